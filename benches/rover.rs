@@ -1,0 +1,2 @@
+//! rover benchmarks (in progress).
+fn main() {}

@@ -1,0 +1,2 @@
+//! space_robot benchmarks (in progress).
+fn main() {}

@@ -1,0 +1,2 @@
+//! sphere benchmarks (in progress).
+fn main() {}

@@ -1,0 +1,106 @@
+//! Fixed-step RK4 integration of a kinematic model under a plan (the ideal run).
+
+use crate::model::{Input, KinematicModel, State};
+use crate::plan::Plan;
+
+/// A sampled run: states, the inputs applied and the label in force, at each time.
+#[derive(Debug, Clone, Default)]
+pub struct Trajectory {
+    /// Sample times, s (uniform, starting at 0).
+    pub t: Vec<f64>,
+    /// States at `t`.
+    pub q: Vec<State>,
+    /// Inputs applied from `t[k]` on (the last sample repeats the previous input).
+    pub u: Vec<Input>,
+    /// Label (segment / primitive index) in force at `t[k]`.
+    pub label: Vec<usize>,
+}
+
+impl Trajectory {
+    /// The final state.
+    pub fn last(&self) -> &State {
+        self.q
+            .last()
+            .expect("a trajectory always holds its initial state")
+    }
+    /// Number of samples.
+    pub fn len(&self) -> usize {
+        self.t.len()
+    }
+    /// True when no sample was recorded.
+    pub fn is_empty(&self) -> bool {
+        self.t.is_empty()
+    }
+}
+
+/// One classical RK4 step of q' = f(t, q).
+pub fn rk4_step(f: &mut impl FnMut(f64, &State) -> State, t: f64, q: &State, h: f64) -> State {
+    let k1 = f(t, q);
+    let k2 = f(t + 0.5 * h, &(q + &k1 * (0.5 * h)));
+    let k3 = f(t + 0.5 * h, &(q + &k2 * (0.5 * h)));
+    let k4 = f(t + h, &(q + &k3 * h));
+    q + (k1 + k2 * 2.0 + k3 * 2.0 + k4) * (h / 6.0)
+}
+
+/// Number of steps of size `dt` that cover `duration` (rounded to the nearest
+/// whole step when within 1e-9 of it, so plans built on the dt grid end exactly).
+pub fn step_count(duration: f64, dt: f64) -> usize {
+    let n = duration / dt;
+    if (n - n.round()).abs() < 1e-9 {
+        n.round() as usize
+    } else {
+        n.ceil() as usize
+    }
+}
+
+/// Integrate `model` from `q0` under `plan` with step `dt`.
+///
+/// Open-loop commands are evaluated at every RK4 stage (continuous u(t));
+/// feedback policies are sampled every `hold_period` and held (the physics
+/// replay does the same, so both runs see the same control timing).
+/// The run stops at the plan's duration or when a policy reports `done`.
+pub fn simulate(model: &dyn KinematicModel, plan: &Plan, q0: &State, dt: f64) -> Trajectory {
+    let mut ctl = plan.controller();
+    let n = step_count(plan.duration, dt);
+    let hold = plan.hold_period();
+    let mut out = Trajectory::default();
+    let mut q = q0.clone();
+    let mut held = ctl.command(0.0, &q);
+    let mut next_sample = 0.0;
+    for k in 0..n {
+        let t = k as f64 * dt;
+        let cmd = match hold {
+            Some(p) => {
+                if t + 1e-12 >= next_sample {
+                    held = ctl.command(t, &q);
+                    next_sample += p;
+                }
+                held.clone()
+            }
+            None => ctl.command(t, &q),
+        };
+        out.t.push(t);
+        out.q.push(q.clone());
+        out.u.push(cmd.u.clone());
+        out.label.push(cmd.label);
+        if cmd.done {
+            return out;
+        }
+        q = match hold {
+            Some(_) => rk4_step(&mut |s, x| model.velocity(s, x, &cmd.u), t, &q, dt),
+            None => rk4_step(
+                &mut |s, x| model.velocity(s, x, &ctl.command(s, x).u),
+                t,
+                &q,
+                dt,
+            ),
+        };
+    }
+    let t_end = n as f64 * dt;
+    let last = ctl.command(t_end, &q);
+    out.t.push(t_end);
+    out.q.push(q);
+    out.u.push(last.u);
+    out.label.push(last.label);
+    out
+}

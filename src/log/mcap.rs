@@ -1,0 +1,672 @@
+//! MCAP log of a run, for Foxglove.
+//!
+//! Written with the `foxglove` SDK on a private [`Context`]; every message's
+//! log (and publish) time is the **simulation time in nanoseconds** (so runs
+//! start at the Unix epoch in Foxglove's timeline). Messages are written in
+//! time order; chunks are zstd-compressed.
+//!
+//! # Topics
+//!
+//! | topic | encoding / schema | one message per | content |
+//! |---|---|---|---|
+//! | `/plan/command` | json / jsonschema `anholonomy.Command` | ideal sample | inputs applied from `t` on |
+//! | `/ideal/state` | json / jsonschema `anholonomy.State` | ideal sample | ideal (RK4) state |
+//! | `/sim/state` | json / jsonschema `anholonomy.State` | sim sample | state read back from physics |
+//! | `/tracking/error` | json / jsonschema `anholonomy.TrackingError` | comparison grid sample | sim − ideal per coordinate, plus `position` |
+//! | `/tf` | protobuf `foxglove.FrameTransforms` | sim sample | `world` → each link frame |
+//! | `/scene` | protobuf `foxglove.SceneUpdate` | once, t = 0 | URDF visuals, one entity per link, frame-locked to the link frame, lifetime 0 (forever) |
+//! | `/scene/paths` | protobuf `foxglove.SceneUpdate` | once, t = 0 | ideal path (green) and simulated path (orange) line strips at z = 0, goal marker (red sphere, arrow for the goal heading); only when the model has a planar position |
+//!
+//! JSON messages all have the form
+//! `{"t": <s>, "segment": "<label name>", "values": {"<name>": <number>, ...}}`:
+//! `t` is the sample time in seconds, `segment` the plan label in force
+//! (for `/tracking/error`, the ideal run's label at that time), and `values`
+//! maps input names (`/plan/command`), state coordinate names (`/ideal/state`,
+//! `/sim/state`; angles in radians) or coordinate names plus `position`
+//! (`/tracking/error`: angles wrapped, in rad; `position` = ‖p_sim − p_ideal‖
+//! in m) to numbers (non-finite values are written as `null`).
+//!
+//! Link frame ids are the URDF link names (a link called `world` becomes
+//! `world_link`); scene entity ids are the link names, plus `ideal_path`,
+//! `sim_path` and `goal` on `/scene/paths`.
+//!
+//! # Metadata
+//!
+//! * `anholonomy.metrics`: every metric, name → value (decimal string).
+//! * `anholonomy.run`: `scenario`, `state_names`, `input_names`, `labels`
+//!   (comma-separated), `ideal_samples`, `sim_samples`, `sim_steps`.
+
+use std::borrow::Cow;
+use std::collections::BTreeMap;
+use std::fs::File;
+use std::io::{self, BufWriter, Seek, SeekFrom, Write};
+use std::path::Path;
+use std::sync::Arc;
+
+use foxglove::messages::{
+    line_primitive, ArrowPrimitive, Color, CubePrimitive, CylinderPrimitive, FrameTransform,
+    FrameTransforms, LinePrimitive, Point3, Pose as FgPose, Quaternion, SceneEntity, SceneUpdate,
+    SpherePrimitive, Timestamp, Vector3,
+};
+use foxglove::{Context, FoxgloveError, PartialMetadata, RawChannel, Schema};
+use serde::ser::{SerializeMap, SerializeStruct};
+use serde::{Serialize, Serializer};
+
+use super::atomic::write_atomically;
+use super::scene::{
+    coord_name, goal_pose, label_at, link_frame, nanos, planar_path, segment_name, GOAL_RGBA,
+    IDEAL_RGBA, SIM_RGBA,
+};
+use super::{validate, LogError};
+use crate::record::{Pose, RunRecord, Shape};
+
+/// Root frame of `/tf` and of the path / goal scene entities.
+pub const WORLD_FRAME: &str = "world";
+
+/// Write the MCAP log of `rec` to `path` (atomically: via `<path>.tmp` + rename).
+pub fn write_mcap(path: &Path, rec: &RunRecord<'_>) -> Result<(), LogError> {
+    validate(path, rec)?;
+    write_atomically(path, |tmp| write_file(tmp, rec))
+}
+
+/// A writer that remembers the first I/O error: the foxglove sink reports
+/// per-message write errors only as log warnings.
+struct Latched<W> {
+    inner: W,
+    err: Option<io::Error>,
+}
+
+impl<W> Latched<W> {
+    fn latch<T>(&mut self, r: io::Result<T>) -> io::Result<T> {
+        if let Err(e) = &r {
+            if self.err.is_none() {
+                self.err = Some(io::Error::new(e.kind(), e.to_string()));
+            }
+        }
+        r
+    }
+}
+
+impl<W: Write> Write for Latched<W> {
+    fn write(&mut self, buf: &[u8]) -> io::Result<usize> {
+        let r = self.inner.write(buf);
+        self.latch(r)
+    }
+    fn flush(&mut self) -> io::Result<()> {
+        let r = self.inner.flush();
+        self.latch(r)
+    }
+}
+
+impl<W: Seek> Seek for Latched<W> {
+    fn seek(&mut self, pos: SeekFrom) -> io::Result<u64> {
+        let r = self.inner.seek(pos);
+        self.latch(r)
+    }
+}
+
+fn write_file(tmp: &Path, rec: &RunRecord<'_>) -> Result<(), LogError> {
+    let io_err = |op, source| LogError::Io {
+        op,
+        path: tmp.to_path_buf(),
+        source,
+    };
+    let fg_err = |source: FoxgloveError| LogError::Mcap {
+        path: tmp.to_path_buf(),
+        source,
+    };
+    let file = File::create(tmp).map_err(|e| io_err("cannot create", e))?;
+    let writer = Latched {
+        inner: BufWriter::with_capacity(1 << 20, file),
+        err: None,
+    };
+
+    let ctx = Context::new();
+    let handle = ctx.mcap_writer().create(writer).map_err(fg_err)?;
+
+    let logged = log_all(&ctx, tmp, rec).and_then(|()| {
+        handle
+            .write_metadata("anholonomy.metrics", metrics_metadata(rec))
+            .map_err(fg_err)?;
+        handle
+            .write_metadata("anholonomy.run", run_metadata(rec))
+            .map_err(fg_err)
+    });
+    // Always close (flushes and finishes the file) before reporting errors.
+    let closed = handle.close().map_err(fg_err);
+    logged?;
+    let writer = closed?;
+    if let Some(e) = writer.err {
+        return Err(io_err("cannot write", e));
+    }
+    let file = writer
+        .inner
+        .into_inner()
+        .map_err(|e| io_err("cannot write", e.into_error()))?;
+    drop(file);
+    Ok(())
+}
+
+// ---------------------------------------------------------------- JSON topics
+
+/// One JSON message: `{"t": .., "segment": .., "values": {name: value, ..}}`.
+struct JsonMsg<'a> {
+    t: f64,
+    segment: &'a str,
+    names: &'a [Cow<'a, str>],
+    values: &'a [f64],
+}
+
+struct Values<'a>(&'a [Cow<'a, str>], &'a [f64]);
+
+impl Serialize for Values<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut m = s.serialize_map(Some(self.0.len()))?;
+        for (n, v) in self.0.iter().zip(self.1) {
+            m.serialize_entry(n.as_ref(), v)?;
+        }
+        m.end()
+    }
+}
+
+impl Serialize for JsonMsg<'_> {
+    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        let mut st = s.serialize_struct("Msg", 3)?;
+        st.serialize_field("t", &self.t)?;
+        st.serialize_field("segment", self.segment)?;
+        st.serialize_field("values", &Values(self.names, self.values))?;
+        st.end()
+    }
+}
+
+/// JSON schema of a JSON topic whose `values` has the given keys.
+fn json_schema(title: &str, description: &str, names: &[Cow<'_, str>]) -> Vec<u8> {
+    let props: serde_json::Map<String, serde_json::Value> = names
+        .iter()
+        .map(|n| {
+            (
+                n.to_string(),
+                serde_json::json!({ "type": ["number", "null"] }),
+            )
+        })
+        .collect();
+    let schema = serde_json::json!({
+        "$schema": "https://json-schema.org/draft/2020-12/schema",
+        "title": title,
+        "description": description,
+        "type": "object",
+        "properties": {
+            "t": { "type": "number", "description": "sample time, s" },
+            "segment": { "type": "string", "description": "plan label (segment) in force" },
+            "values": {
+                "type": "object",
+                "properties": props,
+                "required": names.iter().map(|n| n.as_ref()).collect::<Vec<_>>(),
+            },
+        },
+        "required": ["t", "segment", "values"],
+    });
+    serde_json::to_vec(&schema).expect("a JSON value always serializes")
+}
+
+fn json_channel(
+    ctx: &Arc<Context>,
+    topic: &str,
+    schema_name: &str,
+    description: &str,
+    names: &[Cow<'_, str>],
+    tmp: &Path,
+) -> Result<Arc<RawChannel>, LogError> {
+    ctx.channel_builder(topic)
+        .message_encoding("json")
+        .schema(Schema::new(
+            schema_name,
+            "jsonschema",
+            json_schema(schema_name, description, names),
+        ))
+        .build_raw()
+        .map_err(|source| LogError::Mcap {
+            path: tmp.to_path_buf(),
+            source,
+        })
+}
+
+// ------------------------------------------------------------------- logging
+
+/// What to log next, in time order.
+#[derive(Clone, Copy)]
+enum Ev {
+    Command(usize),
+    Ideal(usize),
+    Sim(usize),
+    Error(usize),
+    Tf(usize),
+}
+
+fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), LogError> {
+    let state_names: Vec<Cow<'_, str>> = (0..rec.state_names.len())
+        .map(|i| coord_name(rec.state_names, i))
+        .collect();
+    let input_names: Vec<Cow<'_, str>> = (0..rec.input_names.len())
+        .map(|i| coord_name(rec.input_names, i))
+        .collect();
+    let mut error_names = state_names.clone();
+    if rec.comparison.position_error.is_some() {
+        error_names.push(Cow::Borrowed("position"));
+    }
+
+    let ch_cmd = json_channel(
+        ctx,
+        "/plan/command",
+        "anholonomy.Command",
+        "Plan inputs applied from t on (ideal run)",
+        &input_names,
+        tmp,
+    )?;
+    let ch_ideal = json_channel(
+        ctx,
+        "/ideal/state",
+        "anholonomy.State",
+        "Model state; angles in rad",
+        &state_names,
+        tmp,
+    )?;
+    let ch_sim = json_channel(
+        ctx,
+        "/sim/state",
+        "anholonomy.State",
+        "Model state; angles in rad",
+        &state_names,
+        tmp,
+    )?;
+    let ch_err = json_channel(
+        ctx,
+        "/tracking/error",
+        "anholonomy.TrackingError",
+        "Sim minus ideal per coordinate (angles wrapped, rad); position = |p_sim - p_ideal| in m",
+        &error_names,
+        tmp,
+    )?;
+    let ch_tf = ctx.channel_builder("/tf").build::<FrameTransforms>();
+    let ch_scene = ctx.channel_builder("/scene").build::<SceneUpdate>();
+
+    // Static scene at t = 0.
+    ch_scene.log_with_time(&robot_scene(rec), 0u64);
+    if let Some(paths) = paths_scene(rec) {
+        let ch_paths = ctx.channel_builder("/scene/paths").build::<SceneUpdate>();
+        ch_paths.log_with_time(&paths, 0u64);
+    }
+
+    // Time-ordered events (stable sort keeps topic order at equal times).
+    let ideal = rec.ideal;
+    let sim = rec.sim;
+    let cmp = rec.comparison;
+    let mut evs: Vec<(u64, Ev)> =
+        Vec::with_capacity(2 * ideal.len() + 2 * sim.traj.len() + cmp.t.len());
+    for (k, &t) in ideal.t.iter().enumerate() {
+        evs.push((nanos(t), Ev::Command(k)));
+        evs.push((nanos(t), Ev::Ideal(k)));
+    }
+    for (k, &t) in sim.traj.t.iter().enumerate() {
+        evs.push((nanos(t), Ev::Sim(k)));
+        if !sim.link_poses.is_empty() {
+            evs.push((nanos(t), Ev::Tf(k)));
+        }
+    }
+    for (k, &t) in cmp.t.iter().enumerate() {
+        evs.push((nanos(t), Ev::Error(k)));
+    }
+    evs.sort_by_key(|&(ns, _)| ns);
+
+    let frames: Vec<String> = rec
+        .links
+        .iter()
+        .map(|l| link_frame(&l.name).into_owned())
+        .collect();
+    let mut buf: Vec<u8> = Vec::with_capacity(512);
+    let mut err_row = vec![0.0; error_names.len()];
+    let json_err = |source| LogError::Json {
+        path: tmp.to_path_buf(),
+        source,
+    };
+    let mut emit = |ch: &RawChannel, ns: u64, msg: &JsonMsg<'_>| -> Result<(), LogError> {
+        buf.clear();
+        serde_json::to_writer(&mut buf, msg).map_err(json_err)?;
+        ch.log_with_meta(&buf, PartialMetadata::with_log_time(ns));
+        Ok(())
+    };
+    for (ns, ev) in evs {
+        match ev {
+            Ev::Command(k) => {
+                let seg = segment_name(rec.labels, ideal.label[k]);
+                let msg = JsonMsg {
+                    t: ideal.t[k],
+                    segment: &seg,
+                    names: &input_names,
+                    values: ideal.u[k].as_slice(),
+                };
+                emit(&ch_cmd, ns, &msg)?;
+            }
+            Ev::Ideal(k) => {
+                let seg = segment_name(rec.labels, ideal.label[k]);
+                let msg = JsonMsg {
+                    t: ideal.t[k],
+                    segment: &seg,
+                    names: &state_names,
+                    values: ideal.q[k].as_slice(),
+                };
+                emit(&ch_ideal, ns, &msg)?;
+            }
+            Ev::Sim(k) => {
+                let seg = segment_name(rec.labels, sim.traj.label[k]);
+                let msg = JsonMsg {
+                    t: sim.traj.t[k],
+                    segment: &seg,
+                    names: &state_names,
+                    values: sim.traj.q[k].as_slice(),
+                };
+                emit(&ch_sim, ns, &msg)?;
+            }
+            Ev::Error(k) => {
+                let t = cmp.t[k];
+                for (slot, series) in err_row.iter_mut().zip(&cmp.coord_error) {
+                    *slot = series[k];
+                }
+                if let Some(p) = &cmp.position_error {
+                    err_row[state_names.len()] = p[k];
+                }
+                let seg = match label_at(ideal, t) {
+                    Some(l) => segment_name(rec.labels, l),
+                    None => Cow::Borrowed(""),
+                };
+                let msg = JsonMsg {
+                    t,
+                    segment: &seg,
+                    names: &error_names,
+                    values: &err_row,
+                };
+                emit(&ch_err, ns, &msg)?;
+            }
+            Ev::Tf(k) => {
+                let ts = Some(timestamp(ns));
+                let transforms = sim.link_poses[k]
+                    .iter()
+                    .zip(&frames)
+                    .map(|(p, frame)| FrameTransform {
+                        timestamp: ts,
+                        parent_frame_id: WORLD_FRAME.to_string(),
+                        child_frame_id: frame.clone(),
+                        translation: Some(vec3(p.translation)),
+                        rotation: Some(quat(p.rotation)),
+                    })
+                    .collect();
+                ch_tf.log_with_time(&FrameTransforms { transforms }, ns);
+            }
+        }
+    }
+    Ok(())
+}
+
+// --------------------------------------------------------------------- scene
+
+fn timestamp(ns: u64) -> Timestamp {
+    Timestamp::new((ns / 1_000_000_000) as u32, (ns % 1_000_000_000) as u32)
+}
+
+fn vec3(v: [f64; 3]) -> Vector3 {
+    Vector3 {
+        x: v[0],
+        y: v[1],
+        z: v[2],
+    }
+}
+
+fn quat(q: [f64; 4]) -> Quaternion {
+    Quaternion {
+        x: q[0],
+        y: q[1],
+        z: q[2],
+        w: q[3],
+    }
+}
+
+fn color(c: [f32; 4]) -> Color {
+    Color {
+        r: c[0] as f64,
+        g: c[1] as f64,
+        b: c[2] as f64,
+        a: c[3] as f64,
+    }
+}
+
+fn fg_pose(p: &Pose) -> FgPose {
+    FgPose {
+        position: Some(vec3(p.translation)),
+        orientation: Some(quat(p.rotation)),
+    }
+}
+
+/// `p` composed with a translation `d` along its local axes.
+fn offset(p: &Pose, d: [f64; 3]) -> Pose {
+    let [x, y, z, w] = p.rotation;
+    // v' = v + 2 w (q × v) + 2 q × (q × v)
+    let u = [x, y, z];
+    let cross = |a: [f64; 3], b: [f64; 3]| {
+        [
+            a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0],
+        ]
+    };
+    let c1 = cross(u, d);
+    let c2 = cross(u, c1);
+    let r = [0, 1, 2].map(|i| d[i] + 2.0 * w * c1[i] + 2.0 * c2[i]);
+    Pose {
+        translation: [0, 1, 2].map(|i| p.translation[i] + r[i]),
+        rotation: p.rotation,
+    }
+}
+
+fn sphere(p: &Pose, radius: f64, c: Color) -> SpherePrimitive {
+    let d = 2.0 * radius;
+    SpherePrimitive {
+        pose: Some(fg_pose(p)),
+        size: Some(vec3([d, d, d])),
+        color: Some(c),
+    }
+}
+
+fn cylinder(p: &Pose, radius: f64, length: f64, c: Color) -> CylinderPrimitive {
+    let d = 2.0 * radius;
+    CylinderPrimitive {
+        pose: Some(fg_pose(p)),
+        size: Some(vec3([d, d, length])),
+        bottom_scale: 1.0,
+        top_scale: 1.0,
+        color: Some(c),
+    }
+}
+
+/// URDF visuals, one entity per link, frame-locked to the link frame.
+fn robot_scene(rec: &RunRecord<'_>) -> SceneUpdate {
+    let entities = rec
+        .links
+        .iter()
+        .filter(|l| !l.visuals.is_empty())
+        .map(|link| {
+            let frame = link_frame(&link.name).into_owned();
+            let mut e = SceneEntity {
+                timestamp: Some(timestamp(0)),
+                frame_id: frame.clone(),
+                id: frame,
+                lifetime: None,
+                frame_locked: true,
+                ..Default::default()
+            };
+            for v in &link.visuals {
+                let c = color(v.rgba);
+                match v.shape {
+                    Shape::Box { size } => e.cubes.push(CubePrimitive {
+                        pose: Some(fg_pose(&v.origin)),
+                        size: Some(vec3(size)),
+                        color: Some(c),
+                    }),
+                    Shape::Cylinder { radius, length } => {
+                        e.cylinders.push(cylinder(&v.origin, radius, length, c))
+                    }
+                    Shape::Sphere { radius } => e.spheres.push(sphere(&v.origin, radius, c)),
+                    Shape::Capsule { radius, length } => {
+                        // No capsule primitive in Foxglove: cylinder + two end spheres.
+                        e.cylinders.push(cylinder(&v.origin, radius, length, c));
+                        for s in [-0.5, 0.5] {
+                            let end = offset(&v.origin, [0.0, 0.0, s * length]);
+                            e.spheres.push(sphere(&end, radius, c));
+                        }
+                    }
+                }
+            }
+            e
+        })
+        .collect();
+    SceneUpdate {
+        deletions: vec![],
+        entities,
+    }
+}
+
+fn line(points: &[[f64; 2]], rgba: [f32; 4]) -> LinePrimitive {
+    LinePrimitive {
+        r#type: line_primitive::Type::LineStrip as i32,
+        pose: Some(fg_pose(&Pose::IDENTITY)),
+        thickness: 3.0,
+        scale_invariant: true,
+        points: points
+            .iter()
+            .map(|p| Point3 {
+                x: p[0],
+                y: p[1],
+                z: 0.0,
+            })
+            .collect(),
+        color: Some(color(rgba)),
+        colors: vec![],
+        indices: vec![],
+    }
+}
+
+/// Ideal / simulated paths and goal marker (models with a planar position).
+fn paths_scene(rec: &RunRecord<'_>) -> Option<SceneUpdate> {
+    let ideal = planar_path(rec, rec.ideal)?;
+    let sim = planar_path(rec, &rec.sim.traj)?;
+    let entity = |id: &str| SceneEntity {
+        timestamp: Some(timestamp(0)),
+        frame_id: WORLD_FRAME.to_string(),
+        id: id.to_string(),
+        lifetime: None,
+        frame_locked: true,
+        ..Default::default()
+    };
+    let mut entities = vec![
+        SceneEntity {
+            lines: vec![line(&ideal, IDEAL_RGBA)],
+            ..entity("ideal_path")
+        },
+        SceneEntity {
+            lines: vec![line(&sim, SIM_RGBA)],
+            ..entity("sim_path")
+        },
+    ];
+    if let Some(([gx, gy], heading)) = goal_pose(rec) {
+        let s = marker_scale(&ideal);
+        let at = Pose {
+            translation: [gx, gy, 0.0],
+            rotation: [0.0, 0.0, 0.0, 1.0],
+        };
+        let mut goal = entity("goal");
+        goal.spheres.push(sphere(&at, 0.5 * s, color(GOAL_RGBA)));
+        if let Some(h) = heading {
+            let yaw = Pose {
+                translation: at.translation,
+                rotation: [0.0, 0.0, (0.5 * h).sin(), (0.5 * h).cos()],
+            };
+            goal.arrows.push(ArrowPrimitive {
+                pose: Some(fg_pose(&yaw)),
+                shaft_length: 2.0 * s,
+                shaft_diameter: 0.2 * s,
+                head_length: 0.8 * s,
+                head_diameter: 0.5 * s,
+                color: Some(color(GOAL_RGBA)),
+            });
+        }
+        entities.push(goal);
+    }
+    Some(SceneUpdate {
+        deletions: vec![],
+        entities,
+    })
+}
+
+/// Marker size: 3 % of the path's extent, within [5 cm, 1 m].
+pub(crate) fn marker_scale(path: &[[f64; 2]]) -> f64 {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in path.iter().filter(|p| p[0].is_finite() && p[1].is_finite()) {
+        for i in 0..2 {
+            lo[i] = lo[i].min(p[i]);
+            hi[i] = hi[i].max(p[i]);
+        }
+    }
+    let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+    if extent.is_finite() {
+        (0.03 * extent).clamp(0.05, 1.0)
+    } else {
+        0.1
+    }
+}
+
+// ------------------------------------------------------------------ metadata
+
+fn metrics_metadata(rec: &RunRecord<'_>) -> BTreeMap<String, String> {
+    rec.metrics
+        .iter()
+        .map(|(k, v)| (k.clone(), v.to_string()))
+        .collect()
+}
+
+fn run_metadata(rec: &RunRecord<'_>) -> BTreeMap<String, String> {
+    let mut m = BTreeMap::new();
+    m.insert("scenario".into(), rec.scenario.to_string());
+    m.insert("state_names".into(), rec.state_names.join(","));
+    m.insert("input_names".into(), rec.input_names.join(","));
+    m.insert("labels".into(), rec.labels.join(","));
+    m.insert("ideal_samples".into(), rec.ideal.len().to_string());
+    m.insert("sim_samples".into(), rec.sim.traj.len().to_string());
+    m.insert("sim_steps".into(), rec.sim.steps.to_string());
+    m
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn offset_rotates_into_parent_frame() {
+        let h = std::f64::consts::FRAC_1_SQRT_2;
+        // 90° about x maps local +z to parent −y.
+        let p = Pose {
+            translation: [1.0, 2.0, 3.0],
+            rotation: [h, 0.0, 0.0, h],
+        };
+        let o = offset(&p, [0.0, 0.0, 1.0]);
+        for (a, b) in o.translation.iter().zip([1.0, 1.0, 3.0]) {
+            assert!((a - b).abs() < 1e-12, "{:?}", o.translation);
+        }
+        assert_eq!(o.rotation, p.rotation);
+    }
+
+    #[test]
+    fn marker_scale_is_bounded() {
+        assert_eq!(marker_scale(&[]), 0.1);
+        assert_eq!(marker_scale(&[[0.0, 0.0], [100.0, 0.0]]), 1.0);
+        assert_eq!(marker_scale(&[[0.0, 0.0], [0.1, 0.0]]), 0.05);
+    }
+}

@@ -1,0 +1,405 @@
+//! Rerun (.rrd) log of a run.
+//!
+//! Timeline `sim_time` (duration, s). Entities:
+//!
+//! * `robot/<link>`: per-link world pose (`Transform3D`) at every sim sample;
+//!   `robot/<link>/visual_<k>`: static URDF visual (`Boxes3D`, `Cylinders3D`,
+//!   `Ellipsoids3D` for spheres, `Capsules3D`) with its origin as a static
+//!   `Transform3D`.
+//! * `paths/ideal` (green) and `paths/sim` (orange): static `LineStrips3D` of
+//!   the planar path at z = 0, with a moving `Points3D` marker `paths/<run>/now`;
+//!   `paths/goal` (+ `paths/goal/heading` arrow). Only for models with a planar
+//!   position.
+//! * `state/<coord>/ideal`, `state/<coord>/sim`, `errors/<coord>`,
+//!   `errors/position`, `command/<input>`, `sim/<channel>`: `Scalars` series.
+//! * `segment`: `TextLog` entry whenever the plan label changes.
+//! * Recording properties: `metrics` (one scalar per metric), `run` (scenario).
+//!
+//! A blueprint lays out a 3D view (`/robot/**`, `/paths/**`), one time-series
+//! view per state coordinate (ideal vs sim), errors, commands, sim channels
+//! and the segment log.
+
+use std::fmt::Display;
+use std::io::{Read, Seek, SeekFrom};
+use std::path::Path;
+
+use ::rerun as rr;
+use rr::blueprint::{
+    Blueprint, ContainerLike, Grid, Horizontal, Spatial3DView, Tabs, TextLogView, TimePanel,
+    TimeSeriesView, Vertical,
+};
+use rr::components::{FillMode, Radius, Scalar};
+use rr::{EntityPath, EntityPathPart, RecordingStream, TimeColumn};
+
+use super::atomic::write_atomically;
+use super::mcap::marker_scale;
+use super::scene::{
+    coord_name, goal_pose, planar_path, segment_name, GOAL_RGBA, IDEAL_RGBA, SIM_RGBA,
+};
+use super::{validate, LogError};
+use crate::record::{Pose, RunRecord, Shape};
+
+/// Name of the timeline all temporal data is logged on.
+pub const TIMELINE: &str = "sim_time";
+
+/// Write the Rerun recording of `rec` to `path` (atomically: via `<path>.tmp` + rename).
+pub fn write_rrd(path: &Path, rec: &RunRecord<'_>) -> Result<(), LogError> {
+    validate(path, rec)?;
+    write_atomically(path, |tmp| write_file(tmp, rec))
+}
+
+/// Errors of the logging calls (SDK errors are rendered to text).
+#[derive(Debug)]
+struct RrError(String);
+
+impl<E: Display> From<E> for RrError {
+    fn from(e: E) -> Self {
+        RrError(e.to_string())
+    }
+}
+
+fn write_file(tmp: &Path, rec: &RunRecord<'_>) -> Result<(), LogError> {
+    let rr_err = |message: String| LogError::Rerun {
+        path: tmp.to_path_buf(),
+        message,
+    };
+    let stream = rr::RecordingStreamBuilder::new("anholonomy")
+        .recording_name(rec.scenario)
+        // The caller asked for a file: ignore a `RERUN=off` environment.
+        .enabled(true)
+        .with_blueprint(blueprint(rec))
+        .save(tmp)
+        .map_err(|e| rr_err(e.to_string()))?;
+    let logged = log_all(&stream, rec);
+    let flushed = stream.flush_blocking();
+    // Dropping the last handle joins the batcher and file-writer threads; the
+    // file writer appends the RRD footer when it shuts down.
+    drop(stream);
+    logged.map_err(|e| rr_err(e.0))?;
+    flushed.map_err(|e| rr_err(format!("flush failed: {e}")))?;
+    check_complete(tmp)
+}
+
+/// The file must start with the RRD stream header and end with the stream footer.
+fn check_complete(path: &Path) -> Result<(), LogError> {
+    let incomplete = |reason: String| LogError::Incomplete {
+        path: path.to_path_buf(),
+        reason,
+    };
+    let io = |e: std::io::Error| LogError::Io {
+        op: "cannot read back",
+        path: path.to_path_buf(),
+        source: e,
+    };
+    let mut f = std::fs::File::open(path).map_err(io)?;
+    let len = f.metadata().map_err(io)?.len();
+    if len < 24 {
+        return Err(incomplete(format!("only {len} bytes")));
+    }
+    let mut head = [0u8; 4];
+    f.read_exact(&mut head).map_err(io)?;
+    // Stream footer: [entries...] "RRF2" "FOOT" <u32 count>.
+    let mut tail = [0u8; 12];
+    f.seek(SeekFrom::End(-12)).map_err(io)?;
+    f.read_exact(&mut tail).map_err(io)?;
+    if &head != b"RRF2" {
+        return Err(incomplete(format!("bad header {head:?}, expected RRF2")));
+    }
+    if &tail[..8] != b"RRF2FOOT" {
+        return Err(incomplete(
+            "no RRD stream footer (writer did not finish)".into(),
+        ));
+    }
+    Ok(())
+}
+
+// ------------------------------------------------------------------- paths
+
+fn ep(parts: &[&str]) -> EntityPath {
+    EntityPath::new(parts.iter().map(|p| EntityPathPart::new(*p)).collect())
+}
+
+fn rgba(c: [f32; 4]) -> rr::Color {
+    let b = |x: f32| (x.clamp(0.0, 1.0) * 255.0).round() as u8;
+    rr::Color::from_unmultiplied_rgba(b(c[0]), b(c[1]), b(c[2]), b(c[3]))
+}
+
+fn f32x3(v: [f64; 3]) -> [f32; 3] {
+    v.map(|x| x as f32)
+}
+
+fn quat(q: [f64; 4]) -> rr::Quaternion {
+    rr::Quaternion::from_xyzw(q.map(|x| x as f32))
+}
+
+fn rr_transform(p: &Pose) -> rr::Transform3D {
+    rr::Transform3D::from_translation_rotation(f32x3(p.translation), quat(p.rotation))
+}
+
+// ------------------------------------------------------------------ logging
+
+fn time_col(t: &[f64]) -> TimeColumn {
+    TimeColumn::new_duration_secs(TIMELINE, t.iter().copied())
+}
+
+fn send_scalars(
+    stream: &RecordingStream,
+    path: EntityPath,
+    t: &[f64],
+    values: impl IntoIterator<Item = f64>,
+) -> Result<(), RrError> {
+    let cols = rr::Scalars::new(values).columns_of_unit_batches()?;
+    stream.send_columns(path, [time_col(t)], cols)?;
+    Ok(())
+}
+
+fn series_style(
+    stream: &RecordingStream,
+    path: &EntityPath,
+    name: &str,
+    color: Option<[f32; 4]>,
+    step: bool,
+) -> Result<(), RrError> {
+    let mut s = rr::SeriesLines::new().with_names([name]);
+    if let Some(c) = color {
+        s = s.with_colors([rgba(c)]);
+    }
+    if step {
+        s = s.with_interpolation_mode(rr::components::InterpolationMode::StepAfter);
+    }
+    stream.log_static(path.clone(), &s)?;
+    Ok(())
+}
+
+fn log_all(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrError> {
+    stream.log_static(EntityPath::root(), &rr::ViewCoordinates::RIGHT_HAND_Z_UP())?;
+
+    // Properties: scenario and metrics.
+    stream.send_property(
+        "run",
+        &rr::AnyValues::default()
+            .with_component::<rr::components::Text>("scenario", [rec.scenario]),
+    )?;
+    if !rec.metrics.is_empty() {
+        let mut m = rr::AnyValues::default();
+        for (name, v) in rec.metrics {
+            // Empty names are not valid component identifiers; skip them.
+            if let Ok(id) = rr::ComponentIdentifier::try_new(name) {
+                m = m.with_component::<Scalar>(id, [*v]);
+            }
+        }
+        stream.send_property("metrics", &m)?;
+    }
+
+    log_robot(stream, rec)?;
+    log_paths(stream, rec)?;
+
+    let ideal = rec.ideal;
+    let sim = &rec.sim.traj;
+    for i in 0..rec.state_names.len() {
+        let name = coord_name(rec.state_names, i);
+        let p_ideal = ep(&["state", &name, "ideal"]);
+        let p_sim = ep(&["state", &name, "sim"]);
+        series_style(
+            stream,
+            &p_ideal,
+            &format!("{name} ideal"),
+            Some(IDEAL_RGBA),
+            false,
+        )?;
+        series_style(
+            stream,
+            &p_sim,
+            &format!("{name} sim"),
+            Some(SIM_RGBA),
+            false,
+        )?;
+        send_scalars(stream, p_ideal, &ideal.t, ideal.q.iter().map(|q| q[i]))?;
+        send_scalars(stream, p_sim, &sim.t, sim.q.iter().map(|q| q[i]))?;
+        let p_err = ep(&["errors", &name]);
+        series_style(stream, &p_err, &name, None, false)?;
+        send_scalars(
+            stream,
+            p_err,
+            &rec.comparison.t,
+            rec.comparison.coord_error[i].iter().copied(),
+        )?;
+    }
+    if let Some(pe) = &rec.comparison.position_error {
+        let p = ep(&["errors", "position"]);
+        series_style(stream, &p, "position", None, false)?;
+        send_scalars(stream, p, &rec.comparison.t, pe.iter().copied())?;
+    }
+    for j in 0..rec.input_names.len() {
+        let name = coord_name(rec.input_names, j);
+        let p = ep(&["command", &name]);
+        series_style(stream, &p, &name, None, true)?;
+        send_scalars(stream, p, &ideal.t, ideal.u.iter().map(|u| u[j]))?;
+    }
+    for (name, values) in &rec.sim.channels {
+        let p = ep(&["sim", name]);
+        series_style(stream, &p, name, None, false)?;
+        send_scalars(stream, p, &sim.t, values.iter().copied())?;
+    }
+
+    // Segment label: one text-log entry at every change.
+    let mut times = Vec::new();
+    let mut texts = Vec::new();
+    for (k, &l) in ideal.label.iter().enumerate() {
+        if k == 0 || ideal.label[k - 1] != l {
+            times.push(ideal.t[k]);
+            texts.push(format!("segment {}", segment_name(rec.labels, l)));
+        }
+    }
+    if !times.is_empty() {
+        let cols = rr::TextLog::update_fields()
+            .with_many_text(texts)
+            .columns_of_unit_batches()?;
+        stream.send_columns("segment", [time_col(&times)], cols)?;
+    }
+    Ok(())
+}
+
+fn log_robot(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrError> {
+    for (i, link) in rec.links.iter().enumerate() {
+        let link_path = ep(&["robot", &link.name]);
+        for (k, v) in link.visuals.iter().enumerate() {
+            let vp = ep(&["robot", &link.name, &format!("visual_{k}")]);
+            stream.log_static(vp.clone(), &rr_transform(&v.origin))?;
+            let c = [rgba(v.rgba)];
+            match v.shape {
+                Shape::Box { size } => stream.log_static(
+                    vp,
+                    &rr::Boxes3D::from_half_sizes([f32x3(size.map(|s| 0.5 * s))])
+                        .with_colors(c)
+                        .with_fill_mode(FillMode::Solid),
+                )?,
+                Shape::Cylinder { radius, length } => stream.log_static(
+                    vp,
+                    &rr::Cylinders3D::from_lengths_and_radii([length as f32], [radius as f32])
+                        .with_colors(c)
+                        .with_fill_mode(FillMode::Solid),
+                )?,
+                Shape::Sphere { radius } => stream.log_static(
+                    vp,
+                    &rr::Ellipsoids3D::from_radii([radius as f32])
+                        .with_colors(c)
+                        .with_fill_mode(FillMode::Solid),
+                )?,
+                // Rerun capsules run from z = 0 to z = length; URDF-style ones are centred.
+                Shape::Capsule { radius, length } => stream.log_static(
+                    vp,
+                    &rr::Capsules3D::from_lengths_and_radii([length as f32], [radius as f32])
+                        .with_translations([[0.0, 0.0, -0.5 * length as f32]])
+                        .with_colors(c)
+                        .with_fill_mode(FillMode::Solid),
+                )?,
+            }
+        }
+        if rec.sim.link_poses.is_empty() {
+            continue;
+        }
+        let poses = rec.sim.link_poses.iter().map(|row| &row[i]);
+        let cols = rr::Transform3D::update_fields()
+            .with_many_translation(poses.clone().map(|p| f32x3(p.translation)))
+            .with_many_quaternion(poses.map(|p| quat(p.rotation)))
+            .columns_of_unit_batches()?;
+        stream.send_columns(link_path, [time_col(&rec.sim.traj.t)], cols)?;
+    }
+    Ok(())
+}
+
+fn log_paths(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrError> {
+    let (Some(ideal), Some(sim)) = (planar_path(rec, rec.ideal), planar_path(rec, &rec.sim.traj))
+    else {
+        return Ok(());
+    };
+    let s = marker_scale(&ideal) as f32;
+    let xyz = |p: &[f64; 2]| [p[0] as f32, p[1] as f32, 0.0];
+    for (name, path, t, color) in [
+        ("ideal", &ideal, &rec.ideal.t, IDEAL_RGBA),
+        ("sim", &sim, &rec.sim.traj.t, SIM_RGBA),
+    ] {
+        let strip: Vec<[f32; 3]> = path.iter().map(xyz).collect();
+        stream.log_static(
+            ep(&["paths", name]),
+            &rr::LineStrips3D::new([strip.clone()])
+                .with_colors([rgba(color)])
+                .with_radii([Radius::new_ui_points(1.5)])
+                .with_labels([name]),
+        )?;
+        let now = ep(&["paths", name, "now"]);
+        stream.log_static(
+            now.clone(),
+            &rr::Points3D::update_fields()
+                .with_colors([rgba(color)])
+                .with_radii([Radius::new_scene_units(0.4 * s)]),
+        )?;
+        let cols = rr::Points3D::update_fields()
+            .with_positions(strip)
+            .columns_of_unit_batches()?;
+        stream.send_columns(now, [time_col(t)], cols)?;
+    }
+    if let Some(([gx, gy], heading)) = goal_pose(rec) {
+        let at = [gx as f32, gy as f32, 0.0];
+        stream.log_static(
+            ep(&["paths", "goal"]),
+            &rr::Points3D::new([at])
+                .with_colors([rgba(GOAL_RGBA)])
+                .with_radii([Radius::new_scene_units(0.5 * s)])
+                .with_labels(["goal"]),
+        )?;
+        if let Some(h) = heading {
+            let len = 3.0 * s;
+            stream.log_static(
+                ep(&["paths", "goal", "heading"]),
+                &rr::Arrows3D::from_vectors([[len * h.cos() as f32, len * h.sin() as f32, 0.0]])
+                    .with_origins([at])
+                    .with_colors([rgba(GOAL_RGBA)]),
+            )?;
+        }
+    }
+    Ok(())
+}
+
+// ---------------------------------------------------------------- blueprint
+
+fn blueprint(rec: &RunRecord<'_>) -> Blueprint {
+    let spatial = Spatial3DView::new("robot")
+        .with_origin("/")
+        .with_contents(["/robot/**", "/paths/**"]);
+    let state_views: Vec<ContainerLike> = (0..rec.state_names.len())
+        .map(|i| {
+            let name = coord_name(rec.state_names, i);
+            TimeSeriesView::new(format!("{name}: ideal vs sim"))
+                .with_origin(ep(&["state", &name]))
+                .into()
+        })
+        .collect();
+    let mut lower: Vec<ContainerLike> = vec![
+        TimeSeriesView::new("tracking errors")
+            .with_origin("/errors")
+            .into(),
+        TimeSeriesView::new("commands")
+            .with_origin("/command")
+            .into(),
+    ];
+    if !rec.sim.channels.is_empty() {
+        lower.push(
+            TimeSeriesView::new("sim channels")
+                .with_origin("/sim")
+                .into(),
+        );
+    }
+    let left = Vertical::new([
+        spatial.into(),
+        TextLogView::new("segments").with_origin("/segment").into(),
+    ])
+    .with_row_shares([4.0, 1.0]);
+    let right = Vertical::new([
+        Grid::new(state_views).with_name("state").into(),
+        Tabs::new(lower).into(),
+    ]);
+    Blueprint::new(Horizontal::new([left.into(), right.into()]))
+        .with_time_panel(TimePanel::new().with_timeline(TIMELINE))
+}

@@ -1,0 +1,45 @@
+//! Kinematic models: control-affine systems q' = f(q) + G(q) u.
+//!
+//! Every model in the harness implements [`KinematicModel`]; the ideal run
+//! integrates it with the shared fixed-step RK4 of [`crate::integrate`].
+
+pub mod disk;
+pub mod rolling_sphere;
+pub mod rover;
+pub mod space_manipulator;
+pub mod space_robot;
+
+use nalgebra::{DMatrix, DVector};
+
+/// Configuration vector (model-specific coordinates, see `state_names`).
+pub type State = DVector<f64>;
+/// Input (velocity command) vector, see `input_names`.
+pub type Input = DVector<f64>;
+
+/// A control-affine kinematic system q' = f(q) + G(q) u.
+pub trait KinematicModel: Send + Sync {
+    /// Short identifier, e.g. `"rolling_disk"`.
+    fn name(&self) -> &'static str;
+    /// Names of the state coordinates, in order (used in logs and tables).
+    fn state_names(&self) -> &'static [&'static str];
+    /// Names of the inputs, in order.
+    fn input_names(&self) -> &'static [&'static str];
+    /// Indices of state coordinates that are angles: their errors are wrapped to (-π, π].
+    fn angular_states(&self) -> &'static [usize] {
+        &[]
+    }
+    /// Indices of a planar position (x, y) in the state, if the model has one.
+    fn position_states(&self) -> Option<[usize; 2]> {
+        None
+    }
+    /// Drift f(q); zero for driftless systems.
+    fn drift(&self, q: &State) -> State {
+        State::zeros(q.len())
+    }
+    /// Input matrix G(q), n × m.
+    fn input_matrix(&self, q: &State) -> DMatrix<f64>;
+    /// q' at time t. Models with a time-varying structure (e.g. switching) override this.
+    fn velocity(&self, _t: f64, q: &State, u: &Input) -> State {
+        self.drift(q) + self.input_matrix(q) * u
+    }
+}

@@ -1,0 +1,1 @@
+//! Rigid-body counterpart of the rover system (in progress).

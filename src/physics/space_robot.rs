@@ -1,0 +1,1 @@
+//! Rigid-body counterpart of the space_robot system (in progress).

@@ -1,0 +1,1 @@
+//! Rigid-body counterpart of the sphere system (in progress).

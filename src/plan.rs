@@ -1,0 +1,272 @@
+//! Plans: what a planner hands to the harness.
+//!
+//! A [`Plan`] is either an open-loop command u(t) or a feedback policy
+//! u = k(t, q). Both are consumed through [`Plan::controller`], so the ideal
+//! run and the physics replay treat them the same way; a feedback policy is
+//! simply evaluated on whichever state (ideal or simulated) it is given.
+
+use crate::model::{Input, State};
+use serde::Serialize;
+use std::sync::Arc;
+
+/// A named time interval of an open-loop plan, e.g. "OZ" or "loop x: PQ".
+#[derive(Debug, Clone, Serialize)]
+pub struct Segment {
+    /// Index into [`Plan::labels`].
+    pub label: usize,
+    /// Start time, s.
+    pub start: f64,
+    /// End time, s.
+    pub end: f64,
+}
+
+/// What a controller outputs at one instant.
+#[derive(Debug, Clone)]
+pub struct Command {
+    /// The input vector.
+    pub u: Input,
+    /// Index into [`Plan::labels`] of the segment or primitive in force.
+    pub label: usize,
+    /// The controller considers the task complete (feedback policies only).
+    pub done: bool,
+}
+
+/// A controller instance: produces u from (t, q). Open-loop plans ignore q.
+pub trait Controller: Send {
+    /// The command at time `t` with measured state `q`.
+    fn command(&mut self, t: f64, q: &State) -> Command;
+}
+
+/// Builds fresh controller instances (a feedback policy may keep internal
+/// state, so the ideal run and the physics run each get their own).
+pub trait PolicyFactory: Send + Sync {
+    /// A new controller, in its initial state.
+    fn start(&self) -> Box<dyn Controller>;
+}
+
+/// Open-loop command u(t) plus the label in force at t.
+pub type OpenLoopFn = dyn Fn(f64) -> (Input, usize) + Send + Sync;
+
+/// How the plan produces commands.
+#[derive(Clone)]
+pub enum ControlLaw {
+    /// A fixed u(t), evaluated continuously (at every integrator stage).
+    OpenLoop(Arc<OpenLoopFn>),
+    /// A feedback law u = k(t, q), sampled every `period` seconds and held.
+    Feedback {
+        /// Creates controller instances.
+        factory: Arc<dyn PolicyFactory>,
+        /// Sample period, s.
+        period: f64,
+    },
+}
+
+/// The output of a planner.
+#[derive(Clone)]
+pub struct Plan {
+    /// Names of segments (open loop) or primitives (feedback).
+    pub labels: Vec<String>,
+    /// Timed segments of an open-loop plan; empty for feedback policies.
+    pub segments: Vec<Segment>,
+    /// Open loop: exact duration. Feedback: time horizon (the run stops earlier when `done`).
+    pub duration: f64,
+    /// The command source.
+    pub law: ControlLaw,
+    /// Planner-derived numbers (loop sizes, chosen parameters...) for reports.
+    pub details: serde_json::Value,
+}
+
+struct OpenLoopController(Arc<OpenLoopFn>);
+
+impl Controller for OpenLoopController {
+    fn command(&mut self, t: f64, _q: &State) -> Command {
+        let (u, label) = (self.0)(t);
+        Command {
+            u,
+            label,
+            done: false,
+        }
+    }
+}
+
+impl Plan {
+    /// A fresh controller for one run.
+    pub fn controller(&self) -> Box<dyn Controller> {
+        match &self.law {
+            ControlLaw::OpenLoop(f) => Box::new(OpenLoopController(f.clone())),
+            ControlLaw::Feedback { factory, .. } => factory.start(),
+        }
+    }
+
+    /// Sample-and-hold period for feedback laws; `None` for continuous open-loop commands.
+    pub fn hold_period(&self) -> Option<f64> {
+        match &self.law {
+            ControlLaw::OpenLoop(_) => None,
+            ControlLaw::Feedback { period, .. } => Some(*period),
+        }
+    }
+
+    /// Name of a label index ("?" when out of range).
+    pub fn label_name(&self, label: usize) -> &str {
+        self.labels.get(label).map(String::as_str).unwrap_or("?")
+    }
+}
+
+/// Velocity profile along one straight segment: smoothstep ramps of length
+/// `ramp` at both ends around a cruise phase. Acceleration and jerk are zero
+/// at the ends, so segments chain smoothly and RK4 keeps its order.
+#[derive(Debug, Clone, Copy)]
+pub struct RampProfile {
+    /// Total duration, s.
+    pub duration: f64,
+    /// Ramp duration at each end, s (≤ duration / 2).
+    pub ramp: f64,
+}
+
+impl RampProfile {
+    /// ds/dt at local time τ ∈ [0, duration], normalised so that ∫ ds = 1.
+    pub fn rate(&self, tau: f64) -> f64 {
+        let (d, r) = (self.duration, self.ramp);
+        if !(0.0..=d).contains(&tau) || d <= 0.0 {
+            return 0.0;
+        }
+        let v = 1.0 / (d - r);
+        // Quintic smoothstep: u, u' and u'' are continuous at the leg ends, so
+        // RK4 keeps its fourth order across legs.
+        let edge = |s: f64| {
+            let x = s / r;
+            v * x * x * x * (10.0 + x * (-15.0 + 6.0 * x))
+        };
+        if tau < r {
+            edge(tau)
+        } else if tau > d - r {
+            edge(d - tau)
+        } else {
+            v
+        }
+    }
+}
+
+impl RampProfile {
+    /// Fraction of the leg covered at local time τ (the integral of [`RampProfile::rate`]).
+    pub fn progress(&self, tau: f64) -> f64 {
+        let (d, r) = (self.duration, self.ramp);
+        if d <= 0.0 || tau >= d {
+            return 1.0;
+        }
+        if tau <= 0.0 {
+            return 0.0;
+        }
+        let v = 1.0 / (d - r);
+        let edge = |s: f64| {
+            if r > 0.0 {
+                let x = s / r;
+                v * r * x.powi(4) * (2.5 + x * (-3.0 + x))
+            } else {
+                0.0
+            }
+        };
+        if tau < r {
+            edge(tau)
+        } else if tau > d - r {
+            1.0 - edge(d - tau)
+        } else {
+            0.5 * v * r + v * (tau - r)
+        }
+    }
+}
+
+/// One straight segment in the space of integrated inputs (∫u dt).
+#[derive(Debug, Clone)]
+pub struct Leg {
+    /// Index into the plan's labels.
+    pub label: usize,
+    /// Total change of ∫u dt over the leg.
+    pub delta: Input,
+    /// Velocity profile.
+    pub profile: RampProfile,
+}
+
+/// Rate limits for building legs.
+#[derive(Debug, Clone)]
+pub struct Limits {
+    /// Per-input magnitude limit of u.
+    pub max_rate: Vec<f64>,
+    /// Ramp time at each end of a leg, s.
+    pub ramp: f64,
+    /// Durations are rounded up to a multiple of this step (the sim dt), s.
+    pub step: f64,
+}
+
+impl Limits {
+    /// The fastest ramped profile moving by `delta` within the rate limits.
+    pub fn profile(&self, delta: &Input) -> RampProfile {
+        let cruise = delta
+            .iter()
+            .zip(&self.max_rate)
+            .map(|(d, m)| d.abs() / m)
+            .fold(0.0, f64::max);
+        let ramp = cruise.min(self.ramp);
+        let raw = cruise + ramp;
+        let duration = (raw / self.step - 1e-9).ceil().max(0.0) * self.step;
+        // Stretch the ramp with the duration so the peak rate stays within limits.
+        RampProfile {
+            duration,
+            ramp: ramp * duration / raw.max(f64::MIN_POSITIVE),
+        }
+    }
+}
+
+/// Chains legs into an open-loop plan. Legs with zero motion are skipped.
+pub fn plan_from_legs(
+    labels: Vec<String>,
+    legs: Vec<(usize, Input)>,
+    limits: &Limits,
+    details: serde_json::Value,
+) -> Plan {
+    let m = limits.max_rate.len();
+    let mut timed: Vec<(f64, Leg)> = Vec::new();
+    let mut segments = Vec::new();
+    let mut t = 0.0;
+    for (label, delta) in legs {
+        if delta.amax() == 0.0 {
+            continue;
+        }
+        let profile = limits.profile(&delta);
+        segments.push(Segment {
+            label,
+            start: t,
+            end: t + profile.duration,
+        });
+        timed.push((
+            t,
+            Leg {
+                label,
+                delta,
+                profile,
+            },
+        ));
+        t += profile.duration;
+    }
+    let duration = t;
+    let last_label = timed.last().map(|(_, l)| l.label).unwrap_or(0);
+    let law = ControlLaw::OpenLoop(Arc::new(move |time: f64| {
+        // Binary search for the leg containing `time`.
+        let idx = timed
+            .partition_point(|(t0, _)| *t0 <= time)
+            .saturating_sub(1);
+        match timed.get(idx) {
+            Some((t0, leg)) if time <= t0 + leg.profile.duration => {
+                (&leg.delta * leg.profile.rate(time - t0), leg.label)
+            }
+            _ => (Input::zeros(m), last_label),
+        }
+    }));
+    Plan {
+        labels,
+        segments,
+        duration,
+        law,
+        details,
+    }
+}

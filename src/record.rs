@@ -1,0 +1,107 @@
+//! Plain data describing one finished run: what the loggers (MCAP, Rerun,
+//! summary) consume. Built by the runner; no logic beyond accessors.
+
+use crate::integrate::Trajectory;
+use serde::Serialize;
+
+/// A rigid transform in f64: translation and unit quaternion (x, y, z, w).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize)]
+pub struct Pose {
+    /// Translation, m.
+    pub translation: [f64; 3],
+    /// Rotation quaternion (x, y, z, w).
+    pub rotation: [f64; 4],
+}
+
+impl Pose {
+    /// The identity transform.
+    pub const IDENTITY: Pose = Pose {
+        translation: [0.0; 3],
+        rotation: [0.0, 0.0, 0.0, 1.0],
+    };
+}
+
+/// Visual geometry of a URDF link, in the link frame.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub enum Shape {
+    /// Full edge lengths, m.
+    Box { size: [f64; 3] },
+    /// Axis along local z (URDF convention).
+    Cylinder { radius: f64, length: f64 },
+    /// Sphere.
+    Sphere { radius: f64 },
+    /// Capsule along local z.
+    Capsule { radius: f64, length: f64 },
+}
+
+/// One `<visual>` element.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Visual {
+    /// Geometry.
+    pub shape: Shape,
+    /// Pose of the geometry in the link frame.
+    pub origin: Pose,
+    /// RGBA in [0, 1].
+    pub rgba: [f32; 4],
+}
+
+/// A link with its visuals.
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct LinkVisual {
+    /// URDF link name.
+    pub name: String,
+    /// Visual elements.
+    pub visuals: Vec<Visual>,
+}
+
+/// The physics replay, sampled every sim step.
+#[derive(Debug, Clone, Default)]
+pub struct SimTrajectory {
+    /// Model coordinates read back from the simulation, with the commands applied.
+    pub traj: Trajectory,
+    /// World pose of each link (same order as [`RunRecord::links`]) at each sample.
+    pub link_poses: Vec<Vec<Pose>>,
+    /// Extra named time series (slip, momentum, ...), one value per sample.
+    pub channels: Vec<(String, Vec<f64>)>,
+    /// Number of physics steps taken.
+    pub steps: usize,
+}
+
+/// Errors of the simulated run against the ideal run on one time grid.
+#[derive(Debug, Clone, Default, Serialize)]
+pub struct Comparison {
+    /// Common time grid, s.
+    pub t: Vec<f64>,
+    /// Per-coordinate error sim − ideal (angles wrapped, in rad), one series per state coordinate.
+    pub coord_error: Vec<Vec<f64>>,
+    /// Position error ‖p_sim − p_ideal‖ (models with a planar position), m.
+    pub position_error: Option<Vec<f64>>,
+}
+
+/// Everything about one run that a logger may show.
+pub struct RunRecord<'a> {
+    /// Scenario name.
+    pub scenario: &'a str,
+    /// State coordinate names.
+    pub state_names: &'a [&'static str],
+    /// Input names.
+    pub input_names: &'a [&'static str],
+    /// Indices of angular coordinates.
+    pub angular: &'a [usize],
+    /// Indices of the planar position (x, y) in the state, when the model has one.
+    pub position: Option<[usize; 2]>,
+    /// Goal state.
+    pub goal: &'a [f64],
+    /// Label names (plan segments / primitives).
+    pub labels: &'a [String],
+    /// The ideal kinematic run.
+    pub ideal: &'a Trajectory,
+    /// The physics run.
+    pub sim: &'a SimTrajectory,
+    /// Comparison on the common grid.
+    pub comparison: &'a Comparison,
+    /// URDF visual geometry per link.
+    pub links: &'a [LinkVisual],
+    /// Scalar metrics (name → value), as in the summary.
+    pub metrics: &'a [(String, f64)],
+}

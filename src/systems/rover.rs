@@ -1,0 +1,20 @@
+//! Placeholder: the rover system is being integrated (planner math lives in
+//! crate::planner, model in crate::model).
+
+use super::System;
+use crate::scenario::PlannerConfig;
+use serde::{Deserialize, Serialize};
+use std::path::PathBuf;
+
+/// `[model] kind = "rover"`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct RoverConfig {
+    /// URDF file, relative to the scenario file.
+    pub urdf: PathBuf,
+}
+
+/// Build the system.
+pub fn build(_cfg: &RoverConfig, _planner: &PlannerConfig) -> Result<Box<dyn System>, String> {
+    Err("model `rover` is not available yet".into())
+}

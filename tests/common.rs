@@ -1,0 +1,64 @@
+//! Helpers shared by the integration tests (included with `mod common;`).
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+/// Repository root.
+pub fn root() -> PathBuf {
+    PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Absolute path of a model file.
+pub fn model(name: &str) -> PathBuf {
+    root().join("models").join(name)
+}
+
+/// Run the CLI with `args` in `cwd`.
+pub fn cli(cwd: &Path, args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_anholonomy"))
+        .args(args)
+        .current_dir(cwd)
+        .output()
+        .expect("binary runs")
+}
+
+/// A disk scenario text with the given overrides appended to the main table
+/// (`extra_top`) and to the sim table (`extra_sim`).
+pub fn disk_scenario(urdf: &Path, extra_top: &str, extra_sim: &str) -> String {
+    format!(
+        r#"{extra_top}
+start = [0.0, 0.0, 0.0, 0.0]
+goal = [-0.4, 1.0, 180.0, 22.5]
+
+[model]
+kind = "rolling_disk"
+radius = 0.25
+urdf = "{}"
+
+[planner]
+kind = "stokes_disk"
+
+[sim]
+dt = 0.001
+{extra_sim}
+"#,
+        urdf.display()
+    )
+}
+
+/// Every file below `dir`, recursively.
+pub fn files_below(dir: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    if let Ok(rd) = std::fs::read_dir(dir) {
+        for e in rd.flatten() {
+            let p = e.path();
+            if p.is_dir() {
+                out.extend(files_below(&p));
+            } else {
+                out.push(p);
+            }
+        }
+    }
+    out
+}

@@ -1,0 +1,136 @@
+//! End-to-end runs of the rolling disk: physics thresholds, failure
+//! reporting, determinism, and the logs read back.
+
+mod common;
+use anholonomy::runner::{run, Prepared, RunOptions, RunOutcome};
+use anholonomy::scenario::Scenario;
+use common::*;
+use std::collections::BTreeMap;
+use std::path::Path;
+
+fn run_file(path: &Path, logs: Option<&Path>) -> RunOutcome {
+    let prep = Prepared::new(Scenario::load(path).unwrap()).unwrap();
+    run(
+        &prep,
+        &RunOptions {
+            log_root: logs.map(Path::to_path_buf),
+            progress: false,
+        },
+    )
+    .unwrap()
+}
+
+fn run_text(text: &str, logs: Option<&Path>) -> RunOutcome {
+    let dir = tempfile::tempdir().unwrap();
+    let file = dir.path().join("case.toml");
+    std::fs::write(&file, text).unwrap();
+    run_file(&file, logs)
+}
+
+#[test]
+fn disk_paper_survives_physics_within_its_thresholds() {
+    let path = root().join("scenarios/disk_paper.toml");
+    let sc = Scenario::load(&path).unwrap();
+    let o = run_file(&path, None);
+    assert!(o.passed, "{:?}", o.failures);
+    // The scenario file must gate the simulated goal error and tracking error.
+    for k in ["sim_goal_position", "tracking_position_max"] {
+        let limit = sc
+            .thresholds
+            .get(k)
+            .copied()
+            .unwrap_or_else(|| panic!("{k} threshold missing"));
+        assert!(o.metric(k).unwrap() <= limit);
+    }
+    assert!(o.metric("ideal_goal_position").unwrap() < 1e-9);
+}
+
+#[test]
+fn too_little_friction_is_reported_as_a_failure() {
+    let text = format!(
+        "{}\n[thresholds]\nsim_goal_position = 0.05\n",
+        disk_scenario(
+            &model("rolling_disk.urdf"),
+            "name = \"slippery\"",
+            "friction = 0.01"
+        )
+    );
+    let o = run_text(&text, None);
+    assert!(!o.passed);
+    assert!(
+        o.failures
+            .iter()
+            .any(|f| f.starts_with("sim_goal_position")),
+        "{:?}",
+        o.failures
+    );
+    // The wheel spins in place: the disk ends far from where the ideal run ends.
+    assert!(
+        o.metric("sim_goal_position").unwrap() > 0.3,
+        "{:?}",
+        o.metric("sim_goal_position")
+    );
+    assert!(o.metric("ideal_goal_position").unwrap() < 1e-9);
+}
+
+#[test]
+fn same_scenario_same_result() {
+    let path = root().join("scenarios/disk_paper.toml");
+    let a = run_file(&path, None);
+    let b = run_file(&path, None);
+    assert_eq!(a.metrics, b.metrics);
+    assert_eq!(a.steps, b.steps);
+}
+
+#[test]
+fn logs_are_complete_and_readable() {
+    let logs = tempfile::tempdir().unwrap();
+    let o = run_file(&root().join("scenarios/disk_paper.toml"), Some(logs.path()));
+    let dir = logs.path().join("disk_paper");
+    let mut names: Vec<String> = std::fs::read_dir(&dir)
+        .unwrap()
+        .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    assert_eq!(names, ["run.mcap", "run.rrd", "summary.json"]);
+
+    // MCAP: the four JSON topics with schemas, one message per sample.
+    let bytes = std::fs::read(dir.join("run.mcap")).unwrap();
+    let mut counts: BTreeMap<String, usize> = BTreeMap::new();
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        let schema = m.channel.schema.as_ref().expect("schema attached");
+        assert!(!schema.data.is_empty());
+        if m.channel.topic.starts_with("/plan")
+            || m.channel.topic.starts_with("/ideal")
+            || m.channel.topic.starts_with("/sim")
+            || m.channel.topic.starts_with("/tracking")
+        {
+            assert_eq!(m.channel.message_encoding, "json");
+            assert_eq!(schema.encoding, "jsonschema");
+            let v: serde_json::Value = serde_json::from_slice(&m.data).unwrap();
+            assert!(v["t"].is_number() && v["values"].is_object(), "{v}");
+        }
+        *counts.entry(m.channel.topic.clone()).or_default() += 1;
+    }
+    let samples = o.steps + 1;
+    assert_eq!(counts["/sim/state"], samples, "{counts:?}");
+    assert_eq!(counts["/ideal/state"], samples, "{counts:?}");
+    assert_eq!(counts["/plan/command"], samples, "{counts:?}");
+    assert_eq!(counts["/tracking/error"], samples, "{counts:?}");
+    assert!(counts.get("/tf").copied().unwrap_or(0) > 0, "{counts:?}");
+    assert!(counts.get("/scene").copied().unwrap_or(0) > 0, "{counts:?}");
+
+    // Rerun: non-empty, with the RRD header.
+    let rrd = std::fs::read(dir.join("run.rrd")).unwrap();
+    assert!(rrd.len() > 1000);
+    assert_eq!(&rrd[..4], b"RRF2", "rrd header");
+
+    // Summary: parses and agrees with the outcome.
+    let s: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(s["passed"], serde_json::json!(o.passed));
+    assert_eq!(s["sim_steps"], serde_json::json!(o.steps));
+    assert!(s["sim"]["final_state"]["x"].is_number());
+    assert!(s["wall_time_s"]["total"].as_f64().unwrap() > 0.0);
+}
