@@ -4,7 +4,6 @@
 
 use anholonomy::integrate::simulate;
 use anholonomy::model::Input;
-use anholonomy::physics::PhysicsSystem;
 use anholonomy::runner::{run, Prepared, RunOptions};
 use anholonomy::scenario::Scenario;
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};

@@ -150,7 +150,7 @@ fn run_cmd(args: &RunArgs, gate: bool) -> Result<u8, Vec<Error>> {
     Ok(0)
 }
 
-fn plan_cmd(file: &PathBuf, as_json: bool) -> Result<u8, Vec<Error>> {
+fn plan_cmd(file: &std::path::Path, as_json: bool) -> Result<u8, Vec<Error>> {
     let prep = Scenario::load(file)
         .and_then(Prepared::new)
         .map_err(|e| vec![e])?;

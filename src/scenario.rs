@@ -288,7 +288,8 @@ impl Scenario {
         }
         let base = path.parent().unwrap_or(Path::new("."));
         let system = systems::build(&file.model, &file.planner).map_err(&bad)?;
-        let model = system.model();
+        // start/goal are written in the system's file chart (usually the model state).
+        let model = system.file_model();
         let (n_state, n_input) = (model.state_names().len(), model.input_names().len());
         let angular = model.angular_states();
         let default_rate = system.default_max_rate();
@@ -317,8 +318,8 @@ impl Scenario {
                 })
                 .collect())
         };
-        let start = to_si("start", &file.start)?;
-        let goal = to_si("goal", &file.goal)?;
+        let start = system.state_from_file(to_si("start", &file.start)?);
+        let goal = system.state_from_file(to_si("goal", &file.goal)?);
         let max_rate = file.limits.max_rate.clone().unwrap_or(default_rate);
         if max_rate.len() != n_input {
             return Err(bad(format!(

@@ -54,8 +54,8 @@ use serde::{Serialize, Serializer};
 
 use super::atomic::write_atomically;
 use super::scene::{
-    coord_name, goal_pose, label_at, link_frame, nanos, planar_path, segment_name, GOAL_RGBA,
-    IDEAL_RGBA, SIM_RGBA,
+    coord_name, goal_pose, label_at, link_frame, marker_scale, nanos, planar_path, segment_name,
+    GOAL_RGBA, IDEAL_RGBA, SIM_RGBA,
 };
 use super::{validate, LogError};
 use crate::record::{Pose, RunRecord, Shape};
@@ -606,23 +606,6 @@ fn paths_scene(rec: &RunRecord<'_>) -> Option<SceneUpdate> {
     })
 }
 
-/// Marker size: 3 % of the path's extent, within [5 cm, 1 m].
-pub(crate) fn marker_scale(path: &[[f64; 2]]) -> f64 {
-    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
-    for p in path.iter().filter(|p| p[0].is_finite() && p[1].is_finite()) {
-        for i in 0..2 {
-            lo[i] = lo[i].min(p[i]);
-            hi[i] = hi[i].max(p[i]);
-        }
-    }
-    let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
-    if extent.is_finite() {
-        (0.03 * extent).clamp(0.05, 1.0)
-    } else {
-        0.1
-    }
-}
-
 // ------------------------------------------------------------------ metadata
 
 fn metrics_metadata(rec: &RunRecord<'_>) -> BTreeMap<String, String> {
@@ -661,12 +644,5 @@ mod tests {
             assert!((a - b).abs() < 1e-12, "{:?}", o.translation);
         }
         assert_eq!(o.rotation, p.rotation);
-    }
-
-    #[test]
-    fn marker_scale_is_bounded() {
-        assert_eq!(marker_scale(&[]), 0.1);
-        assert_eq!(marker_scale(&[[0.0, 0.0], [100.0, 0.0]]), 1.0);
-        assert_eq!(marker_scale(&[[0.0, 0.0], [0.1, 0.0]]), 0.05);
     }
 }

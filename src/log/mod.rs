@@ -1,4 +1,5 @@
-//! Run logs: MCAP (Foxglove), Rerun (.rrd) and summary.json, written atomically.
+//! Run logs: MCAP (Foxglove) and Rerun (.rrd), written atomically
+//! (`summary.json` is written by the runner).
 //!
 //! * [`write_mcap`]: Foxglove-flavoured MCAP (JSON topics with JSON schemas,
 //!   `/tf`, `/scene`, `/scene/paths`, metrics as metadata). Topic list in

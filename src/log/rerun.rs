@@ -32,9 +32,8 @@ use rr::components::{FillMode, Radius, Scalar};
 use rr::{EntityPath, EntityPathPart, RecordingStream, TimeColumn};
 
 use super::atomic::write_atomically;
-use super::mcap::marker_scale;
 use super::scene::{
-    coord_name, goal_pose, planar_path, segment_name, GOAL_RGBA, IDEAL_RGBA, SIM_RGBA,
+    coord_name, goal_pose, marker_scale, planar_path, segment_name, GOAL_RGBA, IDEAL_RGBA, SIM_RGBA,
 };
 use super::{validate, LogError};
 use crate::record::{Pose, RunRecord, Shape};

@@ -66,3 +66,32 @@ pub(crate) fn coord_name<'a>(names: &'a [&'static str], i: usize) -> Cow<'a, str
         _ => Cow::Owned(format!("q{i}")),
     }
 }
+
+/// Marker size: 3 % of the path's extent, within [5 cm, 1 m].
+pub(crate) fn marker_scale(path: &[[f64; 2]]) -> f64 {
+    let (mut lo, mut hi) = ([f64::INFINITY; 2], [f64::NEG_INFINITY; 2]);
+    for p in path.iter().filter(|p| p[0].is_finite() && p[1].is_finite()) {
+        for i in 0..2 {
+            lo[i] = lo[i].min(p[i]);
+            hi[i] = hi[i].max(p[i]);
+        }
+    }
+    let extent = (hi[0] - lo[0]).max(hi[1] - lo[1]);
+    if extent.is_finite() {
+        (0.03 * extent).clamp(0.05, 1.0)
+    } else {
+        0.1
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn marker_scale_is_bounded() {
+        assert_eq!(marker_scale(&[]), 0.1);
+        assert_eq!(marker_scale(&[[0.0, 0.0], [100.0, 0.0]]), 1.0);
+        assert_eq!(marker_scale(&[[0.0, 0.0], [0.1, 0.0]]), 0.05);
+    }
+}

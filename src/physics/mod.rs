@@ -36,7 +36,7 @@ pub trait PhysicsSystem {
 }
 
 /// Replay `plan` on `sys` for its duration plus `settle` seconds (zero input),
-/// calling `progress(fraction)` now and then.
+/// or until `settle` seconds after a feedback policy reports `done`; calling `progress(fraction)` now and then.
 ///
 /// Open-loop commands are applied at the step midpoint (so each step advances
 /// the joints by the exact integral of u to second order); feedback laws are
@@ -50,7 +50,10 @@ pub fn replay(
 ) -> Result<SimTrajectory, String> {
     let mut ctl = plan.controller();
     let n_plan = step_count(plan.duration, dt);
-    let n = n_plan + step_count(settle, dt);
+    let n_settle = step_count(settle, dt);
+    let n = n_plan + n_settle;
+    // A feedback policy that reports `done` ends the run `settle` seconds later.
+    let mut stop_at = n;
     let names = sys.channel_names();
     let mut out = SimTrajectory {
         channels: names
@@ -74,7 +77,6 @@ pub fn replay(
     };
     for k in 0..n {
         let t = k as f64 * dt;
-        record(&mut out, sys, t, &q);
         let cmd = if k >= n_plan || finished {
             let mut c = held.clone();
             c.u.fill(0.0);
@@ -94,6 +96,13 @@ pub fn replay(
                 }
             }
         };
+        if cmd.done && !finished {
+            stop_at = stop_at.min(k + n_settle);
+        }
+        if k >= stop_at {
+            break;
+        }
+        record(&mut out, sys, t, &q);
         finished |= cmd.done;
         out.traj.u.push(cmd.u.clone());
         out.traj.label.push(cmd.label);
@@ -111,7 +120,8 @@ pub fn replay(
             progress(k as f64 / n as f64);
         }
     }
-    record(&mut out, sys, n as f64 * dt, &q);
+    let t_end = out.steps as f64 * dt;
+    record(&mut out, sys, t_end, &q);
     let last = out.traj.u.last().cloned().unwrap_or_else(|| held.u.clone());
     out.traj.u.push(last);
     out.traj.label.push(held.label);

@@ -1,1 +1,228 @@
-//! Rigid-body counterpart of the rover system (in progress).
+//! Rigid-body overconstrained rover: `models/rover.urdf` on a ground plane.
+//!
+//! Five wheels touch the ground: the steered, driven front wheel and the two
+//! passive rear axles (middle and back). Nothing enforces the kinematic
+//! constraints: every wheel moves the body only through contact friction, so
+//! which rear axle holds and which one slips (σ of the seed's multiple-model
+//! system) is decided by the contact solver.
+//!
+//! Actuation: a velocity motor on `front_wheel_joint` at u1 / ρ (u1 is the
+//! front wheel's ground speed) and a velocity motor on `steer_joint` at u2
+//! (the URDF joint limit bounds ψ). Read-back: (x, y, θ) of the chassis
+//! frame, whose origin is the middle-axle centre (the model's reference
+//! point), and ψ the steering joint angle.
+//!
+//! Channels: per wheel the contact-point velocity along and across the wheel
+//! (`slip_<wheel>_lon`, `slip_<wheel>_lat`, m/s), and the envelope check of
+//! the measured (x', y', θ') against the multiple-model set for the last
+//! applied input (`envelope_distance`, `sigma_estimate`: 0 = model a, 1 =
+//! model b, NaN when the models coincide, i.e. ψ = 0 or u1 = 0).
+
+use super::urdf::{SimWorld, WorldOptions};
+use super::PhysicsSystem;
+use crate::model::rover::{envelope, RoverGeometry};
+use crate::model::{Input, State};
+use crate::record::Pose;
+use crate::scenario::SimConfig;
+use rapier3d::prelude::*;
+use std::f64::consts::{PI, TAU};
+use std::path::Path;
+
+/// Chassis link name (frame origin = middle-axle centre).
+pub const CHASSIS: &str = "chassis";
+/// Steering joint name (revolute about chassis z).
+pub const STEER_JOINT: &str = "steer_joint";
+/// Driven front wheel joint name.
+pub const FRONT_JOINT: &str = "front_wheel_joint";
+/// Wheel links, in channel order; the first is the steered front wheel.
+pub const WHEELS: [&str; 5] =
+    ["front_wheel", "middle_left_wheel", "middle_right_wheel", "back_left_wheel", "back_right_wheel"];
+
+fn wrap(a: f64) -> f64 {
+    (a + PI).rem_euclid(TAU) - PI
+}
+
+fn yaw_of(q: &Rotation) -> f64 {
+    let (x, y, z, w) = (q.x as f64, q.y as f64, q.z as f64, q.w as f64);
+    (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))
+}
+
+/// Wheel radius from the URDF: the front wheel's sphere or cylinder collision.
+pub fn urdf_wheel_radius(robot: &urdf_rs::Robot, link: &str) -> Option<f64> {
+    robot.links.iter().find(|l| l.name == link)?.collision.iter().find_map(|c| match c.geometry {
+        urdf_rs::Geometry::Sphere { radius } | urdf_rs::Geometry::Cylinder { radius, .. } => {
+            Some(radius)
+        }
+        _ => None,
+    })
+}
+
+/// x offset of a joint's origin in its parent frame.
+fn joint_x(robot: &urdf_rs::Robot, joint: &str) -> Option<f64> {
+    robot.joints.iter().find(|j| j.name == joint).map(|j| j.origin.xyz[0])
+}
+
+/// The rover in Rapier.
+pub struct RoverPhysics {
+    sim: SimWorld,
+    geom: RoverGeometry,
+    chassis: RigidBodyHandle,
+    steering: RigidBodyHandle,
+    wheels: Vec<RigidBodyHandle>,
+    steer_joint: ImpulseJointHandle,
+    front_joint: ImpulseJointHandle,
+    gain: f64,
+    max_torque: f64,
+    /// Unwrapped heading.
+    theta: f64,
+    /// Last applied input (the envelope check compares against it).
+    last_u: Input,
+}
+
+impl RoverPhysics {
+    /// Build the rover at `start` = (x, y, θ, ψ). The URDF must match `geom`.
+    pub fn new(
+        robot: &urdf_rs::Robot,
+        urdf_dir: &Path,
+        geom: RoverGeometry,
+        start: &[f64],
+        sim: &SimConfig,
+    ) -> Result<Self, String> {
+        let rho = urdf_wheel_radius(robot, WHEELS[0])
+            .ok_or_else(|| format!("URDF needs a link `{}` with a sphere or cylinder collision", WHEELS[0]))?;
+        if (rho - geom.wheel_radius).abs() > 1e-6 {
+            return Err(format!(
+                "URDF front wheel radius {rho} m differs from model.geometry.wheel_radius {} m",
+                geom.wheel_radius
+            ));
+        }
+        let l = joint_x(robot, STEER_JOINT).ok_or_else(|| format!("URDF has no joint `{STEER_JOINT}`"))?;
+        let r = joint_x(robot, "back_left_wheel_joint")
+            .ok_or_else(|| "URDF has no joint `back_left_wheel_joint`".to_string())?;
+        if (l - geom.l).abs() > 1e-6 || (-r - geom.r).abs() > 1e-6 {
+            return Err(format!(
+                "URDF axle positions (l = {l} m, r = {} m) differ from model.geometry (l = {}, r = {})",
+                -r, geom.l, geom.r
+            ));
+        }
+        let root = rapier3d::math::Pose::from_parts(
+            Vector::new(start[0] as Real, start[1] as Real, rho as Real),
+            Rotation::from_rotation_z(start[2] as Real),
+        );
+        let mut sw = SimWorld::new(robot, urdf_dir, &WorldOptions { sim, root_pose: root, ground: true });
+        // Warm-started joints: the wheel and steering joints then hold with a few solver
+        // iterations (without, the front wheel's ground speed lags or leads u1 by up to 20 %).
+        sw.world.integration_parameters.warmstart_joints = true;
+        let missing = |what: &str| format!("URDF has no {what}");
+        let chassis = sw.link(CHASSIS).ok_or_else(|| missing("link `chassis`"))?;
+        let steering = sw.link("steering").ok_or_else(|| missing("link `steering`"))?;
+        let wheels = WHEELS
+            .iter()
+            .map(|w| sw.link(w).ok_or_else(|| missing(&format!("link `{w}`"))))
+            .collect::<Result<Vec<_>, _>>()?;
+        let steer_joint = *sw.joints.get(STEER_JOINT).ok_or_else(|| missing("joint `steer_joint`"))?;
+        let front_joint = *sw.joints.get(FRONT_JOINT).ok_or_else(|| missing("joint `front_wheel_joint`"))?;
+        // Initial steering angle: rotate the steering link and the front wheel about the
+        // steering axis (the joint starts at ψ = 0 in the URDF pose).
+        if start[3] != 0.0 {
+            let axis_pt = sw.world.bodies[chassis].position().transform_point(Vector::new(l as Real, 0.0, 0.0));
+            let rot = Rotation::from_rotation_z(start[3] as Real);
+            for h in [steering, wheels[0]] {
+                let b = &mut sw.world.bodies[h];
+                let p = *b.position();
+                let t = axis_pt + rot * (p.translation - axis_pt);
+                b.set_position(rapier3d::math::Pose::from_parts(t, rot * p.rotation), true);
+            }
+        }
+        let mut me = RoverPhysics {
+            sim: sw,
+            geom,
+            chassis,
+            steering,
+            wheels,
+            steer_joint,
+            front_joint,
+            gain: sim.motor_gain,
+            max_torque: sim.motor_max_torque,
+            theta: start[2],
+            last_u: Input::zeros(2),
+        };
+        me.apply(&Input::zeros(2));
+        Ok(me)
+    }
+
+    fn steer_angle(&self) -> f64 {
+        let b = &self.sim.world.bodies;
+        let rel = b[self.chassis].rotation().inverse() * *b[self.steering].rotation();
+        wrap(yaw_of(&rel))
+    }
+
+    /// Contact-point velocity of wheel `i` along and across its rolling direction, m/s.
+    pub fn wheel_slip(&self, i: usize) -> (f64, f64) {
+        let b = &self.sim.world.bodies[self.wheels[i]];
+        let rho = self.geom.wheel_radius as Real;
+        let contact = b.translation() - Vector::new(0.0, 0.0, rho);
+        let v = b.velocity_at_point(contact);
+        // The wheel's axle is its local y axis; rolling direction = axle × z.
+        let axle = *b.rotation() * Vector::Y;
+        let fwd = Vector::new(axle.y, -axle.x, 0.0).normalize_or_zero();
+        let side = Vector::new(-fwd.y, fwd.x, 0.0);
+        (v.dot(fwd) as f64, v.dot(side) as f64)
+    }
+
+    /// Measured (x', y', θ') of the middle-axle point.
+    pub fn body_velocity(&self) -> nalgebra::Vector3<f64> {
+        let b = &self.sim.world.bodies[self.chassis];
+        let v = b.velocity_at_point(b.translation());
+        nalgebra::Vector3::new(v.x as f64, v.y as f64, b.angvel().z as f64)
+    }
+}
+
+impl PhysicsSystem for RoverPhysics {
+    fn state(&self) -> State {
+        let c = self.sim.world.bodies[self.chassis].translation();
+        State::from_vec(vec![c.x as f64, c.y as f64, self.theta, self.steer_angle()])
+    }
+
+    fn apply(&mut self, u: &Input) {
+        let (gain, tmax) = (self.gain, self.max_torque);
+        self.sim.drive_joint(self.front_joint, u[0] / self.geom.wheel_radius, gain, tmax);
+        self.sim.drive_joint(self.steer_joint, u[1], gain, tmax);
+        self.last_u = u.clone();
+    }
+
+    fn step(&mut self) {
+        self.sim.world.step();
+        let yaw = yaw_of(self.sim.world.bodies[self.chassis].rotation());
+        self.theta += wrap(yaw - wrap(self.theta));
+    }
+
+    fn link_poses(&self) -> Vec<Pose> {
+        self.sim.link_poses()
+    }
+
+    fn channel_names(&self) -> Vec<String> {
+        let mut out = Vec::new();
+        for w in WHEELS {
+            let w = w.trim_end_matches("_wheel");
+            out.push(format!("slip_{w}_lon"));
+            out.push(format!("slip_{w}_lat"));
+        }
+        out.push("envelope_distance".into());
+        out.push("sigma_estimate".into());
+        out
+    }
+
+    fn channels(&self) -> Vec<f64> {
+        let mut out = Vec::with_capacity(12);
+        for i in 0..WHEELS.len() {
+            let (lon, lat) = self.wheel_slip(i);
+            out.push(lon);
+            out.push(lat);
+        }
+        let fit = envelope(&self.geom, &self.state(), &self.last_u, &self.body_velocity());
+        out.push(fit.distance);
+        out.push(fit.sigma.unwrap_or(f64::NAN));
+        out
+    }
+}

@@ -1,1 +1,195 @@
-//! Rigid-body counterpart of the sphere system (in progress).
+//! Rigid-body rolling sphere: `models/sphere.urdf` (one link, `ball`) on a ground plane.
+//!
+//! The ball is a free rigid body: a hollow shell with an internal drive, lumped into one
+//! inertia. The drive is idealised as a pure torque on the shell that servoes the ball's
+//! world-frame angular velocity to the command (ω_x, ω_y, 0): three angular velocity motors
+//! (gain `sim.motor_gain`, each capped at `sim.motor_max_torque`) about the world x, y, z
+//! axes, solved by Rapier together with the contact. Nothing constrains the translation: the
+//! centre moves only through ball–ground friction, so slip (and spin, if the servo saturates)
+//! are real. State read back each step: centre (x, y) and the body orientation as a unit
+//! quaternion, kept sign-continuous.
+//!
+//! Channels: `slip_speed` (horizontal speed of the contact point, m/s), `spin_rate` (ω_z,
+//! rad/s), `orientation_error_deg` (geodesic angle between the simulated orientation and
+//! the orientation the commanded ω produces when integrated exactly, i.e. the ideal
+//! orientation up to O(dt²)), `height` (centre height minus the radius, m).
+
+use super::urdf::{SimWorld, WorldOptions};
+use super::PhysicsSystem;
+use crate::model::rolling_sphere::geodesic_angle;
+use crate::model::{Input, State};
+use crate::record::Pose;
+use crate::scenario::SimConfig;
+use nalgebra::{Quaternion, UnitQuaternion, Vector3};
+use rapier3d::prelude::*;
+use std::path::Path;
+
+/// The link the URDF must provide.
+pub const BALL: &str = "ball";
+
+/// The sphere in Rapier.
+pub struct SpherePhysics {
+    sim: SimWorld,
+    ball: RigidBodyHandle,
+    drive: ImpulseJointHandle,
+    a: f64,
+    gain: f64,
+    dt: f64,
+    /// Sign-continuous orientation read back after the last step (w, x, y, z).
+    q: [f64; 4],
+    /// Orientation from integrating the commanded ω exactly.
+    q_cmd: UnitQuaternion<f64>,
+    /// Last command.
+    u: [f64; 2],
+}
+
+/// Radius of the ball's collision sphere in the URDF, if any.
+pub fn urdf_ball_radius(robot: &urdf_rs::Robot) -> Option<f64> {
+    robot
+        .links
+        .iter()
+        .find(|l| l.name == BALL)?
+        .collision
+        .iter()
+        .find_map(|c| match c.geometry {
+            urdf_rs::Geometry::Sphere { radius } => Some(radius),
+            _ => None,
+        })
+}
+
+impl SpherePhysics {
+    /// Build the ball at `start` = (x, y, qw, qx, qy, qz), resting on the plane.
+    pub fn new(
+        robot: &urdf_rs::Robot,
+        urdf_dir: &Path,
+        radius: f64,
+        start: &[f64],
+        sim: &SimConfig,
+    ) -> Result<Self, String> {
+        let r_urdf = urdf_ball_radius(robot).ok_or_else(|| {
+            format!("URDF needs a link `{BALL}` with a sphere collision (the ball)")
+        })?;
+        if (r_urdf - radius).abs() > 1e-6 {
+            return Err(format!(
+                "URDF ball radius {r_urdf} m differs from the scenario's model.radius {radius} m"
+            ));
+        }
+        if start.len() != 6 {
+            return Err(format!(
+                "sphere physics needs a 6-value state, got {}",
+                start.len()
+            ));
+        }
+        let q0 = UnitQuaternion::from_quaternion(Quaternion::new(
+            start[2], start[3], start[4], start[5],
+        ));
+        let rot = Rotation::from_xyzw(q0.i as Real, q0.j as Real, q0.k as Real, q0.w as Real);
+        let root = rapier3d::math::Pose::from_parts(
+            Vector::new(start[0] as Real, start[1] as Real, radius as Real),
+            rot,
+        );
+        let mut sw = SimWorld::new(
+            robot,
+            urdf_dir,
+            &WorldOptions {
+                sim,
+                root_pose: root,
+                ground: true,
+            },
+        );
+        let ball = sw
+            .link(BALL)
+            .ok_or_else(|| format!("URDF has no link `{BALL}`"))?;
+        // The drive: no locked axes, angular velocity motors about the world axes.
+        let mut b = GenericJointBuilder::new(JointAxesMask::empty())
+            .local_frame1(rapier3d::math::Pose::IDENTITY)
+            .local_frame2(rapier3d::math::Pose::IDENTITY);
+        for axis in [JointAxis::AngX, JointAxis::AngY, JointAxis::AngZ] {
+            b = b
+                .motor_velocity(axis, 0.0, sim.motor_gain as Real)
+                .motor_max_force(axis, sim.motor_max_torque as Real);
+        }
+        let drive = sw
+            .world
+            .impulse_joints
+            .insert(sw.ground, ball, b.build(), true);
+        let mut me = SpherePhysics {
+            sim: sw,
+            ball,
+            drive,
+            a: radius,
+            gain: sim.motor_gain,
+            dt: sim.dt,
+            q: [q0.w, q0.i, q0.j, q0.k],
+            q_cmd: q0,
+            u: [0.0, 0.0],
+        };
+        me.apply(&Input::zeros(2));
+        Ok(me)
+    }
+
+    fn quat(&self) -> UnitQuaternion<f64> {
+        let [w, x, y, z] = self.q;
+        UnitQuaternion::from_quaternion(Quaternion::new(w, x, y, z))
+    }
+
+    /// Horizontal velocity of the ball's lowest point, m/s.
+    fn contact_slip(&self) -> f64 {
+        let b = &self.sim.world.bodies[self.ball];
+        let v = b.linvel() + b.angvel().cross(Vector::new(0.0, 0.0, -self.a as Real));
+        (v.x as f64).hypot(v.y as f64)
+    }
+}
+
+impl PhysicsSystem for SpherePhysics {
+    fn state(&self) -> State {
+        let c = self.sim.world.bodies[self.ball].translation();
+        let [w, x, y, z] = self.q;
+        State::from_vec(vec![c.x as f64, c.y as f64, w, x, y, z])
+    }
+
+    fn apply(&mut self, u: &Input) {
+        self.u = [u[0], u[1]];
+        let gain = self.gain as Real;
+        if let Some(j) = self.sim.world.impulse_joints.get_mut(self.drive, false) {
+            j.data
+                .set_motor_velocity(JointAxis::AngX, u[0] as Real, gain)
+                .set_motor_velocity(JointAxis::AngY, u[1] as Real, gain)
+                .set_motor_velocity(JointAxis::AngZ, 0.0, gain);
+        }
+    }
+
+    fn step(&mut self) {
+        self.sim.world.step();
+        let r = *self.sim.world.bodies[self.ball].rotation();
+        let mut q = [r.w as f64, r.x as f64, r.y as f64, r.z as f64];
+        let dot: f64 = q.iter().zip(&self.q).map(|(a, b)| a * b).sum();
+        if dot < 0.0 {
+            q = q.map(|v| -v);
+        }
+        let n = q.iter().map(|v| v * v).sum::<f64>().sqrt();
+        self.q = q.map(|v| v / n);
+        let w = Vector3::new(self.u[0], self.u[1], 0.0) * self.dt;
+        self.q_cmd = UnitQuaternion::from_scaled_axis(w) * self.q_cmd;
+    }
+
+    fn link_poses(&self) -> Vec<Pose> {
+        self.sim.link_poses()
+    }
+
+    fn channel_names(&self) -> Vec<String> {
+        ["slip_speed", "spin_rate", "orientation_error_deg", "height"]
+            .map(String::from)
+            .to_vec()
+    }
+
+    fn channels(&self) -> Vec<f64> {
+        let b = &self.sim.world.bodies[self.ball];
+        vec![
+            self.contact_slip(),
+            b.angvel().z as f64,
+            geodesic_angle(&self.q_cmd, &self.quat()).to_degrees(),
+            b.translation().z as f64 - self.a,
+        ]
+    }
+}

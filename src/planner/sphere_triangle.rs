@@ -3,7 +3,9 @@
 //! Steps (all straight rolls, so the plan is built with `plan_from_legs`; inputs are the
 //! world-frame (ω_x, ω_y) and a straight roll of ground length ℓ along heading h is
 //! ∫ω = (ℓ/a)(−sin h, cos h)):
-//! 1. [roll to goal position] roll straight to the goal spot F_g.
+//! 1. [roll to goal position] roll straight to the goal spot F_g. Skipped when step 2 alone
+//!    leaves the ball within d < π radii of F_g (e.g. any upright start that close, such as
+//!    §5.2's, which then plans step 3 only).
 //! 2. [roll P upright] roll straight so that P (the body z axis) points up; the ball ends at
 //!    distance d ≤ aπ from F_g, upright with some yaw β₃.
 //! 3. [triangle k: side a / b / c] one spherical-triangle manoeuvre (or two) that rolls back by
@@ -594,11 +596,33 @@ pub fn solve(
     let f_goal = [xg - a * thg * alg.cos(), yg - a * thg * alg.sin()];
     let beta_f = alg + phg;
     let r0 = UnitQuaternion::from_rotation_matrix(&euler_to_rotation(start[2], start[3], start[4]));
-    // Step 1: ∫ω = (−Δy, Δx)/a.
-    let roll1 = [-(f_goal[1] - start[1]) / a, (f_goal[0] - start[0]) / a];
     let rot = |w: [f64; 2]| {
         let v = Vector3::new(w[0], w[1], 0.0);
         UnitQuaternion::from_scaled_axis(v)
+    };
+    // Step 1 is skipped when bringing P upright from the start already leaves the ball within
+    // reach of the triangles (d < π radii): then an upright start plans step 3 alone, as §5.2
+    // simulates it ("the first two steps are trivial").
+    let skip1 = {
+        let pz = r0 * Vector3::z();
+        let cross = pz.cross(&Vector3::z());
+        let ang = cross.norm().atan2(pz.z);
+        let axis = if cross.norm() > 1e-15 {
+            cross / cross.norm()
+        } else {
+            Vector3::x()
+        };
+        let q = [start[0] + a * axis.y * ang, start[1] - a * axis.x * ang];
+        (f_goal[0] - q[0]).hypot(f_goal[1] - q[1]) / a < PI * (1.0 - 1e-9)
+    };
+    // Step 1: ∫ω = (−Δy, Δx)/a.
+    let (roll1, p1) = if skip1 {
+        ([0.0, 0.0], [start[0], start[1]])
+    } else {
+        (
+            [-(f_goal[1] - start[1]) / a, (f_goal[0] - start[0]) / a],
+            f_goal,
+        )
     };
     let r1 = rot(roll1) * r0;
     // Step 2: rotate P = R k onto k about the horizontal axis P × k.
@@ -616,7 +640,7 @@ pub fn solve(
         [0.0, 0.0]
     };
     let r3 = rot(roll2) * r1;
-    let q3 = [f_goal[0] + a * roll2[1], f_goal[1] - a * roll2[0]];
+    let q3 = [p1[0] + a * roll2[1], p1[1] - a * roll2[0]];
     let m = r3.to_rotation_matrix();
     let beta3 = m[(1, 0)].atan2(m[(0, 0)]);
     let (dx, dy) = ((f_goal[0] - q3[0]) / a, (f_goal[1] - q3[1]) / a);
@@ -767,8 +791,8 @@ mod tests {
     };
     use proptest::prelude::*;
 
-    /// See the geometric planner's tests: 2.5e-4 s keeps RK4's ramp-corner error ≪ 1e-9.
-    const DT: f64 = 2.5e-4;
+    /// See the geometric planner's tests: the harness's 1e-3 s keeps RK4's error ≪ 1e-9.
+    const DT: f64 = 1e-3;
     fn limits() -> Limits {
         Limits {
             max_rate: vec![2.0, 2.0],
@@ -993,6 +1017,34 @@ mod tests {
             .unwrap();
             let (dp, dr) = ideal_error(a, &plan, &start, &goal);
             assert!(dp < 1e-9 && dr < 1e-9, "{start} -> {goal}: {dp:e} {dr:e}");
+        }
+    }
+
+    /// Step 1 is skipped for a start that is upright (or gets upright) within d < π of the
+    /// goal spot, and kept beyond; both plans reach the goal.
+    #[test]
+    fn step_one_is_skipped_within_reach() {
+        let m = RollingSphere { a: 1.0 };
+        let goal = deg_state(0.0, 0.0, 0.0, 0.0, 40.0);
+        for (start, skipped) in [
+            (deg_state(-1.0, -1.5, 0.0, 0.0, 0.0), true),
+            (deg_state(2.0, 1.0, 30.0, 50.0, 0.0), true),
+            (deg_state(3.1, 0.5, 0.0, 0.0, 0.0), false),
+            (deg_state(1.0, 0.0, 0.0, 170.0, 0.0), false),
+        ] {
+            let sol = solve(&m, &start, &goal, &SphereTriangleParams::default()).unwrap();
+            assert_eq!(sol.roll1 == [0.0, 0.0], skipped, "{start}");
+            assert!(sol.d < PI);
+            let plan = plan(
+                &m,
+                &start,
+                &goal,
+                &SphereTriangleParams::default(),
+                &limits(),
+            )
+            .unwrap();
+            let (dp, dr) = ideal_error(1.0, &plan, &start, &goal);
+            assert!(dp < 1e-9 && dr < 1e-9, "{start}: {dp:e} {dr:e}");
         }
     }
 

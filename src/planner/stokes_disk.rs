@@ -18,7 +18,7 @@
 //! Misprints in the OCR'd §4.2 (the tests assert the justified values):
 //! * Eq. 28 reads b = −2α_f ± nπ; only odd multiples of π make x repeatable,
 //!   so b = π − 2α_f (mod 2π) is used.
-//!//! * The printed b = 0.01808, a = 132.72 follow from the rounded drift
+//! * The printed b = 0.01808, a = 132.72 follow from the rounded drift
 //!   (0.1522, 0.7654); the exact drift gives b = 0.01813, a = 132.38 — the
 //!   loop is that sensitive near the singularity.
 //! * The detour loop's printed b = 0.8034 rad, a = 3.068 rad also follow from the

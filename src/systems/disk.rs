@@ -29,7 +29,8 @@ struct Disk {
 
 /// Build the disk system.
 pub fn build(cfg: &DiskModelConfig, planner: &PlannerConfig) -> Result<Box<dyn System>, String> {
-    if !(cfg.radius > 0.0) {
+    // Written to also reject NaN (the scenario parser already rejects it).
+    if cfg.radius.is_nan() || cfg.radius <= 0.0 {
         return Err("key `model.radius`: must be > 0".into());
     }
     match planner {

@@ -23,6 +23,15 @@ use std::path::Path;
 pub trait System: Send + Sync {
     /// The kinematic model (state and input names, ideal dynamics).
     fn model(&self) -> &dyn KinematicModel;
+    /// The chart `start`/`goal` are written in in scenario files (lengths, degrees), when it
+    /// differs from the model state (e.g. Euler angles for a quaternion model). Default: the model.
+    fn file_model(&self) -> &dyn KinematicModel {
+        self.model()
+    }
+    /// A `start`/`goal` in [`System::file_model`] coordinates (SI) as a model state. Default: as is.
+    fn state_from_file(&self, q: Vec<f64>) -> Vec<f64> {
+        q
+    }
     /// Default per-input rate limits for open-loop plans.
     fn default_max_rate(&self) -> Vec<f64>;
     /// Run the configured planner.

@@ -1,10 +1,50 @@
-//! Placeholder: the rover system is being integrated (planner math lives in
-//! crate::planner, model in crate::model).
+//! The overconstrained rover (seed 002): the switching kinematic model, the P1–P3 feedback
+//! primitives and `models/rover.urdf` with five wheels in contact.
+//!
+//! The ideal run integrates the multiple-model system with a prescribed σ(t) (`[model.switching]`);
+//! the physics run lets the contact solver decide which rear axle slips. The feedback policy
+//! reads whichever state it is given, so both runs are closed loop. With
+//! `open_loop_replay = true` the plan is instead the command sequence recorded from the ideal
+//! closed-loop run, replayed without feedback (it still reaches the goal in the ideal run,
+//! which is deterministic, but not on Rapier).
 
-use super::System;
-use crate::scenario::PlannerConfig;
+use super::{mismatch, System};
+use crate::integrate::{simulate, Trajectory};
+use crate::model::rover::{RoverGeometry, SwitchingRover, SwitchingSignal};
+use crate::model::{Input, KinematicModel, State};
+use crate::physics::rover::RoverPhysics;
+use crate::physics::PhysicsSystem;
+use crate::plan::{Command, ControlLaw, Controller, Limits, Plan, PolicyFactory};
+use crate::planner::rover_primitives::{self, se2_distance, RoverPrimitiveParams};
+use crate::planner::PlanError;
+use crate::record::SimTrajectory;
+use crate::scenario::{PlannerConfig, SimConfig};
 use serde::{Deserialize, Serialize};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// σ(t) of the ideal run.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum SwitchingConfig {
+    /// σ ≡ a (middle axle holds).
+    A,
+    /// σ ≡ b (back axle holds).
+    B,
+    /// Random telegraph signal: fair initial coin, Poisson switches at `rate` per second.
+    Telegraph {
+        /// RNG seed.
+        seed: u64,
+        /// Mean switching rate, 1/s.
+        rate: f64,
+    },
+}
+
+impl Default for SwitchingConfig {
+    fn default() -> Self {
+        SwitchingConfig::Telegraph { seed: 1, rate: 0.5 }
+    }
+}
 
 /// `[model] kind = "rover"`.
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -12,9 +52,171 @@ use std::path::PathBuf;
 pub struct RoverConfig {
     /// URDF file, relative to the scenario file.
     pub urdf: PathBuf,
+    /// Dimensions (must match the URDF); defaults: l = r = 0.25 m, wheel radius 0.065 m.
+    #[serde(default)]
+    pub geometry: RoverGeometry,
+    /// σ(t) for the ideal run.
+    #[serde(default)]
+    pub switching: SwitchingConfig,
+    /// Replay the ideal closed-loop run's commands open loop (no feedback).
+    #[serde(default)]
+    pub open_loop_replay: bool,
+    /// A physics sample counts as inside the envelope when its distance to the allowed
+    /// velocity set is at most this (m/s and rad/s alike).
+    #[serde(default = "default_envelope_tolerance")]
+    pub envelope_tolerance: f64,
 }
 
-/// Build the system.
-pub fn build(_cfg: &RoverConfig, _planner: &PlannerConfig) -> Result<Box<dyn System>, String> {
-    Err("model `rover` is not available yet".into())
+fn default_envelope_tolerance() -> f64 {
+    0.02
+}
+
+struct Rover {
+    model: SwitchingRover,
+    params: RoverPrimitiveParams,
+    open_loop: bool,
+    envelope_tol: f64,
+}
+
+/// Build the rover system.
+pub fn build(cfg: &RoverConfig, planner: &PlannerConfig) -> Result<Box<dyn System>, String> {
+    cfg.geometry.validate().map_err(|e| format!("key `model.geometry`: {e}"))?;
+    if !(cfg.envelope_tolerance.is_finite() && cfg.envelope_tolerance >= 0.0) {
+        return Err("key `model.envelope_tolerance`: must be finite and ≥ 0".into());
+    }
+    let params = match planner {
+        PlannerConfig::RoverPrimitives(p) => p.clone(),
+        other => return Err(mismatch("rover", other, &["rover_primitives"])),
+    };
+    let horizon = if params.horizon.is_finite() { params.horizon.max(0.0) } else { 0.0 };
+    let signal = match cfg.switching {
+        SwitchingConfig::A => SwitchingSignal::FixedA,
+        SwitchingConfig::B => SwitchingSignal::FixedB,
+        SwitchingConfig::Telegraph { seed, rate } => SwitchingSignal::telegraph(seed, rate, horizon)
+            .map_err(|e| format!("key `model.switching`: {e}"))?,
+    };
+    Ok(Box::new(Rover {
+        model: SwitchingRover::new(cfg.geometry, signal),
+        params,
+        open_loop: cfg.open_loop_replay,
+        envelope_tol: cfg.envelope_tolerance,
+    }))
+}
+
+/// Replays recorded commands on the policy's sample grid, ignoring the state.
+struct Recorded {
+    t: Vec<f64>,
+    u: Vec<Input>,
+    label: Vec<usize>,
+}
+
+struct RecordedController(Arc<Recorded>);
+
+impl Controller for RecordedController {
+    fn command(&mut self, t: f64, _q: &State) -> Command {
+        let r = &self.0;
+        let k = r.t.partition_point(|&s| s <= t + 1e-9).saturating_sub(1);
+        Command { u: r.u[k].clone(), label: r.label[k], done: false }
+    }
+}
+
+struct RecordedFactory(Arc<Recorded>);
+
+impl PolicyFactory for RecordedFactory {
+    fn start(&self) -> Box<dyn Controller> {
+        Box::new(RecordedController(self.0.clone()))
+    }
+}
+
+/// First time the run is within `eps` of the goal in the seed's SE(2) metric (NaN if never).
+pub fn time_to_goal(tr: &Trajectory, goal: &State, eps: f64) -> f64 {
+    tr.q.iter().zip(&tr.t).find(|(q, _)| se2_distance(q, goal) <= eps).map(|(_, t)| *t).unwrap_or(f64::NAN)
+}
+
+impl System for Rover {
+    fn model(&self) -> &dyn KinematicModel {
+        &self.model
+    }
+    fn default_max_rate(&self) -> Vec<f64> {
+        vec![1.0, 2.0]
+    }
+    fn plan(&self, start: &State, goal: &State, limits: &Limits) -> Result<Plan, PlanError> {
+        let plan = rover_primitives::plan(&self.model, start, goal, &self.params, limits)?;
+        if !self.open_loop {
+            return Ok(plan);
+        }
+        // Record the ideal closed-loop run and hand out its commands as an open-loop plan
+        // (sampled and held on the same control grid, so the ideal replay is exact).
+        let ideal = simulate(&self.model, &plan, start, limits.step);
+        let n = ideal.t.len().saturating_sub(1).max(1);
+        let duration = ideal.t.last().copied().unwrap_or(0.0);
+        let rec = Recorded {
+            t: ideal.t[..n].to_vec(),
+            u: ideal.u[..n].to_vec(),
+            label: ideal.label[..n].to_vec(),
+        };
+        let mut details = plan.details.clone();
+        details["open_loop_replay"] = serde_json::json!({
+            "recorded_duration_s": duration,
+            "ideal_closed_loop_goal_se2": se2_distance(ideal.last(), goal),
+        });
+        Ok(Plan {
+            labels: plan.labels,
+            segments: Vec::new(),
+            duration,
+            law: ControlLaw::Feedback { factory: Arc::new(RecordedFactory(Arc::new(rec))), period: self.params.period },
+            details,
+        })
+    }
+    fn physics(
+        &self,
+        robot: &urdf_rs::Robot,
+        urdf_dir: &Path,
+        start: &[f64],
+        sim: &SimConfig,
+    ) -> Result<Box<dyn PhysicsSystem>, String> {
+        Ok(Box::new(RoverPhysics::new(robot, urdf_dir, self.model.geometry, start, sim)?))
+    }
+    fn extra_metric_names(&self) -> Vec<String> {
+        [
+            "ideal_goal_se2",
+            "sim_goal_se2",
+            "ideal_time_to_goal",
+            "sim_time_to_goal",
+            "envelope_fraction",
+            "envelope_outside_fraction",
+            "envelope_distance_max",
+            "slip_lateral_max",
+            "slip_longitudinal_max",
+        ]
+        .map(String::from)
+        .to_vec()
+    }
+    fn extra_metrics(&self, goal: &State, ideal: &Trajectory, sim: &SimTrajectory) -> Vec<(String, f64)> {
+        let eps = self.params.epsilon;
+        let chan = |name: &str| sim.channels.iter().find(|(n, _)| n == name).map(|(_, v)| v.as_slice());
+        let mut out = vec![
+            ("ideal_goal_se2".to_string(), se2_distance(ideal.last(), goal)),
+            ("sim_goal_se2".to_string(), se2_distance(sim.traj.last(), goal)),
+            ("ideal_time_to_goal".to_string(), time_to_goal(ideal, goal, eps)),
+            ("sim_time_to_goal".to_string(), time_to_goal(&sim.traj, goal, eps)),
+        ];
+        let env = chan("envelope_distance").unwrap_or(&[]);
+        let finite: Vec<f64> = env.iter().copied().filter(|v| v.is_finite()).collect();
+        let inside = finite.iter().filter(|&&d| d <= self.envelope_tol).count();
+        let frac = if finite.is_empty() { f64::NAN } else { inside as f64 / finite.len() as f64 };
+        out.push(("envelope_fraction".into(), frac));
+        out.push(("envelope_outside_fraction".into(), 1.0 - frac));
+        out.push(("envelope_distance_max".into(), finite.iter().fold(0.0, |m: f64, v| m.max(*v))));
+        let max_abs = |suffix: &str| {
+            sim.channels
+                .iter()
+                .filter(|(n, _)| n.starts_with("slip_") && n.ends_with(suffix))
+                .flat_map(|(_, v)| v.iter())
+                .fold(0.0, |m: f64, v| m.max(v.abs()))
+        };
+        out.push(("slip_lateral_max".into(), max_abs("_lat")));
+        out.push(("slip_longitudinal_max".into(), max_abs("_lon")));
+        out
+    }
 }

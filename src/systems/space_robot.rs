@@ -1,12 +1,42 @@
-//! Placeholder: the space_robot system is being integrated (planner math lives in
-//! crate::planner, model in crate::model).
+//! The free-floating planar space robot (seed 000 §4.1, seed 001 §5):
+//! `models/space_robot.urdf`, planners `stokes_space` (seed 000 §4.1) and
+//! `endogenous` (seed 001).
+//!
+//! Both planners drive the joints (θ1', θ2'); the vehicle angle θ0 moves only
+//! by conservation of angular momentum. The ideal run integrates seed 000's
+//! Eq. 13 ([`SpaceRobotModel`], state (θ0, θ1, θ2)) for both planners: the
+//! endogenous planner plans on seed 001's Eq. 29 ([`SpaceManipulator`],
+//! state (φ, θ1, θ2), p = 0), which is the same vector field (tested in
+//! `model::space_manipulator`), so metric names are the same for every
+//! space-robot scenario.
+//!
+//! Extra metrics (from the physics channels, maxima over the whole run):
+//! `max_abs_angular_momentum` (|L_z| about the system CoM, kg m²/s),
+//! `max_angular_momentum_out_of_plane`, `max_linear_momentum` (kg m/s),
+//! `max_com_drift` (m), `max_out_of_plane` (m or rad), `max_contact_pairs`.
+//! Endogenous plans with via points also report `ideal_via_error_deg` and
+//! `sim_via_error_deg`: the largest coordinate error (deg, wrapped) at the
+//! via times T, 2T, ….
 
-use super::System;
-use crate::scenario::PlannerConfig;
+use super::{mismatch, System};
+use crate::compare::{coord_error, sample};
+use crate::integrate::Trajectory;
+use crate::model::space_manipulator::SpaceManipulator;
+use crate::model::space_robot::{SpaceRobot, SpaceRobotModel};
+use crate::model::{KinematicModel, State};
+use crate::physics::space_robot::SpaceRobotPhysics;
+use crate::physics::PhysicsSystem;
+use crate::plan::{Limits, Plan};
+use crate::planner::endogenous::{self, EndogenousParams};
+use crate::planner::stokes_space::{self, StokesSpaceParams};
+use crate::planner::PlanError;
+use crate::record::SimTrajectory;
+use crate::scenario::{PlannerConfig, SimConfig};
 use serde::{Deserialize, Serialize};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
-/// `[model] kind = "space_robot"`.
+/// `[model] kind = "space_robot"`. The robot is seed 000's table (the URDF
+/// must match it; the physics checks).
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct SpaceRobotConfig {
@@ -14,7 +44,133 @@ pub struct SpaceRobotConfig {
     pub urdf: PathBuf,
 }
 
-/// Build the system.
-pub fn build(_cfg: &SpaceRobotConfig, _planner: &PlannerConfig) -> Result<Box<dyn System>, String> {
-    Err("model `space_robot` is not available yet".into())
+enum Planner {
+    Stokes(StokesSpaceParams),
+    Endogenous(EndogenousParams),
+}
+
+struct Space {
+    model: SpaceRobotModel,
+    planner: Planner,
+}
+
+/// Channel name → metric name (maximum of |value| over the run).
+const CHANNEL_METRICS: [(&str, &str); 6] = [
+    ("angular_momentum_z", "max_abs_angular_momentum"),
+    ("angular_momentum_out_of_plane", "max_angular_momentum_out_of_plane"),
+    ("linear_momentum_norm", "max_linear_momentum"),
+    ("com_drift", "max_com_drift"),
+    ("out_of_plane", "max_out_of_plane"),
+    ("contact_pairs", "max_contact_pairs"),
+];
+
+/// Build the space-robot system.
+pub fn build(_cfg: &SpaceRobotConfig, planner: &PlannerConfig) -> Result<Box<dyn System>, String> {
+    let planner = match planner {
+        PlannerConfig::StokesSpace(p) => Planner::Stokes(p.clone()),
+        PlannerConfig::Endogenous(p) => {
+            if p.via_deg.iter().any(|v| v.len() != 3 || v.iter().any(|x| !x.is_finite())) {
+                return Err("key `planner.via_deg`: each via point needs 3 finite angles (θ0, θ1, θ2) in degrees".into());
+            }
+            if !(p.segment_time.is_finite() && p.segment_time > 0.0) {
+                return Err("key `planner.segment_time`: must be > 0".into());
+            }
+            Planner::Endogenous(p.clone())
+        }
+        other => return Err(mismatch("space_robot", other, &["stokes_space", "endogenous"])),
+    };
+    Ok(Box::new(Space { model: SpaceRobotModel::default(), planner }))
+}
+
+impl Space {
+    fn via(&self) -> Vec<(f64, State)> {
+        match &self.planner {
+            Planner::Endogenous(p) => p
+                .via_deg
+                .iter()
+                .enumerate()
+                .map(|(k, v)| {
+                    ((k + 1) as f64 * p.segment_time, State::from_iterator(3, v.iter().map(|x| x.to_radians())))
+                })
+                .collect(),
+            Planner::Stokes(_) => Vec::new(),
+        }
+    }
+}
+
+fn manipulator(r: &SpaceRobot) -> SpaceManipulator {
+    use crate::model::space_manipulator::SpaceManipulatorParams;
+    SpaceManipulator::new(SpaceManipulatorParams {
+        m0: r.m0,
+        i0: r.i0,
+        m1: r.m1,
+        i1: r.i1,
+        l1: r.l1,
+        d1: 0.5 * r.l1,
+        m2: r.m2,
+        i2: r.i2,
+        l2: r.l2,
+        d2: 0.5 * r.l2,
+        p: 0.0,
+    })
+}
+
+impl System for Space {
+    fn model(&self) -> &dyn KinematicModel {
+        &self.model
+    }
+    fn default_max_rate(&self) -> Vec<f64> {
+        vec![1.0, 1.0]
+    }
+    fn plan(&self, start: &State, goal: &State, limits: &Limits) -> Result<Plan, PlanError> {
+        match &self.planner {
+            Planner::Stokes(p) => stokes_space::plan(&self.model, start, goal, p, limits),
+            Planner::Endogenous(p) => endogenous::plan(&manipulator(&self.model.robot), start, goal, p, limits),
+        }
+    }
+    fn physics(
+        &self,
+        robot: &urdf_rs::Robot,
+        urdf_dir: &Path,
+        start: &[f64],
+        sim: &SimConfig,
+    ) -> Result<Box<dyn PhysicsSystem>, String> {
+        let p = SpaceRobotPhysics::new(robot, urdf_dir, &self.model.robot, start, sim)?;
+        Ok(Box::new(p))
+    }
+    fn extra_metric_names(&self) -> Vec<String> {
+        let mut out: Vec<String> = CHANNEL_METRICS.iter().map(|(_, m)| m.to_string()).collect();
+        if !self.via().is_empty() {
+            out.push("ideal_via_error_deg".into());
+            out.push("sim_via_error_deg".into());
+        }
+        out
+    }
+    fn extra_metrics(&self, _goal: &State, ideal: &Trajectory, sim: &SimTrajectory) -> Vec<(String, f64)> {
+        let mut out = Vec::new();
+        for (channel, metric) in CHANNEL_METRICS {
+            let v = sim
+                .channels
+                .iter()
+                .find(|(n, _)| n == channel)
+                .map(|(_, s)| s.iter().fold(0.0_f64, |m, v| m.max(v.abs())))
+                .unwrap_or(f64::NAN);
+            out.push((metric.to_string(), v));
+        }
+        let via = self.via();
+        if !via.is_empty() {
+            let angular = self.model.angular_states();
+            let err = |traj: &Trajectory| {
+                via.iter()
+                    .map(|(t, y)| {
+                        coord_error(y, &sample(traj, *t), angular).iter().fold(0.0_f64, |m, e| m.max(e.abs()))
+                    })
+                    .fold(0.0_f64, f64::max)
+                    .to_degrees()
+            };
+            out.push(("ideal_via_error_deg".into(), err(ideal)));
+            out.push(("sim_via_error_deg".into(), err(&sim.traj)));
+        }
+        out
+    }
 }
