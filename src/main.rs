@@ -65,6 +65,9 @@ struct RunArgs {
     /// Never show progress bars.
     #[arg(long)]
     quiet: bool,
+    /// Sweep scenarios only: run the variants with index % N == I (writes sweep-shard-I-of-N.json).
+    #[arg(long, value_name = "I/N")]
+    shard: Option<String>,
 }
 
 fn load_all(paths: &[PathBuf]) -> Result<Vec<Prepared>, Vec<Error>> {
@@ -130,10 +133,21 @@ fn run_cmd(args: &RunArgs, gate: bool) -> Result<u8, Vec<Error>> {
         log_root: (!args.no_logs).then(|| args.logs.clone()),
         progress: !args.quiet,
     };
+    let shard = match &args.shard {
+        Some(s) => Some(
+            anholonomy::sweep::Shard::parse(s).map_err(|m| vec![Error::input("--shard", m)])?,
+        ),
+        None => None,
+    };
     let mut rows = Vec::new();
     let mut errors = Vec::new();
     for p in &preps {
-        match run(p, &opts) {
+        let res = if p.scenario.sweep.is_some() {
+            anholonomy::sweep::run_sweep(p, &opts, shard)
+        } else {
+            run(p, &opts)
+        };
+        match res {
             Ok(o) => rows.push(o),
             Err(e) => errors.push(e),
         }

@@ -78,6 +78,17 @@ pub struct Comparison {
     pub position_error: Option<Vec<f64>>,
 }
 
+/// A named polyline in the world frame, drawn with the paths (e.g. a target line).
+#[derive(Debug, Clone, PartialEq, Serialize)]
+pub struct Overlay {
+    /// Entity name.
+    pub name: String,
+    /// Points, m.
+    pub points: Vec<[f64; 3]>,
+    /// RGBA in [0, 1].
+    pub rgba: [f32; 4],
+}
+
 /// Everything about one run that a logger may show.
 pub struct RunRecord<'a> {
     /// Scenario name.
@@ -92,6 +103,10 @@ pub struct RunRecord<'a> {
     pub position: Option<[usize; 2]>,
     /// Goal state.
     pub goal: &'a [f64],
+    /// Goal heading as a world yaw (rad, from +x towards +y), when the model has one.
+    pub goal_heading: Option<f64>,
+    /// Extra polylines for the 3D views.
+    pub overlays: &'a [Overlay],
     /// Label names (plan segments / primitives).
     pub labels: &'a [String],
     /// The ideal kinematic run.

@@ -276,6 +276,8 @@ fn write_logs(
     let model = prep.model();
     let links = urdf::visuals(&prep.robot);
     let goal_v: Vec<f64> = goal.iter().copied().collect();
+    let (start, _) = prep.start_goal();
+    let overlays = prep.system.overlays(&start, goal);
     let rec = RunRecord {
         scenario: &prep.scenario.name,
         state_names: model.state_names(),
@@ -283,6 +285,8 @@ fn write_logs(
         angular: model.angular_states(),
         position: model.position_states(),
         goal: &goal_v,
+        goal_heading: prep.system.goal_heading(goal),
+        overlays: &overlays,
         labels: &plan.labels,
         ideal,
         sim,

@@ -148,6 +148,7 @@ struct ScenarioFile {
     sim: SimConfig,
     #[serde(default)]
     thresholds: BTreeMap<String, f64>,
+    sweep: Option<crate::sweep::SweepConfig>,
 }
 
 /// A validated scenario with resolved paths and SI units.
@@ -177,6 +178,8 @@ pub struct Scenario {
     pub sim: SimConfig,
     /// Metric name → maximum allowed value.
     pub thresholds: BTreeMap<String, f64>,
+    /// Monte Carlo variants (`[sweep]`): `run`/`check` run the sweep instead of one run.
+    pub sweep: Option<crate::sweep::SweepConfig>,
 }
 
 fn line_of(text: &str, offset: usize) -> usize {
@@ -238,21 +241,23 @@ fn check_finite(path: &Path, text: &str) -> Result<(), Error> {
 fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> Error {
     let message = e.message().trim().replace('\n', " ");
     let mut line = e.span().map(|s| line_of(text, s.start));
-    // serde reports unknown fields at the enclosing table; point at the key itself.
+    // serde reports unknown fields at the enclosing table (or its tag); point
+    // at the key itself: search from the span to the end of that table.
     if let (Some(span), Some(key)) = (e.span(), message.split('`').nth(1)) {
         if message.starts_with("unknown field") {
-            let region = &text[span.start.min(text.len())..span.end.min(text.len())];
-            if let Some(pos) = region
-                .lines()
-                .scan(0, |off, l| {
-                    let here = *off;
-                    *off += l.len() + 1;
-                    Some((here, l))
-                })
-                .find(|(_, l)| l.trim_start().starts_with(key) && l.contains('='))
-                .map(|(o, _)| o)
-            {
-                line = Some(line_of(text, span.start + pos));
+            let start = text[..span.start.min(text.len())].rfind('\n').map_or(0, |i| i + 1);
+            let mut offset = start;
+            for (i, l) in text[start..].split('\n').enumerate() {
+                let t = l.trim_start();
+                if i > 0 && t.starts_with('[') {
+                    break;
+                }
+                let k = t.split('=').next().unwrap_or("").trim().trim_matches('"');
+                if t.contains('=') && k == key {
+                    line = Some(line_of(text, offset));
+                    break;
+                }
+                offset += l.len() + 1;
             }
         }
     }
@@ -351,6 +356,9 @@ impl Scenario {
                     .into(),
             ));
         }
+        if let Some(sw) = &file.sweep {
+            sw.validate().map_err(&bad)?;
+        }
         for (k, v) in &file.thresholds {
             if *v < 0.0 {
                 return Err(bad(format!("key `thresholds.{k}`: must be ≥ 0")));
@@ -369,6 +377,7 @@ impl Scenario {
             ramp: file.limits.ramp,
             sim: file.sim,
             thresholds: file.thresholds,
+            sweep: file.sweep,
         })
     }
 }

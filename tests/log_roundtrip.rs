@@ -160,6 +160,8 @@ impl Fixture {
             comparison: &self.comparison,
             links: &self.links,
             metrics: &self.metrics,
+            goal_heading: self.goal.get(2).copied(),
+            overlays: &[],
         }
     }
 }

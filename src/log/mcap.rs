@@ -576,6 +576,13 @@ fn paths_scene(rec: &RunRecord<'_>) -> Option<SceneUpdate> {
             ..entity("sim_path")
         },
     ];
+    for o in rec.overlays {
+        let pts: Vec<[f64; 2]> = o.points.iter().map(|p| [p[0], p[1]]).collect();
+        entities.push(SceneEntity {
+            lines: vec![line(&pts, o.rgba)],
+            ..entity(&o.name)
+        });
+    }
     if let Some(([gx, gy], heading)) = goal_pose(rec) {
         let s = marker_scale(&ideal);
         let at = Pose {

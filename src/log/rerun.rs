@@ -309,6 +309,17 @@ fn log_robot(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrErro
 }
 
 fn log_paths(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrError> {
+    for o in rec.overlays {
+        let strip: Vec<[f32; 3]> =
+            o.points.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]).collect();
+        stream.log_static(
+            ep(&["paths", &o.name]),
+            &rr::LineStrips3D::new([strip])
+                .with_colors([rgba(o.rgba)])
+                .with_radii([Radius::new_ui_points(1.0)])
+                .with_labels([o.name.as_str()]),
+        )?;
+    }
     let (Some(ideal), Some(sim)) = (planar_path(rec, rec.ideal), planar_path(rec, &rec.sim.traj))
     else {
         return Ok(());

@@ -45,7 +45,7 @@ pub(crate) fn planar_path(rec: &RunRecord<'_>, traj: &Trajectory) -> Option<Vec<
 pub(crate) fn goal_pose(rec: &RunRecord<'_>) -> Option<([f64; 2], Option<f64>)> {
     let [ix, iy] = rec.position?;
     let p = [*rec.goal.get(ix)?, *rec.goal.get(iy)?];
-    let heading = rec.angular.first().and_then(|&a| rec.goal.get(a)).copied();
+    let heading = rec.goal_heading;
     Some((p, heading))
 }
 

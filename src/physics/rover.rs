@@ -110,9 +110,6 @@ impl RoverPhysics {
             Rotation::from_rotation_z(start[2] as Real),
         );
         let mut sw = SimWorld::new(robot, urdf_dir, &WorldOptions { sim, root_pose: root, ground: true });
-        // Warm-started joints: the wheel and steering joints then hold with a few solver
-        // iterations (without, the front wheel's ground speed lags or leads u1 by up to 20 %).
-        sw.world.integration_parameters.warmstart_joints = true;
         let missing = |what: &str| format!("URDF has no {what}");
         let chassis = sw.link(CHASSIS).ok_or_else(|| missing("link `chassis`"))?;
         let steering = sw.link("steering").ok_or_else(|| missing("link `steering`"))?;

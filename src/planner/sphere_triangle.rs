@@ -1029,8 +1029,9 @@ mod tests {
         for (start, skipped) in [
             (deg_state(-1.0, -1.5, 0.0, 0.0, 0.0), true),
             (deg_state(2.0, 1.0, 30.0, 50.0, 0.0), true),
-            (deg_state(3.1, 0.5, 0.0, 0.0, 0.0), false),
-            (deg_state(1.0, 0.0, 0.0, 170.0, 0.0), false),
+            (deg_state(3.2, 0.5, 0.0, 0.0, 0.0), false),
+            (deg_state(1.0, 0.0, 180.0, 170.0, 0.0), false),
+            (deg_state(1.0, 0.0, 0.0, 170.0, 0.0), true),
         ] {
             let sol = solve(&m, &start, &goal, &SphereTriangleParams::default()).unwrap();
             assert_eq!(sol.roll1 == [0.0, 0.0], skipped, "{start}");

@@ -52,6 +52,10 @@ impl System for Disk {
     fn plan(&self, start: &State, goal: &State, limits: &Limits) -> Result<Plan, PlanError> {
         stokes_disk::plan(&self.model, start, goal, &self.params, limits)
     }
+    fn goal_heading(&self, goal: &State) -> Option<f64> {
+        // α is measured from +y towards +x.
+        Some(std::f64::consts::FRAC_PI_2 - goal[3])
+    }
     fn physics(
         &self,
         robot: &urdf_rs::Robot,

@@ -15,7 +15,7 @@ use crate::model::{KinematicModel, State};
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::PlanError;
-use crate::record::SimTrajectory;
+use crate::record::{Overlay, SimTrajectory};
 use crate::scenario::{ModelConfig, PlannerConfig, SimConfig};
 use std::path::Path;
 
@@ -44,6 +44,14 @@ pub trait System: Send + Sync {
         start: &[f64],
         sim: &SimConfig,
     ) -> Result<Box<dyn PhysicsSystem>, String>;
+    /// Goal heading as a world yaw (rad) for the 3D views, if the model has one.
+    fn goal_heading(&self, _goal: &State) -> Option<f64> {
+        None
+    }
+    /// Extra polylines for the 3D views (e.g. a target line).
+    fn overlays(&self, _start: &State, _goal: &State) -> Vec<Overlay> {
+        Vec::new()
+    }
     /// Names of system-specific metrics (so thresholds can be checked up front).
     fn extra_metric_names(&self) -> Vec<String> {
         Vec::new()
