@@ -1,2 +1,105 @@
-//! sphere benchmarks (in progress).
-fn main() {}
+//! Rolling-sphere benchmarks: planner solve times (both planners, the paper's cases), the
+//! planner as the harness calls it, and the physics step rate.
+//!
+//! `cargo bench --bench sphere`. Medians are quoted in the README.
+
+use anholonomy::model::rolling_sphere::RollingSphere;
+use anholonomy::model::{Input, State};
+use anholonomy::planner::sphere_geometric::{self, ArcDirection, SphereGeometricParams};
+use anholonomy::planner::sphere_triangle::{self, SphereTriangleParams};
+use anholonomy::runner::Prepared;
+use anholonomy::scenario::Scenario;
+use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
+use std::hint::black_box;
+use std::path::Path;
+
+fn prepared(name: &str) -> Prepared {
+    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("scenarios")
+        .join(name);
+    Prepared::new(Scenario::load(&path).expect("scenario")).expect("prepared")
+}
+
+fn deg_state(v: [f64; 5]) -> State {
+    State::from_vec(vec![
+        v[0],
+        v[1],
+        v[2].to_radians(),
+        v[3].to_radians(),
+        v[4].to_radians(),
+    ])
+}
+
+fn planners(c: &mut Criterion) {
+    let m = RollingSphere { a: 1.0 };
+    let mut g = c.benchmark_group("sphere_planner");
+    // §5.1: the (A)-(B)-(A) solve (root scan over Δα, Newton for θ').
+    let start = deg_state([5.0, 5.0, -60.0, 45.0, -30.0]);
+    let goal = deg_state([0.0; 5]);
+    let ccw = SphereGeometricParams {
+        direction: ArcDirection::Ccw,
+        ..Default::default()
+    };
+    g.bench_function("geometric_solve_paper_ccw", |b| {
+        b.iter(|| sphere_geometric::solve(&m, black_box(&start), &goal, &ccw).expect("solve"))
+    });
+    let auto = SphereGeometricParams::default();
+    g.bench_function("geometric_solve_paper_auto", |b| {
+        b.iter(|| sphere_geometric::solve(&m, black_box(&start), &goal, &auto).expect("solve"))
+    });
+    // §5.2: one triangle, paper's fixed ψ (Newton on Eqs. 17, 18, 21) and free ψ (default).
+    let (d, phi, yaw) = (1.8, 56.31f64.to_radians(), -std::f64::consts::FRAC_PI_2);
+    let paper = SphereTriangleParams {
+        psi_offset_deg: Some(10.0),
+        ..Default::default()
+    };
+    g.bench_function("triangle_solve_paper_fixed_psi", |b| {
+        b.iter(|| sphere_triangle::solve_triangles(black_box(d), phi, yaw, &paper).expect("solve"))
+    });
+    let free = SphereTriangleParams::default();
+    g.bench_function("triangle_solve_paper_free_psi", |b| {
+        b.iter(|| sphere_triangle::solve_triangles(black_box(d), phi, yaw, &free).expect("solve"))
+    });
+    // Two triangles: a pure translation (α = 0).
+    g.bench_function("triangle_solve_two_triangles", |b| {
+        b.iter(|| {
+            sphere_triangle::solve_triangles(black_box(2.06), -0.245, 0.0, &free).expect("solve")
+        })
+    });
+    g.finish();
+    // The planner as the harness runs it (conversion, solve, plan assembly).
+    let mut g = c.benchmark_group("sphere_plan_scenario");
+    for name in ["sphere_geometric_paper.toml", "sphere_triangle_paper.toml"] {
+        let prep = prepared(name);
+        g.bench_function(name.trim_end_matches(".toml"), |b| {
+            b.iter(|| prep.plan().expect("plan"))
+        });
+    }
+    g.finish();
+}
+
+fn physics_steps(c: &mut Criterion) {
+    let prep = prepared("sphere_geometric_paper.toml");
+    const STEPS: u64 = 1000;
+    let mut g = c.benchmark_group("sphere_physics");
+    g.throughput(Throughput::Elements(STEPS));
+    g.sample_size(20);
+    g.bench_function("1000_steps_rolling", |b| {
+        b.iter_batched(
+            || prep.physics().expect("physics"),
+            |mut sys| {
+                let u = Input::from_vec(vec![0.5, 0.8]);
+                for _ in 0..STEPS {
+                    sys.apply(&u);
+                    sys.step();
+                }
+                sys.state()
+            },
+            BatchSize::LargeInput,
+        )
+    });
+    g.finish();
+}
+
+criterion_group!(benches, planners, physics_steps);
+criterion_main!(benches);

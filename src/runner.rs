@@ -98,7 +98,7 @@ impl Prepared {
         let dir = sc.urdf.parent().unwrap_or(Path::new("."));
         self.system
             .physics(&self.robot, dir, &sc.start, &sc.sim)
-            .map_err(|m| Error::input(&sc.urdf, m))
+            .map_err(|m| Error::input(&sc.path, m))
     }
 }
 

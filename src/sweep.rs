@@ -64,7 +64,9 @@ impl SweepConfig {
         let range = |key: &str, r: Option<[f64; 2]>, min: f64| -> Result<(), String> {
             if let Some([lo, hi]) = r {
                 if !(lo.is_finite() && hi.is_finite() && lo >= min && lo <= hi) {
-                    return Err(format!("key `sweep.{key}`: need finite lo ≤ hi with lo ≥ {min}"));
+                    return Err(format!(
+                        "key `sweep.{key}`: need finite lo ≤ hi with lo ≥ {min}"
+                    ));
                 }
             }
             Ok(())
@@ -100,8 +102,10 @@ impl Shard {
     pub fn parse(s: &str) -> Result<Shard, String> {
         let bad = || format!("--shard `{s}`: expected I/N with 0 <= I < N");
         let (i, n) = s.split_once('/').ok_or_else(bad)?;
-        let (index, count): (usize, usize) =
-            (i.trim().parse().map_err(|_| bad())?, n.trim().parse().map_err(|_| bad())?);
+        let (index, count): (usize, usize) = (
+            i.trim().parse().map_err(|_| bad())?,
+            n.trim().parse().map_err(|_| bad())?,
+        );
         if count == 0 || index >= count {
             return Err(bad());
         }
@@ -117,7 +121,10 @@ impl Shard {
 /// Seed of variant `index`: SplitMix64 of the base seed and the index (independent of sharding
 /// and of the order in which variants run).
 pub fn variant_seed(seed: u64, index: usize) -> u64 {
-    let mut z = seed ^ (index as u64).wrapping_add(1).wrapping_mul(0x9E37_79B9_7F4A_7C15);
+    let mut z = seed
+        ^ (index as u64)
+            .wrapping_add(1)
+            .wrapping_mul(0x9E37_79B9_7F4A_7C15);
     z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
     z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
     z ^ (z >> 31)
@@ -148,7 +155,13 @@ pub fn variant(cfg: &SweepConfig, base_friction: f64, index: usize) -> Variant {
     };
     let friction = draw(cfg.friction, base_friction);
     let mass_scale = draw(cfg.mass_scale, 1.0);
-    Variant { index, seed, friction, mass_scale, sigma_rate: cfg.sigma_rate }
+    Variant {
+        index,
+        seed,
+        friction,
+        mass_scale,
+        sigma_rate: cfg.sigma_rate,
+    }
 }
 
 /// Outcome of one variant.
@@ -180,24 +193,38 @@ fn prepare_variant(prep: &Prepared, v: &Variant) -> Result<Prepared, String> {
             ModelConfig::Rover(m) => {
                 m.switching = systems::rover::SwitchingConfig::Telegraph { seed: v.seed, rate }
             }
-            other => return Err(format!("key `sweep.sigma_rate`: model `{}` has no σ", other.kind())),
+            other => {
+                return Err(format!(
+                    "key `sweep.sigma_rate`: model `{}` has no σ",
+                    other.kind()
+                ))
+            }
         }
     }
     let mut robot = prep.robot.clone();
     for l in &mut robot.links {
         l.inertial.mass.value *= v.mass_scale;
         let i = &mut l.inertial.inertia;
-        for x in [&mut i.ixx, &mut i.ixy, &mut i.ixz, &mut i.iyy, &mut i.iyz, &mut i.izz] {
+        for x in [
+            &mut i.ixx, &mut i.ixy, &mut i.ixz, &mut i.iyy, &mut i.iyz, &mut i.izz,
+        ] {
             *x *= v.mass_scale;
         }
     }
     let system = systems::build(&sc.model, &sc.planner)?;
-    Ok(Prepared { scenario: sc, system, robot })
+    Ok(Prepared {
+        scenario: sc,
+        system,
+        robot,
+    })
 }
 
 fn run_variant(prep: &Prepared, cfg: &SweepConfig, v: Variant) -> VariantResult {
     let t0 = Instant::now();
-    let opts = RunOptions { log_root: None, progress: false };
+    let opts = RunOptions {
+        log_root: None,
+        progress: false,
+    };
     let res = prepare_variant(prep, &v).and_then(|p| run(&p, &opts).map_err(|e| e.to_string()));
     let finite = |x: Option<f64>| x.filter(|v| v.is_finite());
     match res {
@@ -238,15 +265,28 @@ pub fn distribution(values: &[f64]) -> Option<[f64; 3]> {
 
 /// Run the sweep of a prepared scenario (which must have `[sweep]`); prints a table and writes
 /// `<log_root>/<name>/sweep.json` (or `sweep-shard-I-of-N.json`).
-pub fn run_sweep(prep: &Prepared, opts: &RunOptions, shard: Option<Shard>) -> Result<RunOutcome, Error> {
+pub fn run_sweep(
+    prep: &Prepared,
+    opts: &RunOptions,
+    shard: Option<Shard>,
+) -> Result<RunOutcome, Error> {
     let t_all = Instant::now();
     let sc = &prep.scenario;
-    let cfg = sc.sweep.as_ref().ok_or_else(|| Error::input(&sc.path, "scenario has no [sweep] table"))?;
+    let cfg = sc
+        .sweep
+        .as_ref()
+        .ok_or_else(|| Error::input(&sc.path, "scenario has no [sweep] table"))?;
     let mut known = crate::runner::metric_spec(prep.model()).names();
     known.extend(prep.system.extra_metric_names());
-    for (key, m) in [("success_metric", &cfg.success_metric), ("time_metric", &cfg.time_metric)] {
+    for (key, m) in [
+        ("success_metric", &cfg.success_metric),
+        ("time_metric", &cfg.time_metric),
+    ] {
         if !known.contains(m) {
-            return Err(Error::input(&sc.path, format!("key `sweep.{key}`: unknown metric `{m}`")));
+            return Err(Error::input(
+                &sc.path,
+                format!("key `sweep.{key}`: unknown metric `{m}`"),
+            ));
         }
     }
     let variants: Vec<Variant> = (0..cfg.count)
@@ -258,9 +298,15 @@ pub fn run_sweep(prep: &Prepared, opts: &RunOptions, shard: Option<Shard>) -> Re
     }
     let bar = ProgressBar::with_draw_target(
         Some(variants.len() as u64),
-        if opts.progress { ProgressDrawTarget::stderr() } else { ProgressDrawTarget::hidden() },
+        if opts.progress {
+            ProgressDrawTarget::stderr()
+        } else {
+            ProgressDrawTarget::hidden()
+        },
     );
-    if let Ok(style) = ProgressStyle::with_template("{prefix:>24} [{bar:40}] {pos}/{len} {elapsed}/{eta}") {
+    if let Ok(style) =
+        ProgressStyle::with_template("{prefix:>24} [{bar:40}] {pos}/{len} {elapsed}/{eta}")
+    {
         bar.set_style(style.progress_chars("=> "));
     }
     bar.set_prefix(sc.name.clone());
@@ -278,20 +324,39 @@ pub fn run_sweep(prep: &Prepared, opts: &RunOptions, shard: Option<Shard>) -> Re
     let ok = results.iter().filter(|r| r.success).count();
     let rate = if n == 0 { 0.0 } else { ok as f64 / n as f64 };
     let errors: Vec<f64> = results.iter().filter_map(|r| r.final_error).collect();
-    let times: Vec<f64> = results.iter().filter(|r| r.success).filter_map(|r| r.time_to_goal).collect();
-    let failed_to_run: Vec<String> =
-        results.iter().filter_map(|r| r.error.as_ref().map(|e| format!("variant {}: {e}", r.variant.index))).collect();
+    let times: Vec<f64> = results
+        .iter()
+        .filter(|r| r.success)
+        .filter_map(|r| r.time_to_goal)
+        .collect();
+    let failed_to_run: Vec<String> = results
+        .iter()
+        .filter_map(|r| {
+            r.error
+                .as_ref()
+                .map(|e| format!("variant {}: {e}", r.variant.index))
+        })
+        .collect();
     let err_d = distribution(&errors);
     let time_d = distribution(&times);
-    let mut metrics = vec![("sweep_success_rate".to_string(), rate), ("sweep_variants".to_string(), n as f64)];
+    let mut metrics = vec![
+        ("sweep_success_rate".to_string(), rate),
+        ("sweep_variants".to_string(), n as f64),
+    ];
     for (name, d) in [("sweep_final_error", err_d), ("sweep_time_to_goal", time_d)] {
-        for (s, v) in ["median", "p95", "max"].iter().zip(d.unwrap_or([f64::NAN; 3])) {
+        for (s, v) in ["median", "p95", "max"]
+            .iter()
+            .zip(d.unwrap_or([f64::NAN; 3]))
+        {
             metrics.push((format!("{name}_{s}"), v));
         }
     }
     let mut failures = failed_to_run.clone();
     if rate < cfg.min_success_rate {
-        failures.push(format!("sweep_success_rate = {rate:.3} < {}", cfg.min_success_rate));
+        failures.push(format!(
+            "sweep_success_rate = {rate:.3} < {}",
+            cfg.min_success_rate
+        ));
     }
     let steps = results.iter().map(|r| r.steps).sum();
     let wall = t_all.elapsed().as_secs_f64();
@@ -304,14 +369,20 @@ pub fn run_sweep(prep: &Prepared, opts: &RunOptions, shard: Option<Shard>) -> Re
         "sweep {} ({} variants{}, {:.1} s): success {}/{} = {:.1} %",
         sc.name,
         n,
-        shard.map(|s| format!(", shard {}/{}", s.index, s.count)).unwrap_or_default(),
+        shard
+            .map(|s| format!(", shard {}/{}", s.index, s.count))
+            .unwrap_or_default(),
         wall,
         ok,
         n,
         100.0 * rate
     );
     println!("  {:<28} {:>9} {:>9} {:>9}", "", "median", "p95", "max");
-    println!("  {:<28} {}", format!("final error ({})", cfg.success_metric), fmt(err_d));
+    println!(
+        "  {:<28} {}",
+        format!("final error ({})", cfg.success_metric),
+        fmt(err_d)
+    );
     println!("  {:<28} {}", "time to goal, s (successes)", fmt(time_d));
 
     let mut outcome = RunOutcome {
@@ -321,19 +392,26 @@ pub fn run_sweep(prep: &Prepared, opts: &RunOptions, shard: Option<Shard>) -> Re
         failures,
         metrics,
         steps,
-        timings: Timings { physics: wall, total: wall, ..Default::default() },
+        timings: Timings {
+            physics: wall,
+            total: wall,
+            ..Default::default()
+        },
         log_dir: None,
     };
     if let Some(root) = &opts.log_root {
         let dir = root.join(&sc.name);
-        std::fs::create_dir_all(&dir)
-            .map_err(|e| Error::Log { path: sc.path.clone(), message: format!("{}: {e}", dir.display()) })?;
+        std::fs::create_dir_all(&dir).map_err(|e| Error::Log {
+            path: sc.path.clone(),
+            message: format!("{}: {e}", dir.display()),
+        })?;
         let file = match shard {
             Some(s) => format!("sweep-shard-{}-of-{}.json", s.index, s.count),
             None => "sweep.json".into(),
         };
         let summary = |d: Option<[f64; 3]>| {
-            d.map(|[m, p, x]| json!({"median": m, "p95": p, "max": x})).unwrap_or(serde_json::Value::Null)
+            d.map(|[m, p, x]| json!({"median": m, "p95": p, "max": x}))
+                .unwrap_or(serde_json::Value::Null)
         };
         let doc = json!({
             "scenario": sc.name,
@@ -350,8 +428,13 @@ pub fn run_sweep(prep: &Prepared, opts: &RunOptions, shard: Option<Shard>) -> Re
             "wall_time_s": wall,
             "results": results,
         });
-        write_atomic(&dir.join(file), |w| serde_json::to_writer_pretty(w, &doc).map_err(std::io::Error::other))
-            .map_err(|message| Error::Log { path: sc.path.clone(), message })?;
+        write_atomic(&dir.join(file), |w| {
+            serde_json::to_writer_pretty(w, &doc).map_err(std::io::Error::other)
+        })
+        .map_err(|message| Error::Log {
+            path: sc.path.clone(),
+            message,
+        })?;
         outcome.log_dir = Some(dir);
     }
     Ok(outcome)

@@ -118,6 +118,7 @@ fn logs_are_complete_and_readable() {
     assert_eq!(counts["/ideal/state"], samples, "{counts:?}");
     assert_eq!(counts["/plan/command"], samples, "{counts:?}");
     assert_eq!(counts["/tracking/error"], samples, "{counts:?}");
+    assert_eq!(counts["/sim/channels"], samples, "{counts:?}");
     assert!(counts.get("/tf").copied().unwrap_or(0) > 0, "{counts:?}");
     assert!(counts.get("/scene").copied().unwrap_or(0) > 0, "{counts:?}");
 

@@ -18,7 +18,14 @@ fn prepared(name: &str) -> Prepared {
 }
 
 fn run_prepared(prep: &Prepared, logs: Option<&Path>) -> RunOutcome {
-    run(prep, &RunOptions { log_root: logs.map(Path::to_path_buf), progress: false }).unwrap()
+    run(
+        prep,
+        &RunOptions {
+            log_root: logs.map(Path::to_path_buf),
+            progress: false,
+        },
+    )
+    .unwrap()
 }
 
 /// Runs a scenario file and checks it passes and gates the physics.
@@ -38,7 +45,10 @@ fn run_and_check(name: &str) -> (Prepared, RunOutcome) {
         "max_com_drift",
         "max_contact_pairs",
     ] {
-        let limit = th.get(k).copied().unwrap_or_else(|| panic!("{name}: {k} threshold missing"));
+        let limit = th
+            .get(k)
+            .copied()
+            .unwrap_or_else(|| panic!("{name}: {k} threshold missing"));
         assert!(o.metric(k).unwrap() <= limit, "{name}: {k}");
     }
     // No self-contact ever (vehicle/link 1 overlap by construction).
@@ -52,27 +62,58 @@ fn peak_vehicle_rate(prep: &Prepared) -> (f64, f64) {
     let plan = prep.plan().unwrap();
     let dt = prep.scenario.sim.dt;
     let ideal = simulate(prep.model(), &plan, &start, dt);
-    let rate = ideal.q.windows(2).map(|w| ((w[1][0] - w[0][0]) / dt).abs()).fold(0.0, f64::max);
+    let rate = ideal
+        .q
+        .windows(2)
+        .map(|w| ((w[1][0] - w[0][0]) / dt).abs())
+        .fold(0.0, f64::max);
     let lo = ideal.q.iter().map(|q| q[0]).fold(f64::INFINITY, f64::min);
-    let hi = ideal.q.iter().map(|q| q[0]).fold(f64::NEG_INFINITY, f64::max);
+    let hi = ideal
+        .q
+        .iter()
+        .map(|q| q[0])
+        .fold(f64::NEG_INFINITY, f64::max);
     (rate, (hi - lo).to_degrees())
 }
 
 /// The physics bounds every space-robot scenario must meet, relative to
-/// the motion: measured values are ≤ 0.25 % of the vehicle's peak angular
-/// momentum I0·|θ0'|max and θ0 tracking ≤ 1 % of the ideal θ0 excursion
-/// (large_turn: 1.17° of 121°), so 1 % / 2 % leave room for solver noise.
+/// the motion. Measured: max |L_z| ≤ 0.20 % of the vehicle's peak angular
+/// momentum I0·|θ0'|max (large_turn 1.96e-3, the others ≤ 8.4e-4) and max θ0
+/// tracking error ≤ 0.77 % of the ideal θ0 excursion (large_turn; the others
+/// ≤ 0.21 %), so the bounds 1 % and 2 % leave room for solver noise while a
+/// leak of momentum (e.g. multibody joints, reported ~0.3 % attitude drift)
+/// or a contact would show.
 fn assert_momentum_and_tracking(name: &str, prep: &Prepared, o: &RunOutcome) {
     let (rate, range) = peak_vehicle_rate(prep);
     let scale = I0 * rate;
     let l = o.metric("max_abs_angular_momentum").unwrap();
-    assert!(l < 0.01 * scale, "{name}: |L| {l:e} vs vehicle scale {scale:e}");
-    assert!(o.metric("max_angular_momentum_out_of_plane").unwrap() < 1e-4, "{name}");
+    assert!(
+        l < 0.01 * scale,
+        "{name}: |L| {l:e} vs vehicle scale {scale:e}"
+    );
+    assert!(
+        o.metric("max_angular_momentum_out_of_plane").unwrap() < 1e-4,
+        "{name}"
+    );
     assert!(o.metric("max_linear_momentum").unwrap() < 1e-3, "{name}");
-    assert!(o.metric("max_com_drift").unwrap() < 1e-4, "{name}: CoM moved");
-    assert!(o.metric("max_out_of_plane").unwrap() < 1e-3, "{name}: left the plane");
+    assert!(
+        o.metric("max_com_drift").unwrap() < 1e-4,
+        "{name}: CoM moved"
+    );
+    assert!(
+        o.metric("max_out_of_plane").unwrap() < 1e-3,
+        "{name}: left the plane"
+    );
     let track = o.metric("tracking_theta0_deg_max").unwrap();
-    assert!(track < 0.02 * range, "{name}: θ0 tracking {track}° vs excursion {range}°");
+    eprintln!(
+        "{name}: |L|max/(I0 |θ0'|max) = {:.2e}, θ0 tracking/excursion = {:.2e}",
+        l / scale,
+        track / range
+    );
+    assert!(
+        track < 0.02 * range,
+        "{name}: θ0 tracking {track}° vs excursion {range}°"
+    );
 }
 
 #[test]
@@ -83,7 +124,11 @@ fn space_robot_paper_reaches_goal_and_conserves_momentum() {
     let plan = prep.plan().unwrap();
     let ideal = simulate(prep.model(), &plan, &start, prep.scenario.sim.dt);
     let end = ideal.last();
-    assert!((end[0] - (-20f64).to_radians()).abs() < 1e-9, "θ0 = {}°", end[0].to_degrees());
+    assert!(
+        (end[0] - (-20f64).to_radians()).abs() < 1e-9,
+        "θ0 = {}°",
+        end[0].to_degrees()
+    );
     assert!((end - &goal).amax() < 1e-9);
     assert_eq!(plan.details["cycles"], 3);
     // Simulated θ0 tracks the ideal θ0 along the whole plan: measured max
@@ -103,18 +148,29 @@ fn joint_limit_and_large_turn_scenarios() {
     let plan = prep.plan().unwrap();
     let span = &plan.details["theta1_span_deg"];
     assert!(span[0].as_f64().unwrap() >= -120.0 && span[1].as_f64().unwrap() <= 120.0);
-    assert!((plan.details["shift_deg"].as_f64().unwrap() - 80.0).abs() < 1e-9, "ADMN expected");
+    assert!(
+        (plan.details["shift_deg"].as_f64().unwrap() - 80.0).abs() < 1e-9,
+        "ADMN expected"
+    );
 
     let (prep, o) = run_and_check("space_robot_large_turn");
     assert_momentum_and_tracking("space_robot_large_turn", &prep, &o);
     let plan = prep.plan().unwrap();
-    assert!(plan.details["cycles"].as_u64().unwrap() >= 8, "{}", plan.details);
+    assert!(
+        plan.details["cycles"].as_u64().unwrap() >= 8,
+        "{}",
+        plan.details
+    );
     assert!(o.metric("ideal_goal_theta0_deg").unwrap() < 1e-8);
 }
 
 #[test]
 fn endogenous_scenarios_meet_via_and_goal() {
-    for (name, s) in [("space_manipulator_s1", 1), ("space_manipulator_s2", 2), ("space_manipulator_s3", 3)] {
+    for (name, s) in [
+        ("space_manipulator_s1", 1),
+        ("space_manipulator_s2", 2),
+        ("space_manipulator_s3", 3),
+    ] {
         let (prep, o) = run_and_check(name);
         assert_momentum_and_tracking(name, &prep, &o);
         // Ideal errors at T and 2T below 1e-4 rad. The scenario's dt = 1e-3
@@ -131,12 +187,20 @@ fn endogenous_scenarios_meet_via_and_goal() {
         let fine = simulate(prep.model(), &plan, &start, 1e-4);
         let k_t = fine.t.iter().position(|t| (t - 20.0).abs() < 1e-9).unwrap();
         let y1 = [0.0, 0.0, 22.5f64.to_radians()];
-        let e_t = (0..3).map(|i| (fine.q[k_t][i] - y1[i]).abs()).fold(0.0, f64::max);
+        let e_t = (0..3)
+            .map(|i| (fine.q[k_t][i] - y1[i]).abs())
+            .fold(0.0, f64::max);
         let e_2t = (fine.last() - &goal).amax();
-        assert!(e_t < 1e-4 && e_2t < 1e-4, "{name}: errors {e_t:e} at T, {e_2t:e} at 2T");
+        assert!(
+            e_t < 1e-4 && e_2t < 1e-4,
+            "{name}: errors {e_t:e} at T, {e_2t:e} at 2T"
+        );
         // Continuity at the join as the scenario asks.
         let join = &plan.details["joins"][0];
-        let (uj, dj) = (join["u_jump"].as_f64().unwrap(), join["du_jump"].as_f64().unwrap());
+        let (uj, dj) = (
+            join["u_jump"].as_f64().unwrap(),
+            join["du_jump"].as_f64().unwrap(),
+        );
         match s {
             1 => assert!(uj > 0.1, "S1 jumps"),
             2 => assert!(uj < 1e-9 && dj > 1e-3, "S2 is C0 with a kink"),
@@ -151,9 +215,19 @@ fn channels_are_logged() {
     let prep = prepared("space_robot_paper");
     let o = run_prepared(&prep, Some(logs.path()));
     let dir = o.log_dir.unwrap();
-    let mcap = std::fs::read(dir.join("run.mcap")).unwrap();
-    for ch in ["angular_momentum_z", "linear_momentum_norm", "com_drift", "contact_pairs"] {
-        assert!(mcap.windows(ch.len()).any(|w| w == ch.as_bytes()), "{ch} not in MCAP");
+    // The Rerun recording carries the sim channels as time series
+    // (the MCAP writer does not log sim channels yet).
+    let rrd = std::fs::read(dir.join("run.rrd")).unwrap();
+    for ch in [
+        "angular_momentum_z",
+        "linear_momentum_norm",
+        "com_drift",
+        "contact_pairs",
+    ] {
+        assert!(
+            rrd.windows(ch.len()).any(|w| w == ch.as_bytes()),
+            "{ch} not in the RRD"
+        );
     }
     let s: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.join("summary.json")).unwrap()).unwrap();
@@ -187,12 +261,22 @@ fn expect_cli_error(text: &str, needles: &[&str]) -> String {
     let out = cli(dir.path(), &["run", "bad.toml", "--logs", "logs"]);
     let stderr = String::from_utf8_lossy(&out.stderr).to_string();
     assert_eq!(out.status.code(), Some(2), "stderr: {stderr}");
-    assert_eq!(stderr.trim_end().lines().count(), 1, "one line expected: {stderr}");
-    assert!(stderr.starts_with("error: ") && !stderr.contains("panicked"), "{stderr}");
+    assert_eq!(
+        stderr.trim_end().lines().count(),
+        1,
+        "one line expected: {stderr}"
+    );
+    assert!(
+        stderr.starts_with("error: ") && !stderr.contains("panicked"),
+        "{stderr}"
+    );
     for n in needles {
         assert!(stderr.contains(n), "`{n}` not in: {stderr}");
     }
-    assert!(files_below(&dir.path().join("logs")).is_empty(), "a log file was written");
+    assert!(
+        files_below(&dir.path().join("logs")).is_empty(),
+        "a log file was written"
+    );
     stderr
 }
 
@@ -204,9 +288,16 @@ fn joint_limit_leaving_no_rectangle_is_a_clear_error() {
         "kind = \"stokes_space\"\nfixed_value_deg = 200.0\ntheta1_limit_deg = 50.0",
         "gravity = [0.0, 0.0, 0.0]",
     );
-    expect_cli_error(&text, &["goal unreachable", "does not fit", "|θ1| ≤ 50.000°"]);
+    let err = expect_cli_error(
+        &text,
+        &["goal unreachable", "does not fit", "|θ1| ≤ 50.000°"],
+    );
+    assert!(err.contains("n = 3…12: width 155.000°"), "{err}");
     // The goal itself outside the limit.
-    let text = space_scenario("kind = \"stokes_space\"\ntheta1_limit_deg = 30.0", "gravity = [0.0, 0.0, 0.0]");
+    let text = space_scenario(
+        "kind = \"stokes_space\"\ntheta1_limit_deg = 30.0",
+        "gravity = [0.0, 0.0, 0.0]",
+    );
     expect_cli_error(&text, &["goal unreachable", "goal θ1 = 45.000°"]);
 }
 
@@ -222,8 +313,14 @@ fn other_bad_input_is_reported() {
     let dir = tempfile::tempdir().unwrap();
     let urdf = std::fs::read_to_string(model("space_robot.urdf")).unwrap();
     let bad = dir.path().join("heavy.urdf");
-    std::fs::write(&bad, urdf.replace("<mass value=\"5.38\"/>", "<mass value=\"6.0\"/>")).unwrap();
-    let text = space_scenario("kind = \"stokes_space\"", "gravity = [0.0, 0.0, 0.0]")
-        .replace(&model("space_robot.urdf").display().to_string(), &bad.display().to_string());
+    std::fs::write(
+        &bad,
+        urdf.replace("<mass value=\"5.38\"/>", "<mass value=\"6.0\"/>"),
+    )
+    .unwrap();
+    let text = space_scenario("kind = \"stokes_space\"", "gravity = [0.0, 0.0, 0.0]").replace(
+        &model("space_robot.urdf").display().to_string(),
+        &bad.display().to_string(),
+    );
     expect_cli_error(&text, &["link1", "mass"]);
 }

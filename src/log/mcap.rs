@@ -12,6 +12,7 @@
 //! | `/plan/command` | json / jsonschema `anholonomy.Command` | ideal sample | inputs applied from `t` on |
 //! | `/ideal/state` | json / jsonschema `anholonomy.State` | ideal sample | ideal (RK4) state |
 //! | `/sim/state` | json / jsonschema `anholonomy.State` | sim sample | state read back from physics |
+//! | `/sim/channels` | json / jsonschema `anholonomy.SimChannels` | sim sample | extra physics measurements (slip, momentum, ...), when the system has any |
 //! | `/tracking/error` | json / jsonschema `anholonomy.TrackingError` | comparison grid sample | sim − ideal per coordinate, plus `position` |
 //! | `/tf` | protobuf `foxglove.FrameTransforms` | sim sample | `world` → each link frame |
 //! | `/scene` | protobuf `foxglove.SceneUpdate` | once, t = 0 | URDF visuals, one entity per link, frame-locked to the link frame, lifetime 0 (forever) |
@@ -239,6 +240,7 @@ enum Ev {
     Command(usize),
     Ideal(usize),
     Sim(usize),
+    Channels(usize),
     Error(usize),
     Tf(usize),
 }
@@ -287,6 +289,20 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
         &error_names,
         tmp,
     )?;
+    let channel_names: Vec<Cow<'_, str>> =
+        rec.sim.channels.iter().map(|(n, _)| Cow::Borrowed(n.as_str())).collect();
+    let ch_chan = if channel_names.is_empty() {
+        None
+    } else {
+        Some(json_channel(
+            ctx,
+            "/sim/channels",
+            "anholonomy.SimChannels",
+            "Extra measurements of the physics run (slip, momentum, ...), one per sim sample",
+            &channel_names,
+            tmp,
+        )?)
+    };
     let ch_tf = ctx.channel_builder("/tf").build::<FrameTransforms>();
     let ch_scene = ctx.channel_builder("/scene").build::<SceneUpdate>();
 
@@ -309,6 +325,9 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
     }
     for (k, &t) in sim.traj.t.iter().enumerate() {
         evs.push((nanos(t), Ev::Sim(k)));
+        if ch_chan.is_some() {
+            evs.push((nanos(t), Ev::Channels(k)));
+        }
         if !sim.link_poses.is_empty() {
             evs.push((nanos(t), Ev::Tf(k)));
         }
@@ -366,6 +385,19 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
                     values: sim.traj.q[k].as_slice(),
                 };
                 emit(&ch_sim, ns, &msg)?;
+            }
+            Ev::Channels(k) => {
+                if let Some(ch) = &ch_chan {
+                    let seg = segment_name(rec.labels, sim.traj.label[k]);
+                    let row: Vec<f64> = sim.channels.iter().map(|(_, v)| v[k]).collect();
+                    let msg = JsonMsg {
+                        t: sim.traj.t[k],
+                        segment: &seg,
+                        names: &channel_names,
+                        values: &row,
+                    };
+                    emit(ch, ns, &msg)?;
+                }
             }
             Ev::Error(k) => {
                 let t = cmp.t[k];

@@ -35,8 +35,13 @@ pub const STEER_JOINT: &str = "steer_joint";
 /// Driven front wheel joint name.
 pub const FRONT_JOINT: &str = "front_wheel_joint";
 /// Wheel links, in channel order; the first is the steered front wheel.
-pub const WHEELS: [&str; 5] =
-    ["front_wheel", "middle_left_wheel", "middle_right_wheel", "back_left_wheel", "back_right_wheel"];
+pub const WHEELS: [&str; 5] = [
+    "front_wheel",
+    "middle_left_wheel",
+    "middle_right_wheel",
+    "back_left_wheel",
+    "back_right_wheel",
+];
 
 fn wrap(a: f64) -> f64 {
     (a + PI).rem_euclid(TAU) - PI
@@ -49,17 +54,27 @@ fn yaw_of(q: &Rotation) -> f64 {
 
 /// Wheel radius from the URDF: the front wheel's sphere or cylinder collision.
 pub fn urdf_wheel_radius(robot: &urdf_rs::Robot, link: &str) -> Option<f64> {
-    robot.links.iter().find(|l| l.name == link)?.collision.iter().find_map(|c| match c.geometry {
-        urdf_rs::Geometry::Sphere { radius } | urdf_rs::Geometry::Cylinder { radius, .. } => {
-            Some(radius)
-        }
-        _ => None,
-    })
+    robot
+        .links
+        .iter()
+        .find(|l| l.name == link)?
+        .collision
+        .iter()
+        .find_map(|c| match c.geometry {
+            urdf_rs::Geometry::Sphere { radius } | urdf_rs::Geometry::Cylinder { radius, .. } => {
+                Some(radius)
+            }
+            _ => None,
+        })
 }
 
 /// x offset of a joint's origin in its parent frame.
 fn joint_x(robot: &urdf_rs::Robot, joint: &str) -> Option<f64> {
-    robot.joints.iter().find(|j| j.name == joint).map(|j| j.origin.xyz[0])
+    robot
+        .joints
+        .iter()
+        .find(|j| j.name == joint)
+        .map(|j| j.origin.xyz[0])
 }
 
 /// The rover in Rapier.
@@ -88,15 +103,20 @@ impl RoverPhysics {
         start: &[f64],
         sim: &SimConfig,
     ) -> Result<Self, String> {
-        let rho = urdf_wheel_radius(robot, WHEELS[0])
-            .ok_or_else(|| format!("URDF needs a link `{}` with a sphere or cylinder collision", WHEELS[0]))?;
+        let rho = urdf_wheel_radius(robot, WHEELS[0]).ok_or_else(|| {
+            format!(
+                "URDF needs a link `{}` with a sphere or cylinder collision",
+                WHEELS[0]
+            )
+        })?;
         if (rho - geom.wheel_radius).abs() > 1e-6 {
             return Err(format!(
                 "URDF front wheel radius {rho} m differs from model.geometry.wheel_radius {} m",
                 geom.wheel_radius
             ));
         }
-        let l = joint_x(robot, STEER_JOINT).ok_or_else(|| format!("URDF has no joint `{STEER_JOINT}`"))?;
+        let l = joint_x(robot, STEER_JOINT)
+            .ok_or_else(|| format!("URDF has no joint `{STEER_JOINT}`"))?;
         let r = joint_x(robot, "back_left_wheel_joint")
             .ok_or_else(|| "URDF has no joint `back_left_wheel_joint`".to_string())?;
         if (l - geom.l).abs() > 1e-6 || (-r - geom.r).abs() > 1e-6 {
@@ -109,20 +129,38 @@ impl RoverPhysics {
             Vector::new(start[0] as Real, start[1] as Real, rho as Real),
             Rotation::from_rotation_z(start[2] as Real),
         );
-        let mut sw = SimWorld::new(robot, urdf_dir, &WorldOptions { sim, root_pose: root, ground: true });
+        let mut sw = SimWorld::new(
+            robot,
+            urdf_dir,
+            &WorldOptions {
+                sim,
+                root_pose: root,
+                ground: true,
+            },
+        );
         let missing = |what: &str| format!("URDF has no {what}");
         let chassis = sw.link(CHASSIS).ok_or_else(|| missing("link `chassis`"))?;
-        let steering = sw.link("steering").ok_or_else(|| missing("link `steering`"))?;
+        let steering = sw
+            .link("steering")
+            .ok_or_else(|| missing("link `steering`"))?;
         let wheels = WHEELS
             .iter()
             .map(|w| sw.link(w).ok_or_else(|| missing(&format!("link `{w}`"))))
             .collect::<Result<Vec<_>, _>>()?;
-        let steer_joint = *sw.joints.get(STEER_JOINT).ok_or_else(|| missing("joint `steer_joint`"))?;
-        let front_joint = *sw.joints.get(FRONT_JOINT).ok_or_else(|| missing("joint `front_wheel_joint`"))?;
+        let steer_joint = *sw
+            .joints
+            .get(STEER_JOINT)
+            .ok_or_else(|| missing("joint `steer_joint`"))?;
+        let front_joint = *sw
+            .joints
+            .get(FRONT_JOINT)
+            .ok_or_else(|| missing("joint `front_wheel_joint`"))?;
         // Initial steering angle: rotate the steering link and the front wheel about the
         // steering axis (the joint starts at ψ = 0 in the URDF pose).
         if start[3] != 0.0 {
-            let axis_pt = sw.world.bodies[chassis].position().transform_point(Vector::new(l as Real, 0.0, 0.0));
+            let axis_pt = sw.world.bodies[chassis]
+                .position()
+                .transform_point(Vector::new(l as Real, 0.0, 0.0));
             let rot = Rotation::from_rotation_z(start[3] as Real);
             for h in [steering, wheels[0]] {
                 let b = &mut sw.world.bodies[h];
@@ -183,7 +221,8 @@ impl PhysicsSystem for RoverPhysics {
 
     fn apply(&mut self, u: &Input) {
         let (gain, tmax) = (self.gain, self.max_torque);
-        self.sim.drive_joint(self.front_joint, u[0] / self.geom.wheel_radius, gain, tmax);
+        self.sim
+            .drive_joint(self.front_joint, u[0] / self.geom.wheel_radius, gain, tmax);
         self.sim.drive_joint(self.steer_joint, u[1], gain, tmax);
         self.last_u = u.clone();
     }
@@ -217,7 +256,12 @@ impl PhysicsSystem for RoverPhysics {
             out.push(lon);
             out.push(lat);
         }
-        let fit = envelope(&self.geom, &self.state(), &self.last_u, &self.body_velocity());
+        let fit = envelope(
+            &self.geom,
+            &self.state(),
+            &self.last_u,
+            &self.body_velocity(),
+        );
         out.push(fit.distance);
         out.push(fit.sigma.unwrap_or(f64::NAN));
         out

@@ -4,8 +4,12 @@
 //! * **Impulse joints** (rapier3d-urdf `insert_using_impulse_joints`): every
 //!   joint impulse acts equally and oppositely on two bodies, so the solver
 //!   conserves the system's linear and angular momentum up to f32 round-off.
-//!   Multibody joints were measured to drift ~0.3 % in base attitude and to
-//!   inject momentum, so they are not used.
+//!   Multibody joints drifted ~0.3 % in base attitude and injected momentum
+//!   in an earlier prototype (not re-measured here), so they are not used.
+//!   The remaining leak is small and grows with the solver iteration count
+//!   (substeps): max |L_z| on `space_robot_paper` measured 3.0e-4, 4.7e-4,
+//!   9.2e-4, 1.9e-3 kg m²/s for 4, 8, 16, 32 iterations (the vehicle alone
+//!   carries up to ~0.7 kg m²/s), so the scenarios keep Rapier's default 4.
 //! * No ground, **gravity must be zero**, bodies never sleep. Nothing holds
 //!   the vehicle: θ0 changes only because the joint motors exchange angular
 //!   momentum between the bodies.
@@ -82,10 +86,16 @@ pub fn check_urdf(robot: &urdf_rs::Robot, model: &SpaceRobot) -> Result<(), Stri
         let l = link(name)?;
         let i = &l.inertial;
         if !close(i.mass.value, m) {
-            return Err(format!("URDF link `{name}` mass {} differs from the model's {m} kg", i.mass.value));
+            return Err(format!(
+                "URDF link `{name}` mass {} differs from the model's {m} kg",
+                i.mass.value
+            ));
         }
         if !close(i.inertia.izz, izz) {
-            return Err(format!("URDF link `{name}` izz {} differs from the model's {izz} kg m²", i.inertia.izz));
+            return Err(format!(
+                "URDF link `{name}` izz {} differs from the model's {izz} kg m²",
+                i.inertia.izz
+            ));
         }
         let o = &i.origin;
         if !close(o.xyz[0], com_x) || o.xyz[1].abs() > 1e-9 || o.xyz[2].abs() > 1e-9 {
@@ -102,7 +112,10 @@ pub fn check_urdf(robot: &urdf_rs::Robot, model: &SpaceRobot) -> Result<(), Stri
             return Err(format!("URDF link `{name}` inertia must be diagonal"));
         }
     }
-    let expect = [(JOINTS[0], LINKS[0], LINKS[1], 0.0), (JOINTS[1], LINKS[1], LINKS[2], model.l1)];
+    let expect = [
+        (JOINTS[0], LINKS[0], LINKS[1], 0.0),
+        (JOINTS[1], LINKS[1], LINKS[2], model.l1),
+    ];
     for (name, parent, child, x) in expect {
         let j = robot
             .joints
@@ -110,25 +123,39 @@ pub fn check_urdf(robot: &urdf_rs::Robot, model: &SpaceRobot) -> Result<(), Stri
             .find(|j| j.name == name)
             .ok_or_else(|| format!("URDF has no joint `{name}` (needs {})", JOINTS.join(", ")))?;
         if j.parent.link != parent || j.child.link != child {
-            return Err(format!("URDF joint `{name}` must connect `{parent}` to `{child}`"));
+            return Err(format!(
+                "URDF joint `{name}` must connect `{parent}` to `{child}`"
+            ));
         }
-        if !matches!(j.joint_type, urdf_rs::JointType::Continuous | urdf_rs::JointType::Revolute) {
-            return Err(format!("URDF joint `{name}` must be continuous (or revolute)"));
+        if !matches!(
+            j.joint_type,
+            urdf_rs::JointType::Continuous | urdf_rs::JointType::Revolute
+        ) {
+            return Err(format!(
+                "URDF joint `{name}` must be continuous (or revolute)"
+            ));
         }
         let a = j.axis.xyz.0;
         if a[0].abs() > 1e-9 || a[1].abs() > 1e-9 || a[2] <= 0.0 {
-            return Err(format!("URDF joint `{name}` axis must be +z (planar model)"));
+            return Err(format!(
+                "URDF joint `{name}` axis must be +z (planar model)"
+            ));
         }
         let o = &j.origin;
         if !close(o.xyz[0], x) || o.xyz[1].abs() > 1e-9 || o.xyz[2].abs() > 1e-9 {
-            return Err(format!("URDF joint `{name}` must sit at ({x}, 0, 0) in `{parent}`"));
+            return Err(format!(
+                "URDF joint `{name}` must sit at ({x}, 0, 0) in `{parent}`"
+            ));
         }
         if o.rpy.0.iter().any(|a| a.abs() > 1e-9) {
             return Err(format!("URDF joint `{name}` origin must not be rotated"));
         }
     }
     if robot.links.len() != 3 || robot.joints.len() != 2 {
-        return Err("URDF must have exactly the links vehicle, link1, link2 and joints joint1, joint2".into());
+        return Err(
+            "URDF must have exactly the links vehicle, link1, link2 and joints joint1, joint2"
+                .into(),
+        );
     }
     Ok(())
 }
@@ -162,7 +189,11 @@ fn v3(v: Vector) -> [f64; 3] {
 }
 
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
-    [a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]]
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
 }
 
 /// Rotate `v` by the quaternion `q` (f64).
@@ -171,7 +202,11 @@ fn rotate(q: &rapier3d::math::Rotation, v: [f64; 3]) -> [f64; 3] {
     let u = [x, y, z];
     let t = cross(u, v).map(|c| 2.0 * c);
     let c = cross(u, t);
-    [v[0] + w * t[0] + c[0], v[1] + w * t[1] + c[1], v[2] + w * t[2] + c[2]]
+    [
+        v[0] + w * t[0] + c[0],
+        v[1] + w * t[1] + c[1],
+        v[2] + w * t[2] + c[2],
+    ]
 }
 
 fn conj(q: &rapier3d::math::Rotation) -> rapier3d::math::Rotation {
@@ -189,7 +224,7 @@ impl SpaceRobotPhysics {
     ) -> Result<Self, String> {
         check_urdf(robot, model)?;
         if sim.gravity.iter().any(|g| *g != 0.0) {
-            return Err("key `sim.gravity`: the free-floating space robot needs gravity = [0, 0, 0]".into());
+            return Err("scenario key `sim.gravity` must be [0, 0, 0]: the space robot floats free (no ground, no gravity)".into());
         }
         if start.len() != 3 {
             return Err("start needs (θ0, θ1, θ2)".into());
@@ -201,15 +236,28 @@ impl SpaceRobotPhysics {
             Vector::new(p0.x as Real, p0.y as Real, 0.0),
             rot(start[0]),
         );
-        let mut sw = SimWorld::new(robot, urdf_dir, &WorldOptions { sim, root_pose: root, ground: false });
+        let mut sw = SimWorld::new(
+            robot,
+            urdf_dir,
+            &WorldOptions {
+                sim,
+                root_pose: root,
+                ground: false,
+            },
+        );
         let missing = |what: &str| format!("URDF has no {what}");
         let mut bodies = [RigidBodyHandle::invalid(); 3];
         for (b, name) in bodies.iter_mut().zip(LINKS) {
-            *b = sw.link(name).ok_or_else(|| missing(&format!("link `{name}`")))?;
+            *b = sw
+                .link(name)
+                .ok_or_else(|| missing(&format!("link `{name}`")))?;
         }
         let mut joints = [ImpulseJointHandle::invalid(); 2];
         for (j, name) in joints.iter_mut().zip(JOINTS) {
-            *j = *sw.joints.get(name).ok_or_else(|| missing(&format!("joint `{name}`")))?;
+            *j = *sw
+                .joints
+                .get(name)
+                .ok_or_else(|| missing(&format!("joint `{name}`")))?;
         }
         // Place the links at the start joint angles: link frames sit at the joints.
         let phi1 = start[0] + start[1];
@@ -230,7 +278,11 @@ impl SpaceRobotPhysics {
             }
         }
         // No self-contacts at all (non-adjacent pairs included).
-        let groups = InteractionGroups::new(Group::GROUP_1, Group::ALL.difference(Group::GROUP_1), InteractionTestMode::And);
+        let groups = InteractionGroups::new(
+            Group::GROUP_1,
+            Group::ALL.difference(Group::GROUP_1),
+            InteractionTestMode::And,
+        );
         for h in bodies {
             let colliders: Vec<ColliderHandle> = sw.world.bodies[h].colliders().to_vec();
             for c in colliders {
@@ -245,11 +297,19 @@ impl SpaceRobotPhysics {
         let mut local_com = [[0.0; 3]; 3];
         let mut inertia = [[[0.0; 3]; 3]; 3];
         for (i, name) in LINKS.iter().enumerate() {
-            let l = robot.links.iter().find(|l| l.name == *name).ok_or_else(|| missing(name))?;
+            let l = robot
+                .links
+                .iter()
+                .find(|l| l.name == *name)
+                .ok_or_else(|| missing(name))?;
             let t = &l.inertial.inertia;
             mass[i] = l.inertial.mass.value;
             local_com[i] = l.inertial.origin.xyz.0;
-            inertia[i] = [[t.ixx, t.ixy, t.ixz], [t.ixy, t.iyy, t.iyz], [t.ixz, t.iyz, t.izz]];
+            inertia[i] = [
+                [t.ixx, t.ixy, t.ixz],
+                [t.ixy, t.iyy, t.iyz],
+                [t.ixz, t.iyz, t.izz],
+            ];
         }
         let mut me = SpaceRobotPhysics {
             sim: sw,
@@ -308,7 +368,8 @@ impl SpaceRobotPhysics {
             // I_world ω = R I R^T ω.
             let q = b.rotation();
             let wl = rotate(&conj(q), w);
-            let iw: [f64; 3] = std::array::from_fn(|r| (0..3).map(|c| self.inertia[i][r][c] * wl[c]).sum());
+            let iw: [f64; 3] =
+                std::array::from_fn(|r| (0..3).map(|c| self.inertia[i][r][c] * wl[c]).sum());
             let iw = rotate(q, iw);
             for k in 0..3 {
                 p[k] += m * v[k];
@@ -321,7 +382,10 @@ impl SpaceRobotPhysics {
     fn measure(&self) -> Vec<f64> {
         let (p, l) = self.momentum();
         let com = self.system_com();
-        let drift = (0..3).map(|k| (com[k] - self.com0[k]).powi(2)).sum::<f64>().sqrt();
+        let drift = (0..3)
+            .map(|k| (com[k] - self.com0[k]).powi(2))
+            .sum::<f64>()
+            .sqrt();
         let mut out_of_plane: f64 = 0.0;
         for (i, h) in self.bodies.iter().enumerate() {
             let b = &self.sim.world.bodies[*h];
@@ -363,8 +427,13 @@ impl PhysicsSystem for SpaceRobotPhysics {
     fn step(&mut self) {
         self.sim.world.step();
         let b = &self.sim.world.bodies;
-        let r: Vec<rapier3d::math::Rotation> = self.bodies.iter().map(|h| *b[*h].rotation()).collect();
-        let read = [angle_z(&r[0]), angle_z(&(conj(&r[0]) * r[1])), angle_z(&(conj(&r[1]) * r[2]))];
+        let r: Vec<rapier3d::math::Rotation> =
+            self.bodies.iter().map(|h| *b[*h].rotation()).collect();
+        let read = [
+            angle_z(&r[0]),
+            angle_z(&(conj(&r[0]) * r[1])),
+            angle_z(&(conj(&r[1]) * r[2])),
+        ];
         for (q, v) in self.q.iter_mut().zip(read) {
             *q += wrap(v - wrap(*q));
         }

@@ -436,8 +436,34 @@ pub fn design(
         "no rectangle with {} to {} cycles is feasible: {}",
         params.cycles,
         params.max_cycles,
-        d.rejected.join("; ")
+        summarize_rejections(&d.rejected)
     )))
+}
+
+/// Joins "n = k: reason" entries, merging runs of consecutive n with the
+/// same reason into "n = a…b: reason" (a fixed λ gives the same width, hence
+/// the same reason, for every n).
+fn summarize_rejections(rejected: &[String]) -> String {
+    let mut groups: Vec<(String, String, String)> = Vec::new(); // (first n, last n, reason)
+    for r in rejected {
+        let (n, reason) = match r.strip_prefix("n = ").and_then(|t| t.split_once(": ")) {
+            Some((n, reason)) => (n.to_string(), reason.to_string()),
+            None => (String::new(), r.clone()),
+        };
+        match groups.last_mut() {
+            Some(g) if g.2 == reason && !n.is_empty() => g.1 = n,
+            _ => groups.push((n.clone(), n, reason)),
+        }
+    }
+    groups
+        .into_iter()
+        .map(|(a, b, reason)| match (a.is_empty(), a == b) {
+            (true, _) => reason,
+            (false, true) => format!("n = {a}: {reason}"),
+            (false, false) => format!("n = {a}…{b}: {reason}"),
+        })
+        .collect::<Vec<_>>()
+        .join("; ")
 }
 
 fn corner_letters(names: &Option<String>) -> Vec<char> {
@@ -915,6 +941,10 @@ mod tests {
             matches!(&e, PlanError::Unreachable(m) if m.contains("does not fit")),
             "{e}"
         );
+        // Identical reasons for consecutive n are merged into one clause.
+        let msg = e.to_string();
+        assert!(msg.contains("n = 3…12: width 155.000°"), "{msg}");
+        assert_eq!(msg.matches("does not fit").count(), 1, "{msg}");
     }
 
     #[test]

@@ -80,7 +80,9 @@ struct Rover {
 
 /// Build the rover system.
 pub fn build(cfg: &RoverConfig, planner: &PlannerConfig) -> Result<Box<dyn System>, String> {
-    cfg.geometry.validate().map_err(|e| format!("key `model.geometry`: {e}"))?;
+    cfg.geometry
+        .validate()
+        .map_err(|e| format!("key `model.geometry`: {e}"))?;
     if !(cfg.envelope_tolerance.is_finite() && cfg.envelope_tolerance >= 0.0) {
         return Err("key `model.envelope_tolerance`: must be finite and ≥ 0".into());
     }
@@ -88,12 +90,18 @@ pub fn build(cfg: &RoverConfig, planner: &PlannerConfig) -> Result<Box<dyn Syste
         PlannerConfig::RoverPrimitives(p) => p.clone(),
         other => return Err(mismatch("rover", other, &["rover_primitives"])),
     };
-    let horizon = if params.horizon.is_finite() { params.horizon.max(0.0) } else { 0.0 };
+    let horizon = if params.horizon.is_finite() {
+        params.horizon.max(0.0)
+    } else {
+        0.0
+    };
     let signal = match cfg.switching {
         SwitchingConfig::A => SwitchingSignal::FixedA,
         SwitchingConfig::B => SwitchingSignal::FixedB,
-        SwitchingConfig::Telegraph { seed, rate } => SwitchingSignal::telegraph(seed, rate, horizon)
-            .map_err(|e| format!("key `model.switching`: {e}"))?,
+        SwitchingConfig::Telegraph { seed, rate } => {
+            SwitchingSignal::telegraph(seed, rate, horizon)
+                .map_err(|e| format!("key `model.switching`: {e}"))?
+        }
     };
     Ok(Box::new(Rover {
         model: SwitchingRover::new(cfg.geometry, signal),
@@ -116,7 +124,11 @@ impl Controller for RecordedController {
     fn command(&mut self, t: f64, _q: &State) -> Command {
         let r = &self.0;
         let k = r.t.partition_point(|&s| s <= t + 1e-9).saturating_sub(1);
-        Command { u: r.u[k].clone(), label: r.label[k], done: false }
+        Command {
+            u: r.u[k].clone(),
+            label: r.label[k],
+            done: false,
+        }
     }
 }
 
@@ -130,7 +142,11 @@ impl PolicyFactory for RecordedFactory {
 
 /// First time the run is within `eps` of the goal in the seed's SE(2) metric (NaN if never).
 pub fn time_to_goal(tr: &Trajectory, goal: &State, eps: f64) -> f64 {
-    tr.q.iter().zip(&tr.t).find(|(q, _)| se2_distance(q, goal) <= eps).map(|(_, t)| *t).unwrap_or(f64::NAN)
+    tr.q.iter()
+        .zip(&tr.t)
+        .find(|(q, _)| se2_distance(q, goal) <= eps)
+        .map(|(_, t)| *t)
+        .unwrap_or(f64::NAN)
 }
 
 impl System for Rover {
@@ -164,7 +180,10 @@ impl System for Rover {
             labels: plan.labels,
             segments: Vec::new(),
             duration,
-            law: ControlLaw::Feedback { factory: Arc::new(RecordedFactory(Arc::new(rec))), period: self.params.period },
+            law: ControlLaw::Feedback {
+                factory: Arc::new(RecordedFactory(Arc::new(rec))),
+                period: self.params.period,
+            },
             details,
         })
     }
@@ -175,7 +194,13 @@ impl System for Rover {
         start: &[f64],
         sim: &SimConfig,
     ) -> Result<Box<dyn PhysicsSystem>, String> {
-        Ok(Box::new(RoverPhysics::new(robot, urdf_dir, self.model.geometry, start, sim)?))
+        Ok(Box::new(RoverPhysics::new(
+            robot,
+            urdf_dir,
+            self.model.geometry,
+            start,
+            sim,
+        )?))
     }
     fn extra_metric_names(&self) -> Vec<String> {
         [
@@ -192,22 +217,51 @@ impl System for Rover {
         .map(String::from)
         .to_vec()
     }
-    fn extra_metrics(&self, goal: &State, ideal: &Trajectory, sim: &SimTrajectory) -> Vec<(String, f64)> {
+    fn extra_metrics(
+        &self,
+        goal: &State,
+        ideal: &Trajectory,
+        sim: &SimTrajectory,
+    ) -> Vec<(String, f64)> {
         let eps = self.params.epsilon;
-        let chan = |name: &str| sim.channels.iter().find(|(n, _)| n == name).map(|(_, v)| v.as_slice());
+        let chan = |name: &str| {
+            sim.channels
+                .iter()
+                .find(|(n, _)| n == name)
+                .map(|(_, v)| v.as_slice())
+        };
         let mut out = vec![
-            ("ideal_goal_se2".to_string(), se2_distance(ideal.last(), goal)),
-            ("sim_goal_se2".to_string(), se2_distance(sim.traj.last(), goal)),
-            ("ideal_time_to_goal".to_string(), time_to_goal(ideal, goal, eps)),
-            ("sim_time_to_goal".to_string(), time_to_goal(&sim.traj, goal, eps)),
+            (
+                "ideal_goal_se2".to_string(),
+                se2_distance(ideal.last(), goal),
+            ),
+            (
+                "sim_goal_se2".to_string(),
+                se2_distance(sim.traj.last(), goal),
+            ),
+            (
+                "ideal_time_to_goal".to_string(),
+                time_to_goal(ideal, goal, eps),
+            ),
+            (
+                "sim_time_to_goal".to_string(),
+                time_to_goal(&sim.traj, goal, eps),
+            ),
         ];
         let env = chan("envelope_distance").unwrap_or(&[]);
         let finite: Vec<f64> = env.iter().copied().filter(|v| v.is_finite()).collect();
         let inside = finite.iter().filter(|&&d| d <= self.envelope_tol).count();
-        let frac = if finite.is_empty() { f64::NAN } else { inside as f64 / finite.len() as f64 };
+        let frac = if finite.is_empty() {
+            f64::NAN
+        } else {
+            inside as f64 / finite.len() as f64
+        };
         out.push(("envelope_fraction".into(), frac));
         out.push(("envelope_outside_fraction".into(), 1.0 - frac));
-        out.push(("envelope_distance_max".into(), finite.iter().fold(0.0, |m: f64, v| m.max(*v))));
+        out.push((
+            "envelope_distance_max".into(),
+            finite.iter().fold(0.0, |m: f64, v| m.max(*v)),
+        ));
         let max_abs = |suffix: &str| {
             sim.channels
                 .iter()

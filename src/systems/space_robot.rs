@@ -57,7 +57,10 @@ struct Space {
 /// Channel name → metric name (maximum of |value| over the run).
 const CHANNEL_METRICS: [(&str, &str); 6] = [
     ("angular_momentum_z", "max_abs_angular_momentum"),
-    ("angular_momentum_out_of_plane", "max_angular_momentum_out_of_plane"),
+    (
+        "angular_momentum_out_of_plane",
+        "max_angular_momentum_out_of_plane",
+    ),
     ("linear_momentum_norm", "max_linear_momentum"),
     ("com_drift", "max_com_drift"),
     ("out_of_plane", "max_out_of_plane"),
@@ -69,7 +72,10 @@ pub fn build(_cfg: &SpaceRobotConfig, planner: &PlannerConfig) -> Result<Box<dyn
     let planner = match planner {
         PlannerConfig::StokesSpace(p) => Planner::Stokes(p.clone()),
         PlannerConfig::Endogenous(p) => {
-            if p.via_deg.iter().any(|v| v.len() != 3 || v.iter().any(|x| !x.is_finite())) {
+            if p.via_deg
+                .iter()
+                .any(|v| v.len() != 3 || v.iter().any(|x| !x.is_finite()))
+            {
                 return Err("key `planner.via_deg`: each via point needs 3 finite angles (θ0, θ1, θ2) in degrees".into());
             }
             if !(p.segment_time.is_finite() && p.segment_time > 0.0) {
@@ -77,9 +83,18 @@ pub fn build(_cfg: &SpaceRobotConfig, planner: &PlannerConfig) -> Result<Box<dyn
             }
             Planner::Endogenous(p.clone())
         }
-        other => return Err(mismatch("space_robot", other, &["stokes_space", "endogenous"])),
+        other => {
+            return Err(mismatch(
+                "space_robot",
+                other,
+                &["stokes_space", "endogenous"],
+            ))
+        }
     };
-    Ok(Box::new(Space { model: SpaceRobotModel::default(), planner }))
+    Ok(Box::new(Space {
+        model: SpaceRobotModel::default(),
+        planner,
+    }))
 }
 
 impl Space {
@@ -90,7 +105,10 @@ impl Space {
                 .iter()
                 .enumerate()
                 .map(|(k, v)| {
-                    ((k + 1) as f64 * p.segment_time, State::from_iterator(3, v.iter().map(|x| x.to_radians())))
+                    (
+                        (k + 1) as f64 * p.segment_time,
+                        State::from_iterator(3, v.iter().map(|x| x.to_radians())),
+                    )
                 })
                 .collect(),
             Planner::Stokes(_) => Vec::new(),
@@ -125,7 +143,9 @@ impl System for Space {
     fn plan(&self, start: &State, goal: &State, limits: &Limits) -> Result<Plan, PlanError> {
         match &self.planner {
             Planner::Stokes(p) => stokes_space::plan(&self.model, start, goal, p, limits),
-            Planner::Endogenous(p) => endogenous::plan(&manipulator(&self.model.robot), start, goal, p, limits),
+            Planner::Endogenous(p) => {
+                endogenous::plan(&manipulator(&self.model.robot), start, goal, p, limits)
+            }
         }
     }
     fn physics(
@@ -146,7 +166,12 @@ impl System for Space {
         }
         out
     }
-    fn extra_metrics(&self, _goal: &State, ideal: &Trajectory, sim: &SimTrajectory) -> Vec<(String, f64)> {
+    fn extra_metrics(
+        &self,
+        _goal: &State,
+        ideal: &Trajectory,
+        sim: &SimTrajectory,
+    ) -> Vec<(String, f64)> {
         let mut out = Vec::new();
         for (channel, metric) in CHANNEL_METRICS {
             let v = sim
@@ -163,7 +188,9 @@ impl System for Space {
             let err = |traj: &Trajectory| {
                 via.iter()
                     .map(|(t, y)| {
-                        coord_error(y, &sample(traj, *t), angular).iter().fold(0.0_f64, |m, e| m.max(e.abs()))
+                        coord_error(y, &sample(traj, *t), angular)
+                            .iter()
+                            .fold(0.0_f64, |m, e| m.max(e.abs()))
                     })
                     .fold(0.0_f64, f64::max)
                     .to_degrees()
