@@ -100,7 +100,7 @@ pub struct Shard {
 impl Shard {
     /// Parses `I/N` (0 ≤ I < N).
     pub fn parse(s: &str) -> Result<Shard, String> {
-        let bad = || format!("--shard `{s}`: expected I/N with 0 <= I < N");
+        let bad = || format!("`{s}`: expected I/N with 0 <= I < N");
         let (i, n) = s.split_once('/').ok_or_else(bad)?;
         let (index, count): (usize, usize) = (
             i.trim().parse().map_err(|_| bad())?,

@@ -17,7 +17,7 @@ use crate::physics::PhysicsSystem;
 use crate::plan::{Command, ControlLaw, Controller, Limits, Plan, PolicyFactory};
 use crate::planner::rover_primitives::{self, se2_distance, RoverPrimitiveParams};
 use crate::planner::PlanError;
-use crate::record::SimTrajectory;
+use crate::record::{Overlay, SimTrajectory};
 use crate::scenario::{PlannerConfig, SimConfig};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -152,6 +152,20 @@ pub fn time_to_goal(tr: &Trajectory, goal: &State, eps: f64) -> f64 {
 impl System for Rover {
     fn model(&self) -> &dyn KinematicModel {
         &self.model
+    }
+    fn goal_heading(&self, goal: &State) -> Option<f64> {
+        Some(goal[2])
+    }
+    /// The line N through the goal at the goal heading, which P2 stabilises to.
+    fn overlays(&self, start: &State, goal: &State) -> Vec<Overlay> {
+        let (c, s) = (goal[2].cos(), goal[2].sin());
+        let reach = 2.0 + (start[0] - goal[0]).hypot(start[1] - goal[1]);
+        let at = |d: f64| [goal[0] + d * c, goal[1] + d * s, 0.0];
+        vec![Overlay {
+            name: "line_N".into(),
+            points: vec![at(-reach), at(reach)],
+            rgba: [0.55, 0.35, 0.85, 1.0],
+        }]
     }
     fn default_max_rate(&self) -> Vec<f64> {
         vec![1.0, 2.0]
