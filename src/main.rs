@@ -93,31 +93,42 @@ fn fmt_metric(o: &RunOutcome, name: &str) -> String {
         .unwrap_or_else(|| "-".into())
 }
 
+/// The coordinate the table reports: the planar position when the model has
+/// one, else its first coordinate (the first `ideal_goal_*` metric).
+fn primary(o: &RunOutcome) -> Option<&str> {
+    o.metrics
+        .iter()
+        .find_map(|(n, _)| n.strip_prefix("ideal_goal_"))
+}
+
 fn print_table(rows: &[RunOutcome]) {
     println!(
-        "{:<26} {:<14} {:>7} {:>10} {:>7} {:>10} {:>10} {:>9} {:>9}  result",
+        "{:<30} {:<17} {:>7} {:>9} {:>7} {:>14} {:>10} {:>10} {:>10} {:>10}  result",
         "scenario",
         "planner",
         "steps",
         "steps/s",
         "wall s",
+        "coordinate",
         "ideal goal",
         "sim goal",
-        "pos rms",
-        "pos max"
+        "track rms",
+        "track max"
     );
     for o in rows {
+        let c = primary(o).unwrap_or("-");
         println!(
-            "{:<26} {:<14} {:>7} {:>10.0} {:>7.3} {:>10} {:>10} {:>9} {:>9}  {}",
+            "{:<30} {:<17} {:>7} {:>9.0} {:>7.3} {:>14} {:>10} {:>10} {:>10} {:>10}  {}",
             o.name,
             o.planner,
             o.steps,
             o.steps as f64 / o.timings.physics.max(1e-9),
             o.timings.total,
-            fmt_metric(o, "ideal_goal_position"),
-            fmt_metric(o, "sim_goal_position"),
-            fmt_metric(o, "tracking_position_rms"),
-            fmt_metric(o, "tracking_position_max"),
+            c,
+            fmt_metric(o, &format!("ideal_goal_{c}")),
+            fmt_metric(o, &format!("sim_goal_{c}")),
+            fmt_metric(o, &format!("tracking_{c}_rms")),
+            fmt_metric(o, &format!("tracking_{c}_max")),
             if o.passed {
                 "PASS".to_string()
             } else {
@@ -134,9 +145,9 @@ fn run_cmd(args: &RunArgs, gate: bool) -> Result<u8, Vec<Error>> {
         progress: !args.quiet,
     };
     let shard = match &args.shard {
-        Some(s) => Some(
-            anholonomy::sweep::Shard::parse(s).map_err(|m| vec![Error::input("--shard", m)])?,
-        ),
+        Some(s) => {
+            Some(anholonomy::sweep::Shard::parse(s).map_err(|m| vec![Error::input("--shard", m)])?)
+        }
         None => None,
     };
     let mut rows = Vec::new();

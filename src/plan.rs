@@ -206,8 +206,10 @@ impl Limits {
             .zip(&self.max_rate)
             .map(|(d, m)| d.abs() / m)
             .fold(0.0, f64::max);
-        let ramp = cruise.min(self.ramp);
-        let raw = cruise + ramp;
+        // Legs shorter than a ramp are slowed to last two ramps: ramps of a few
+        // steps would cost RK4 its order (and the physics its smoothness).
+        let ramp = if cruise > 0.0 { self.ramp } else { 0.0 };
+        let raw = cruise.max(ramp) + ramp;
         let duration = (raw / self.step - 1e-9).ceil().max(0.0) * self.step;
         // Stretch the ramp with the duration so the peak rate stays within limits.
         RampProfile {

@@ -245,7 +245,9 @@ fn toml_error(path: &Path, text: &str, e: &toml::de::Error) -> Error {
     // at the key itself: search from the span to the end of that table.
     if let (Some(span), Some(key)) = (e.span(), message.split('`').nth(1)) {
         if message.starts_with("unknown field") {
-            let start = text[..span.start.min(text.len())].rfind('\n').map_or(0, |i| i + 1);
+            let start = text[..span.start.min(text.len())]
+                .rfind('\n')
+                .map_or(0, |i| i + 1);
             let mut offset = start;
             for (i, l) in text[start..].split('\n').enumerate() {
                 let t = l.trim_start();

@@ -140,9 +140,15 @@ fn check_on_bad_input_also_exits_2() {
 
 #[test]
 fn unknown_planner_key_names_its_line() {
-    let text = disk_scenario(&model("rolling_disk.urdf"), "", "")
-        .replace("kind = \"stokes_disk\"", "kind = \"stokes_disk\"\nalgoritm = \"x\"");
+    let text = disk_scenario(&model("rolling_disk.urdf"), "", "").replace(
+        "kind = \"stokes_disk\"",
+        "kind = \"stokes_disk\"\nalgoritm = \"x\"",
+    );
     let err = expect_input_error(&text, "algoritm");
-    let line = text.lines().position(|l| l.starts_with("algoritm")).unwrap() + 1;
+    let line = text
+        .lines()
+        .position(|l| l.starts_with("algoritm"))
+        .unwrap()
+        + 1;
     assert!(err.contains(&format!(":{line}:")), "{err}");
 }

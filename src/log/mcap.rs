@@ -289,8 +289,12 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
         &error_names,
         tmp,
     )?;
-    let channel_names: Vec<Cow<'_, str>> =
-        rec.sim.channels.iter().map(|(n, _)| Cow::Borrowed(n.as_str())).collect();
+    let channel_names: Vec<Cow<'_, str>> = rec
+        .sim
+        .channels
+        .iter()
+        .map(|(n, _)| Cow::Borrowed(n.as_str()))
+        .collect();
     let ch_chan = if channel_names.is_empty() {
         None
     } else {

@@ -310,8 +310,11 @@ fn log_robot(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrErro
 
 fn log_paths(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrError> {
     for o in rec.overlays {
-        let strip: Vec<[f32; 3]> =
-            o.points.iter().map(|p| [p[0] as f32, p[1] as f32, p[2] as f32]).collect();
+        let strip: Vec<[f32; 3]> = o
+            .points
+            .iter()
+            .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32])
+            .collect();
         stream.log_static(
             ep(&["paths", &o.name]),
             &rr::LineStrips3D::new([strip])

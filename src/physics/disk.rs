@@ -7,12 +7,12 @@
 //! the disk moves only through wheel–ground friction.
 
 use super::urdf::{SimWorld, WorldOptions};
-use super::PhysicsSystem;
+use super::{angles, PhysicsSystem};
 use crate::model::{Input, State};
 use crate::record::Pose;
 use crate::scenario::SimConfig;
 use rapier3d::prelude::*;
-use std::f64::consts::{FRAC_PI_2, PI, TAU};
+use std::f64::consts::FRAC_PI_2;
 use std::path::Path;
 
 /// Names the URDF must use.
@@ -39,20 +39,9 @@ pub struct DiskPhysics {
     yaw: f64,
 }
 
-fn wrap(a: f64) -> f64 {
-    (a + PI).rem_euclid(TAU) - PI
-}
-
-fn yaw_of(q: &rapier3d::math::Rotation) -> f64 {
-    let (x, y, z, w) = (q.x as f64, q.y as f64, q.z as f64, q.w as f64);
-    (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))
-}
-
 /// Wheel angle about the axle (yoke +y) relative to the yoke, in (−π, π].
 fn wheel_angle(yoke: &rapier3d::math::Rotation, wheel: &rapier3d::math::Rotation) -> f64 {
-    let rel = yoke.inverse() * *wheel;
-    let s = if rel.w < 0.0 { -1.0 } else { 1.0 };
-    wrap(2.0 * ((s * rel.y) as f64).atan2((s * rel.w) as f64))
+    angles::about_axis(&(yoke.inverse() * *wheel), 1)
 }
 
 /// Radius of the wheel's collision cylinder in the URDF, if any.
@@ -171,8 +160,8 @@ impl PhysicsSystem for DiskPhysics {
         self.sim.world.step();
         let bodies = &self.sim.world.bodies;
         let (yq, wq) = (bodies[self.yoke].rotation(), bodies[self.wheel].rotation());
-        self.yaw += wrap(yaw_of(yq) - wrap(self.yaw));
-        self.joint += wrap(wheel_angle(yq, wq) - wrap(self.joint));
+        self.yaw = angles::unwrap(self.yaw, angles::yaw(yq));
+        self.joint = angles::unwrap(self.joint, wheel_angle(yq, wq));
     }
 
     fn link_poses(&self) -> Vec<Pose> {

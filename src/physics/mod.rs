@@ -4,6 +4,7 @@
 //! coordinates back from the simulated bodies. [`replay`] drives it with the
 //! same controller the ideal run used, evaluated on the simulated state.
 
+pub mod angles;
 pub mod disk;
 pub mod rover;
 pub mod space_robot;

@@ -19,13 +19,13 @@
 //! model b, NaN when the models coincide, i.e. ψ = 0 or u1 = 0).
 
 use super::urdf::{SimWorld, WorldOptions};
-use super::PhysicsSystem;
+use super::{angles, PhysicsSystem};
 use crate::model::rover::{envelope, RoverGeometry};
 use crate::model::{Input, State};
 use crate::record::Pose;
 use crate::scenario::SimConfig;
 use rapier3d::prelude::*;
-use std::f64::consts::{PI, TAU};
+
 use std::path::Path;
 
 /// Chassis link name (frame origin = middle-axle centre).
@@ -42,15 +42,6 @@ pub const WHEELS: [&str; 5] = [
     "back_left_wheel",
     "back_right_wheel",
 ];
-
-fn wrap(a: f64) -> f64 {
-    (a + PI).rem_euclid(TAU) - PI
-}
-
-fn yaw_of(q: &Rotation) -> f64 {
-    let (x, y, z, w) = (q.x as f64, q.y as f64, q.z as f64, q.w as f64);
-    (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))
-}
 
 /// Wheel radius from the URDF: the front wheel's sphere or cylinder collision.
 pub fn urdf_wheel_radius(robot: &urdf_rs::Robot, link: &str) -> Option<f64> {
@@ -189,7 +180,7 @@ impl RoverPhysics {
     fn steer_angle(&self) -> f64 {
         let b = &self.sim.world.bodies;
         let rel = b[self.chassis].rotation().inverse() * *b[self.steering].rotation();
-        wrap(yaw_of(&rel))
+        angles::yaw(&rel)
     }
 
     /// Contact-point velocity of wheel `i` along and across its rolling direction, m/s.
@@ -229,8 +220,8 @@ impl PhysicsSystem for RoverPhysics {
 
     fn step(&mut self) {
         self.sim.world.step();
-        let yaw = yaw_of(self.sim.world.bodies[self.chassis].rotation());
-        self.theta += wrap(yaw - wrap(self.theta));
+        let yaw = angles::yaw(self.sim.world.bodies[self.chassis].rotation());
+        self.theta = angles::unwrap(self.theta, yaw);
     }
 
     fn link_poses(&self) -> Vec<Pose> {

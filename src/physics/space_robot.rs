@@ -33,13 +33,13 @@
 //! rad) and the number of active contact pairs.
 
 use super::urdf::{SimWorld, WorldOptions};
-use super::PhysicsSystem;
+use super::{angles, PhysicsSystem};
 use crate::model::space_robot::SpaceRobot;
 use crate::model::{Input, State};
 use crate::record::Pose;
 use crate::scenario::SimConfig;
 use rapier3d::prelude::*;
-use std::f64::consts::{PI, TAU};
+
 use std::path::Path;
 
 /// Link names the URDF must use (vehicle, link 1, link 2).
@@ -57,14 +57,9 @@ pub const CHANNELS: [&str; 6] = [
     "contact_pairs",
 ];
 
-fn wrap(a: f64) -> f64 {
-    (a + PI).rem_euclid(TAU) - PI
-}
-
 /// Angle about z of a rotation (exact for rotations about z).
 fn angle_z(q: &rapier3d::math::Rotation) -> f64 {
-    let s = if q.w < 0.0 { -1.0 } else { 1.0 };
-    wrap(2.0 * ((s * q.z) as f64).atan2((s * q.w) as f64))
+    angles::about_axis(q, 2)
 }
 
 /// Checks the URDF against the model's geometry and mass table (1e-6 relative).
@@ -435,7 +430,7 @@ impl PhysicsSystem for SpaceRobotPhysics {
             angle_z(&(conj(&r[1]) * r[2])),
         ];
         for (q, v) in self.q.iter_mut().zip(read) {
-            *q += wrap(v - wrap(*q));
+            *q = angles::unwrap(*q, v);
         }
         self.channels = self.measure();
     }
