@@ -44,20 +44,6 @@ fn wheel_angle(yoke: &rapier3d::math::Rotation, wheel: &rapier3d::math::Rotation
     angles::about_axis(&(yoke.inverse() * *wheel), 1)
 }
 
-/// Radius of the wheel's collision cylinder in the URDF, if any.
-pub fn urdf_wheel_radius(robot: &urdf_rs::Robot) -> Option<f64> {
-    robot
-        .links
-        .iter()
-        .find(|l| l.name == WHEEL)?
-        .collision
-        .iter()
-        .find_map(|c| match c.geometry {
-            urdf_rs::Geometry::Cylinder { radius, .. } => Some(radius),
-            _ => None,
-        })
-}
-
 impl DiskPhysics {
     /// Build the disk at `start` = (x, y, θ, α). Errors name what the URDF lacks.
     pub fn new(
@@ -67,14 +53,7 @@ impl DiskPhysics {
         start: &[f64],
         sim: &SimConfig,
     ) -> Result<Self, String> {
-        let r_urdf = urdf_wheel_radius(robot).ok_or_else(|| {
-            format!("URDF needs a link `{WHEEL}` with a cylinder collision (the wheel)")
-        })?;
-        if (r_urdf - radius).abs() > 1e-6 {
-            return Err(format!(
-                "URDF wheel radius {r_urdf} m differs from the scenario's model.radius {radius} m"
-            ));
-        }
+        super::urdf::require_radius(robot, WHEEL, "the wheel", radius)?;
         let yaw0 = FRAC_PI_2 - start[3];
         let root = rapier3d::math::Pose::from_parts(
             Vector::new(start[0] as Real, start[1] as Real, radius as Real),

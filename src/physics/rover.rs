@@ -43,22 +43,6 @@ pub const WHEELS: [&str; 5] = [
     "back_right_wheel",
 ];
 
-/// Wheel radius from the URDF: the front wheel's sphere or cylinder collision.
-pub fn urdf_wheel_radius(robot: &urdf_rs::Robot, link: &str) -> Option<f64> {
-    robot
-        .links
-        .iter()
-        .find(|l| l.name == link)?
-        .collision
-        .iter()
-        .find_map(|c| match c.geometry {
-            urdf_rs::Geometry::Sphere { radius } | urdf_rs::Geometry::Cylinder { radius, .. } => {
-                Some(radius)
-            }
-            _ => None,
-        })
-}
-
 /// x offset of a joint's origin in its parent frame.
 fn joint_x(robot: &urdf_rs::Robot, joint: &str) -> Option<f64> {
     robot
@@ -94,7 +78,7 @@ impl RoverPhysics {
         start: &[f64],
         sim: &SimConfig,
     ) -> Result<Self, String> {
-        let rho = urdf_wheel_radius(robot, WHEELS[0]).ok_or_else(|| {
+        let rho = super::urdf::collision_radius(robot, WHEELS[0]).ok_or_else(|| {
             format!(
                 "URDF needs a link `{}` with a sphere or cylinder collision",
                 WHEELS[0]

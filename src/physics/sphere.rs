@@ -43,20 +43,6 @@ pub struct SpherePhysics {
     u: [f64; 2],
 }
 
-/// Radius of the ball's collision sphere in the URDF, if any.
-pub fn urdf_ball_radius(robot: &urdf_rs::Robot) -> Option<f64> {
-    robot
-        .links
-        .iter()
-        .find(|l| l.name == BALL)?
-        .collision
-        .iter()
-        .find_map(|c| match c.geometry {
-            urdf_rs::Geometry::Sphere { radius } => Some(radius),
-            _ => None,
-        })
-}
-
 impl SpherePhysics {
     /// Build the ball at `start` = (x, y, qw, qx, qy, qz), resting on the plane.
     pub fn new(
@@ -66,14 +52,7 @@ impl SpherePhysics {
         start: &[f64],
         sim: &SimConfig,
     ) -> Result<Self, String> {
-        let r_urdf = urdf_ball_radius(robot).ok_or_else(|| {
-            format!("URDF needs a link `{BALL}` with a sphere collision (the ball)")
-        })?;
-        if (r_urdf - radius).abs() > 1e-6 {
-            return Err(format!(
-                "URDF ball radius {r_urdf} m differs from the scenario's model.radius {radius} m"
-            ));
-        }
+        super::urdf::require_radius(robot, BALL, "the ball", radius)?;
         if start.len() != 6 {
             return Err(format!(
                 "sphere physics needs a 6-value state, got {}",

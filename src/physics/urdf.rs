@@ -54,6 +54,36 @@ pub fn read(path: &Path) -> Result<Robot, String> {
     Ok(robot)
 }
 
+/// Radius of the first sphere or cylinder collision of `link`, if any.
+pub fn collision_radius(robot: &Robot, link: &str) -> Option<f64> {
+    robot
+        .links
+        .iter()
+        .find(|l| l.name == link)?
+        .collision
+        .iter()
+        .find_map(|c| match c.geometry {
+            urdf_rs::Geometry::Sphere { radius } | urdf_rs::Geometry::Cylinder { radius, .. } => {
+                Some(radius)
+            }
+            _ => None,
+        })
+}
+
+/// Check that `link` has a round collision (`what`, e.g. "the wheel") of the
+/// scenario's `radius`; the error names both values.
+pub fn require_radius(robot: &Robot, link: &str, what: &str, radius: f64) -> Result<(), String> {
+    let r = collision_radius(robot, link).ok_or_else(|| {
+        format!("URDF needs a link `{link}` with a sphere or cylinder collision ({what})")
+    })?;
+    if (r - radius).abs() > 1e-6 {
+        return Err(format!(
+            "URDF radius of {what} ({r} m) differs from the scenario's model.radius ({radius} m)"
+        ));
+    }
+    Ok(())
+}
+
 /// URDF pose (xyz, rpy) as a [`Pose`].
 pub fn pose_of(p: &urdf_rs::Pose) -> Pose {
     let q = UnitQuaternion::from_euler_angles(p.rpy[0], p.rpy[1], p.rpy[2]);

@@ -28,3 +28,15 @@ pub enum PlanError {
     #[error("planner did not converge: {0}")]
     NoConvergence(String),
 }
+
+/// `Ok` when `ok`, else [`PlanError::InvalidParameter`] naming the parameter.
+pub fn check_param(name: &str, ok: bool, reason: &str) -> Result<(), PlanError> {
+    if ok {
+        Ok(())
+    } else {
+        Err(PlanError::InvalidParameter {
+            name: name.into(),
+            reason: reason.into(),
+        })
+    }
+}

@@ -127,15 +127,30 @@ pub const LABELS: [&str; 5] = [
     "final (A): tilt to goal",
 ];
 
-fn check(name: &str, ok: bool, reason: &str) -> Result<(), PlanError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(PlanError::InvalidParameter {
-            name: name.into(),
-            reason: reason.into(),
-        })
-    }
+use crate::planner::check_param as check;
+
+/// Checks shared by both sphere planners: radius, and 5 finite Euler coordinates.
+pub(crate) fn validate_task(
+    model: &RollingSphere,
+    start: &State,
+    goal: &State,
+) -> Result<(), PlanError> {
+    check(
+        "radius",
+        model.a.is_finite() && model.a > 0.0,
+        "must be a positive number",
+    )?;
+    check(
+        "start",
+        start.len() == 5 && start.iter().all(|v| v.is_finite()),
+        "need 5 finite values",
+    )?;
+    check(
+        "goal",
+        goal.len() == 5 && goal.iter().all(|v| v.is_finite()),
+        "need 5 finite values",
+    )?;
+    Ok(())
 }
 
 fn wrap(a: f64) -> f64 {
@@ -368,21 +383,7 @@ fn validate(
     goal: &State,
     p: &SphereGeometricParams,
 ) -> Result<(), PlanError> {
-    check(
-        "radius",
-        model.a.is_finite() && model.a > 0.0,
-        "must be a positive number",
-    )?;
-    check(
-        "start",
-        start.len() == 5 && start.iter().all(|v| v.is_finite()),
-        "need 5 finite values",
-    )?;
-    check(
-        "goal",
-        goal.len() == 5 && goal.iter().all(|v| v.is_finite()),
-        "need 5 finite values",
-    )?;
+    validate_task(model, start, goal)?;
     check(
         "candidate_turns",
         p.candidate_turns >= 1,

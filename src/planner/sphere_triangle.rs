@@ -660,16 +660,7 @@ pub fn solve(
     })
 }
 
-fn check(name: &str, ok: bool, reason: &str) -> Result<(), PlanError> {
-    if ok {
-        Ok(())
-    } else {
-        Err(PlanError::InvalidParameter {
-            name: name.into(),
-            reason: reason.into(),
-        })
-    }
-}
+use crate::planner::check_param as check;
 
 fn validate(
     model: &RollingSphere,
@@ -677,21 +668,7 @@ fn validate(
     goal: &State,
     p: &SphereTriangleParams,
 ) -> Result<(), PlanError> {
-    check(
-        "radius",
-        model.a.is_finite() && model.a > 0.0,
-        "must be a positive number",
-    )?;
-    check(
-        "start",
-        start.len() == 5 && start.iter().all(|v| v.is_finite()),
-        "need 5 finite values",
-    )?;
-    check(
-        "goal",
-        goal.len() == 5 && goal.iter().all(|v| v.is_finite()),
-        "need 5 finite values",
-    )?;
+    super::sphere_geometric::validate_task(model, start, goal)?;
     check(
         "side_ratio",
         p.side_ratio.is_finite() && p.side_ratio > 0.05 && p.side_ratio < 20.0,
