@@ -83,8 +83,10 @@ pub struct Comparison {
 pub struct Overlay {
     /// Entity name.
     pub name: String,
-    /// Points, m.
+    /// Points, m, in the world frame or, with `link`, in that link's frame.
     pub points: Vec<[f64; 3]>,
+    /// URDF link the points are attached to (they move with it); `None`: world.
+    pub link: Option<String>,
     /// RGBA in [0, 1].
     pub rgba: [f32; 4],
 }

@@ -249,6 +249,18 @@ fn logs_are_written() {
     assert_eq!(s["passed"], serde_json::json!(o.passed));
     assert!(s["metrics"]["sim_goal_orientation_deg"].is_number());
     assert!(s["sim"]["final_state"]["qw"].is_number());
+    // The spherical triangle is drawn on the ball, attached to its link frame.
+    let bytes = std::fs::read(dir.join("run.mcap")).unwrap();
+    let mut found = false;
+    for m in mcap::MessageStream::new(&bytes).unwrap() {
+        let m = m.unwrap();
+        if m.channel.topic == "/scene/paths" {
+            let d = &m.data;
+            found |= d.windows(10).any(|w| w == b"triangle_1")
+                && d.windows(4).any(|w| w == b"ball");
+        }
+    }
+    assert!(found, "triangle overlay missing from /scene/paths");
 }
 
 /// start/goal are the paper's 5 Euler coordinates; other lengths, a wrong radius and a

@@ -613,11 +613,24 @@ fn paths_scene(rec: &RunRecord<'_>) -> Option<SceneUpdate> {
         },
     ];
     for o in rec.overlays {
-        let pts: Vec<[f64; 2]> = o.points.iter().map(|p| [p[0], p[1]]).collect();
-        entities.push(SceneEntity {
-            lines: vec![line(&pts, o.rgba)],
+        let mut line = line(&[], o.rgba);
+        line.points = o
+            .points
+            .iter()
+            .map(|p| Point3 {
+                x: p[0],
+                y: p[1],
+                z: p[2],
+            })
+            .collect();
+        let mut e = SceneEntity {
+            lines: vec![line],
             ..entity(&o.name)
-        });
+        };
+        if let Some(link) = &o.link {
+            e.frame_id = link_frame(link).into_owned();
+        }
+        entities.push(e);
     }
     if let Some(([gx, gy], heading)) = goal_pose(rec) {
         let s = marker_scale(&ideal);

@@ -315,8 +315,12 @@ fn log_paths(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrErro
             .iter()
             .map(|p| [p[0] as f32, p[1] as f32, p[2] as f32])
             .collect();
+        let path = match &o.link {
+            Some(link) => ep(&["robot", link, &o.name]),
+            None => ep(&["paths", &o.name]),
+        };
         stream.log_static(
-            ep(&["paths", &o.name]),
+            path,
             &rr::LineStrips3D::new([strip])
                 .with_colors([rgba(o.rgba)])
                 .with_radii([Radius::new_ui_points(1.0)])

@@ -164,6 +164,7 @@ impl System for Rover {
         vec![Overlay {
             name: "line_N".into(),
             points: vec![at(-reach), at(reach)],
+            link: None,
             rgba: [0.55, 0.35, 0.85, 1.0],
         }]
     }

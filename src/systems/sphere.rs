@@ -29,7 +29,7 @@ use crate::plan::{Limits, Plan};
 use crate::planner::sphere_geometric::{self, SphereGeometricParams};
 use crate::planner::sphere_triangle::{self, SphereTriangleParams};
 use crate::planner::PlanError;
-use crate::record::SimTrajectory;
+use crate::record::{Overlay, SimTrajectory};
 use crate::scenario::{PlannerConfig, SimConfig};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -119,6 +119,30 @@ impl System for Sphere {
     }
     fn file_model(&self) -> &dyn KinematicModel {
         &self.euler
+    }
+    /// The spherical triangles the contact point traces on the ball (body
+    /// frame, drawn just outside the shell so they move with the ball).
+    fn overlays(&self, start: &State, goal: &State) -> Vec<Overlay> {
+        let Planner::Triangle(p) = &self.planner else {
+            return Vec::new();
+        };
+        let (s, g) = (
+            quat_state_to_euler_state(start),
+            quat_state_to_euler_state(goal),
+        );
+        let traces =
+            sphere_triangle::triangle_traces(&self.euler, &s, &g, p, 24).unwrap_or_default();
+        let scale = 1.01 * self.euler.a;
+        traces
+            .into_iter()
+            .enumerate()
+            .map(|(k, tri)| Overlay {
+                name: format!("triangle_{}", k + 1),
+                points: tri.iter().map(|v| v.map(|c| c * scale)).collect(),
+                link: Some(crate::physics::sphere::BALL.to_string()),
+                rgba: [0.95, 0.3, 0.6, 1.0],
+            })
+            .collect()
     }
     fn state_from_file(&self, q: Vec<f64>) -> Vec<f64> {
         if q.len() != 5 {
