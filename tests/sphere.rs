@@ -256,8 +256,8 @@ fn logs_are_written() {
         let m = m.unwrap();
         if m.channel.topic == "/scene/paths" {
             let d = &m.data;
-            found |= d.windows(10).any(|w| w == b"triangle_1")
-                && d.windows(4).any(|w| w == b"ball");
+            found |=
+                d.windows(10).any(|w| w == b"triangle_1") && d.windows(4).any(|w| w == b"ball");
         }
     }
     assert!(found, "triangle overlay missing from /scene/paths");
