@@ -3,45 +3,25 @@
 //!
 //! `cargo bench --bench rover`.
 
-use anholonomy::model::Input;
 use anholonomy::physics::urdf::{SimWorld, WorldOptions};
-use anholonomy::runner::Prepared;
-use anholonomy::scenario::Scenario;
+mod common;
+use common::{bench_driven_steps, prepared, STEPS};
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
 use std::path::Path;
 
-fn prepared() -> Prepared {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenarios/rover_paper.toml");
-    Prepared::new(Scenario::load(&path).expect("scenario")).expect("prepared")
-}
-
 fn physics_steps(c: &mut Criterion) {
-    let prep = prepared();
-    const STEPS: u64 = 1000;
+    let prep = prepared("rover_paper");
     let mut g = c.benchmark_group("rover_physics");
     g.throughput(Throughput::Elements(STEPS));
     g.sample_size(20);
-    g.bench_function("1000_steps_five_contacts_driving_turning", |b| {
-        b.iter_batched(
-            || {
-                let mut sys = prep.physics().expect("physics");
-                // Settle onto the ground first so every sample has five contacts.
-                for _ in 0..100 {
-                    sys.step();
-                }
-                sys
-            },
-            |mut sys| {
-                let u = Input::from_vec(vec![0.4, 0.2]);
-                for _ in 0..STEPS {
-                    sys.apply(&u);
-                    sys.step();
-                }
-                sys.state()
-            },
-            BatchSize::LargeInput,
-        )
-    });
+    // 100 settling steps first, so every sample has five contacts.
+    bench_driven_steps(
+        &mut g,
+        "1000_steps_five_contacts_driving_turning",
+        &prep,
+        &[0.4, 0.2],
+        100,
+    );
     let dir = prep
         .scenario
         .urdf

@@ -3,17 +3,10 @@
 //!
 //! `cargo bench --bench space_robot`. Medians are quoted in the README.
 
-use anholonomy::model::Input;
-use anholonomy::runner::Prepared;
-use anholonomy::scenario::Scenario;
-use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
-use std::path::Path;
+mod common;
+use common::{bench_driven_steps, prepared, STEPS};
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use std::time::Duration;
-
-fn prepared(name: &str) -> Prepared {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(format!("scenarios/{name}.toml"));
-    Prepared::new(Scenario::load(&path).expect("scenario")).expect("prepared")
-}
 
 fn planning(c: &mut Criterion) {
     let mut g = c.benchmark_group("space_plan");
@@ -33,24 +26,16 @@ fn planning(c: &mut Criterion) {
 
 fn physics_steps(c: &mut Criterion) {
     let prep = prepared("space_robot_paper");
-    const STEPS: u64 = 1000;
     let mut g = c.benchmark_group("space_robot_physics");
     g.throughput(Throughput::Elements(STEPS));
     g.sample_size(20);
-    g.bench_function("1000_steps_both_joints_driven", |b| {
-        b.iter_batched(
-            || prep.physics().expect("physics"),
-            |mut sys| {
-                let u = Input::from_vec(vec![0.8, -0.5]);
-                for _ in 0..STEPS {
-                    sys.apply(&u);
-                    sys.step();
-                }
-                sys.state()
-            },
-            BatchSize::LargeInput,
-        )
-    });
+    bench_driven_steps(
+        &mut g,
+        "1000_steps_both_joints_driven",
+        &prep,
+        &[0.8, -0.5],
+        0,
+    );
     g.finish();
 }
 

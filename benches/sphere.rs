@@ -4,21 +4,13 @@
 //! `cargo bench --bench sphere`. Medians are quoted in the README.
 
 use anholonomy::model::rolling_sphere::RollingSphere;
-use anholonomy::model::{Input, State};
+use anholonomy::model::State;
 use anholonomy::planner::sphere_geometric::{self, ArcDirection, SphereGeometricParams};
 use anholonomy::planner::sphere_triangle::{self, SphereTriangleParams};
-use anholonomy::runner::Prepared;
-use anholonomy::scenario::Scenario;
-use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
+mod common;
+use common::{bench_driven_steps, prepared, STEPS};
+use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use std::hint::black_box;
-use std::path::Path;
-
-fn prepared(name: &str) -> Prepared {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR"))
-        .join("scenarios")
-        .join(name);
-    Prepared::new(Scenario::load(&path).expect("scenario")).expect("prepared")
-}
 
 fn deg_state(v: [f64; 5]) -> State {
     State::from_vec(vec![
@@ -69,35 +61,19 @@ fn planners(c: &mut Criterion) {
     g.finish();
     // The planner as the harness runs it (conversion, solve, plan assembly).
     let mut g = c.benchmark_group("sphere_plan_scenario");
-    for name in ["sphere_geometric_paper.toml", "sphere_triangle_paper.toml"] {
+    for name in ["sphere_geometric_paper", "sphere_triangle_paper"] {
         let prep = prepared(name);
-        g.bench_function(name.trim_end_matches(".toml"), |b| {
-            b.iter(|| prep.plan().expect("plan"))
-        });
+        g.bench_function(name, |b| b.iter(|| prep.plan().expect("plan")));
     }
     g.finish();
 }
 
 fn physics_steps(c: &mut Criterion) {
-    let prep = prepared("sphere_geometric_paper.toml");
-    const STEPS: u64 = 1000;
+    let prep = prepared("sphere_geometric_paper");
     let mut g = c.benchmark_group("sphere_physics");
     g.throughput(Throughput::Elements(STEPS));
     g.sample_size(20);
-    g.bench_function("1000_steps_rolling", |b| {
-        b.iter_batched(
-            || prep.physics().expect("physics"),
-            |mut sys| {
-                let u = Input::from_vec(vec![0.5, 0.8]);
-                for _ in 0..STEPS {
-                    sys.apply(&u);
-                    sys.step();
-                }
-                sys.state()
-            },
-            BatchSize::LargeInput,
-        )
-    });
+    bench_driven_steps(&mut g, "1000_steps_rolling", &prep, &[0.5, 0.8], 0);
     g.finish();
 }
 
