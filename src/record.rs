@@ -67,6 +67,16 @@ pub struct SimTrajectory {
     pub steps: usize,
 }
 
+impl SimTrajectory {
+    /// The series of a named channel, if the system records it.
+    pub fn channel(&self, name: &str) -> Option<&[f64]> {
+        self.channels
+            .iter()
+            .find(|(n, _)| n == name)
+            .map(|(_, v)| v.as_slice())
+    }
+}
+
 /// Errors of the simulated run against the ideal run on one time grid.
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct Comparison {

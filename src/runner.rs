@@ -213,7 +213,7 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
     let spec = metric_spec(model);
     let cmp = compare(&ideal, &sim.traj, sc.sim.dt, spec.angular, spec.position);
     let mut metrics = spec.compute(&goal, ideal.last(), sim.traj.last(), &cmp);
-    metrics.extend(prep.system.extra_metrics(&goal, &ideal, &sim));
+    metrics.extend(prep.system.extra_metrics(&goal, &ideal, &sim, &cmp));
     let mut failures = Vec::new();
     for (k, limit) in &sc.thresholds {
         let v = metrics

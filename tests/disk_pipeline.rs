@@ -2,23 +2,11 @@
 //! reporting, determinism, and the logs read back.
 
 mod common;
-use anholonomy::runner::{run, Prepared, RunOptions, RunOutcome};
+use anholonomy::runner::RunOutcome;
 use anholonomy::scenario::Scenario;
 use common::*;
 use std::collections::BTreeMap;
 use std::path::Path;
-
-fn run_file(path: &Path, logs: Option<&Path>) -> RunOutcome {
-    let prep = Prepared::new(Scenario::load(path).unwrap()).unwrap();
-    run(
-        &prep,
-        &RunOptions {
-            log_root: logs.map(Path::to_path_buf),
-            progress: false,
-        },
-    )
-    .unwrap()
-}
 
 fn run_text(text: &str, logs: Option<&Path>) -> RunOutcome {
     let dir = tempfile::tempdir().unwrap();

@@ -4,32 +4,11 @@
 mod common;
 use anholonomy::integrate::simulate;
 use anholonomy::planner::rover_primitives::LABEL_P1;
-use anholonomy::runner::{run, Prepared, RunOptions, RunOutcome};
-use anholonomy::scenario::Scenario;
+use anholonomy::runner::{RunOptions, RunOutcome};
 use anholonomy::sweep::{run_sweep, Shard};
 use common::*;
-use std::path::Path;
 
 const EPS: f64 = 0.1;
-
-fn prep_file(path: &Path) -> Prepared {
-    Prepared::new(Scenario::load(path).unwrap()).unwrap()
-}
-
-fn prep(name: &str) -> Prepared {
-    prep_file(&root().join("scenarios").join(name))
-}
-
-fn run_quiet(p: &Prepared) -> RunOutcome {
-    run(
-        p,
-        &RunOptions {
-            log_root: None,
-            progress: false,
-        },
-    )
-    .unwrap()
-}
 
 fn metric(o: &RunOutcome, name: &str) -> f64 {
     o.metric(name)
@@ -38,8 +17,8 @@ fn metric(o: &RunOutcome, name: &str) -> f64 {
 
 #[test]
 fn closed_loop_reaches_epsilon_on_physics() {
-    let p = prep("rover_paper.toml");
-    let o = run_quiet(&p);
+    let p = prepared(&scenario("rover_paper.toml"));
+    let o = run_prepared(&p, None);
     assert!(o.passed, "{:?}", o.failures);
     let (ideal, sim) = (metric(&o, "ideal_goal_se2"), metric(&o, "sim_goal_se2"));
     assert!(ideal <= EPS && sim <= EPS, "ideal {ideal}, sim {sim}");
@@ -65,7 +44,7 @@ fn closed_loop_reaches_epsilon_on_physics() {
 
 #[test]
 fn physics_reports_slip_per_wheel_and_envelope_channels() {
-    let p = prep("rover_paper.toml");
+    let p = prepared(&scenario("rover_paper.toml"));
     let sys = p.physics().unwrap();
     let names = sys.channel_names();
     for w in [
@@ -90,7 +69,7 @@ fn physics_reports_slip_per_wheel_and_envelope_channels() {
 
 #[test]
 fn open_loop_replay_ends_much_farther() {
-    let o = run_quiet(&prep("rover_open_loop.toml"));
+    let o = run_prepared(&prepared(&scenario("rover_open_loop.toml")), None);
     assert!(o.passed, "{:?}", o.failures);
     // The recorded commands still reach the goal on the (deterministic) ideal model...
     assert!(metric(&o, "ideal_goal_se2") <= EPS);
@@ -103,7 +82,7 @@ fn open_loop_replay_ends_much_farther() {
 #[test]
 fn p1_turns_the_short_way_on_the_mirrored_goal() {
     let p1_turn = |name: &str| {
-        let p = prep(name);
+        let p = prepared(&scenario(name));
         let plan = p.plan().unwrap();
         let (start, goal) = p.start_goal();
         let tr = simulate(p.model(), &plan, &start, p.scenario.sim.dt);
@@ -135,7 +114,7 @@ fn small_sweep_reports_rate_and_distribution_and_shards_agree() {
     let dir = tempfile::tempdir().unwrap();
     let file = dir.path().join("mini_sweep.toml");
     std::fs::write(&file, text).unwrap();
-    let p = prep_file(&file);
+    let p = prepared(&file);
     let logs = dir.path().join("logs");
     let opts = RunOptions {
         log_root: Some(logs.clone()),

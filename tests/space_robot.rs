@@ -5,32 +5,14 @@
 
 mod common;
 use anholonomy::integrate::simulate;
-use anholonomy::runner::{run, Prepared, RunOptions, RunOutcome};
-use anholonomy::scenario::Scenario;
+use anholonomy::runner::{Prepared, RunOutcome};
 use common::*;
-use std::path::Path;
 
 const I0: f64 = 1.52;
 
-fn prepared(name: &str) -> Prepared {
-    let path = root().join("scenarios").join(format!("{name}.toml"));
-    Prepared::new(Scenario::load(&path).unwrap()).unwrap()
-}
-
-fn run_prepared(prep: &Prepared, logs: Option<&Path>) -> RunOutcome {
-    run(
-        prep,
-        &RunOptions {
-            log_root: logs.map(Path::to_path_buf),
-            progress: false,
-        },
-    )
-    .unwrap()
-}
-
 /// Runs a scenario file and checks it passes and gates the physics.
 fn run_and_check(name: &str) -> (Prepared, RunOutcome) {
-    let prep = prepared(name);
+    let prep = prepared(&scenario(&format!("{name}.toml")));
     let o = run_prepared(&prep, None);
     assert!(o.passed, "{name}: {:?}", o.failures);
     let th = &prep.scenario.thresholds;
@@ -212,7 +194,7 @@ fn endogenous_scenarios_meet_via_and_goal() {
 #[test]
 fn channels_are_logged() {
     let logs = tempfile::tempdir().unwrap();
-    let prep = prepared("space_robot_paper");
+    let prep = prepared(&scenario("space_robot_paper.toml"));
     let o = run_prepared(&prep, Some(logs.path()));
     let dir = o.log_dir.unwrap();
     // The Rerun recording carries the sim channels as time series

@@ -5,29 +5,10 @@
 mod common;
 use anholonomy::physics::replay;
 use anholonomy::record::SimTrajectory;
-use anholonomy::runner::{run, Prepared, RunOptions, RunOutcome};
+use anholonomy::runner::Prepared;
 use anholonomy::scenario::Scenario;
 use common::*;
 use std::path::Path;
-
-fn prepared(path: &Path) -> Prepared {
-    Prepared::new(Scenario::load(path).unwrap()).unwrap()
-}
-
-fn run_file(path: &Path, logs: Option<&Path>) -> RunOutcome {
-    run(
-        &prepared(path),
-        &RunOptions {
-            log_root: logs.map(Path::to_path_buf),
-            progress: false,
-        },
-    )
-    .unwrap()
-}
-
-fn scenario(name: &str) -> std::path::PathBuf {
-    root().join("scenarios").join(name)
-}
 
 /// The physics replay alone (to read the per-step channels).
 fn replay_file(path: &Path) -> SimTrajectory {
@@ -39,11 +20,8 @@ fn replay_file(path: &Path) -> SimTrajectory {
 }
 
 fn channel<'a>(sim: &'a SimTrajectory, name: &str) -> &'a [f64] {
-    &sim.channels
-        .iter()
-        .find(|(n, _)| n == name)
+    sim.channel(name)
         .unwrap_or_else(|| panic!("channel {name}"))
-        .1
 }
 
 fn max_abs(v: &[f64]) -> f64 {

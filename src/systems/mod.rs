@@ -15,7 +15,7 @@ use crate::model::{KinematicModel, State};
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::PlanError;
-use crate::record::{Overlay, SimTrajectory};
+use crate::record::{Comparison, Overlay, SimTrajectory};
 use crate::scenario::{ModelConfig, PlannerConfig, SimConfig};
 use std::path::Path;
 
@@ -56,12 +56,14 @@ pub trait System: Send + Sync {
     fn extra_metric_names(&self) -> Vec<String> {
         Vec::new()
     }
-    /// System-specific metrics from the two runs (e.g. momentum bounds, orientation error).
+    /// System-specific metrics from the two runs (e.g. momentum bounds,
+    /// orientation error); `cmp` carries the common time grid.
     fn extra_metrics(
         &self,
         _goal: &State,
         _ideal: &Trajectory,
         _sim: &SimTrajectory,
+        _cmp: &Comparison,
     ) -> Vec<(String, f64)> {
         Vec::new()
     }

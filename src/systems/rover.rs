@@ -17,6 +17,7 @@ use crate::physics::PhysicsSystem;
 use crate::plan::{Command, ControlLaw, Controller, Limits, Plan, PolicyFactory};
 use crate::planner::rover_primitives::{self, se2_distance, RoverPrimitiveParams};
 use crate::planner::PlanError;
+use crate::record::Comparison;
 use crate::record::{Overlay, SimTrajectory};
 use crate::scenario::{PlannerConfig, SimConfig};
 use serde::{Deserialize, Serialize};
@@ -237,14 +238,9 @@ impl System for Rover {
         goal: &State,
         ideal: &Trajectory,
         sim: &SimTrajectory,
+        _cmp: &Comparison,
     ) -> Vec<(String, f64)> {
         let eps = self.params.epsilon;
-        let chan = |name: &str| {
-            sim.channels
-                .iter()
-                .find(|(n, _)| n == name)
-                .map(|(_, v)| v.as_slice())
-        };
         let mut out = vec![
             (
                 "ideal_goal_se2".to_string(),
@@ -263,7 +259,7 @@ impl System for Rover {
                 time_to_goal(&sim.traj, goal, eps),
             ),
         ];
-        let env = chan("envelope_distance").unwrap_or(&[]);
+        let env = sim.channel("envelope_distance").unwrap_or(&[]);
         let finite: Vec<f64> = env.iter().copied().filter(|v| v.is_finite()).collect();
         let inside = finite.iter().filter(|&&d| d <= self.envelope_tol).count();
         let frac = if finite.is_empty() {

@@ -30,6 +30,7 @@ use crate::plan::{Limits, Plan};
 use crate::planner::endogenous::{self, EndogenousParams};
 use crate::planner::stokes_space::{self, StokesSpaceParams};
 use crate::planner::PlanError;
+use crate::record::Comparison;
 use crate::record::SimTrajectory;
 use crate::scenario::{PlannerConfig, SimConfig};
 use serde::{Deserialize, Serialize};
@@ -171,14 +172,13 @@ impl System for Space {
         _goal: &State,
         ideal: &Trajectory,
         sim: &SimTrajectory,
+        _cmp: &Comparison,
     ) -> Vec<(String, f64)> {
         let mut out = Vec::new();
         for (channel, metric) in CHANNEL_METRICS {
             let v = sim
-                .channels
-                .iter()
-                .find(|(n, _)| n == channel)
-                .map(|(_, s)| s.iter().fold(0.0_f64, |m, v| m.max(v.abs())))
+                .channel(channel)
+                .map(|s| s.iter().fold(0.0_f64, |m, v| m.max(v.abs())))
                 .unwrap_or(f64::NAN);
             out.push((metric.to_string(), v));
         }

@@ -29,7 +29,7 @@ use crate::plan::{Limits, Plan};
 use crate::planner::sphere_geometric::{self, SphereGeometricParams};
 use crate::planner::sphere_triangle::{self, SphereTriangleParams};
 use crate::planner::PlanError;
-use crate::record::{Overlay, SimTrajectory};
+use crate::record::{Comparison, Overlay, SimTrajectory};
 use crate::scenario::{PlannerConfig, SimConfig};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -87,24 +87,11 @@ pub const EXTRA_METRICS: [&str; 5] = [
     "tracking_orientation_deg_final",
 ];
 
-/// Geodesic orientation error (rad) between two quaternion states, sampled on a dt grid
-/// covering both trajectories (each held at its end, as in [`crate::compare::compare`]).
-pub fn orientation_tracking(ideal: &Trajectory, sim: &Trajectory) -> Vec<f64> {
-    let end = ideal
-        .t
-        .last()
-        .copied()
-        .unwrap_or(0.0)
-        .max(sim.t.last().copied().unwrap_or(0.0));
-    let dt = if ideal.t.len() > 1 {
-        ideal.t[1] - ideal.t[0]
-    } else {
-        end.max(1e-3)
-    };
-    let n = crate::integrate::step_count(end, dt);
-    (0..=n)
-        .map(|k| {
-            let t = (k as f64 * dt).min(end);
+/// Geodesic orientation error (rad) between two quaternion trajectories on
+/// the comparison's time grid (each run held at its end).
+pub fn orientation_tracking(ideal: &Trajectory, sim: &Trajectory, grid: &[f64]) -> Vec<f64> {
+    grid.iter()
+        .map(|&t| {
             geodesic_angle(
                 &quat_of_state(&sample(ideal, t)),
                 &quat_of_state(&sample(sim, t)),
@@ -196,11 +183,13 @@ impl System for Sphere {
         goal: &State,
         ideal: &Trajectory,
         sim: &SimTrajectory,
+        cmp: &Comparison,
     ) -> Vec<(String, f64)> {
         let g = quat_of_state(goal);
         let ideal_goal = geodesic_angle(&g, &quat_of_state(ideal.last()));
         let sim_goal = geodesic_angle(&g, &quat_of_state(sim.traj.last()));
-        let (rms, max, fin) = crate::compare::stats(&orientation_tracking(ideal, &sim.traj));
+        let (rms, max, fin) =
+            crate::compare::stats(&orientation_tracking(ideal, &sim.traj, &cmp.t));
         [ideal_goal, sim_goal, rms, max, fin]
             .iter()
             .zip(EXTRA_METRICS)

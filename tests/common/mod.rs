@@ -1,12 +1,38 @@
 //! Helpers shared by the integration tests (included with `mod common;`).
 #![allow(dead_code)]
 
+use anholonomy::runner::{run, Prepared, RunOptions, RunOutcome};
+use anholonomy::scenario::Scenario;
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
 
 /// Repository root.
 pub fn root() -> PathBuf {
     PathBuf::from(env!("CARGO_MANIFEST_DIR"))
+}
+
+/// Absolute path of a shipped scenario file.
+pub fn scenario(file: &str) -> PathBuf {
+    root().join("scenarios").join(file)
+}
+
+/// A scenario file, loaded and validated.
+pub fn prepared(path: &Path) -> Prepared {
+    Prepared::new(Scenario::load(path).unwrap()).unwrap()
+}
+
+/// Run a prepared scenario without progress bars, logging under `logs` if given.
+pub fn run_prepared(prep: &Prepared, logs: Option<&Path>) -> RunOutcome {
+    let opts = RunOptions {
+        log_root: logs.map(Path::to_path_buf),
+        progress: false,
+    };
+    run(prep, &opts).unwrap()
+}
+
+/// Load and run a scenario file.
+pub fn run_file(path: &Path, logs: Option<&Path>) -> RunOutcome {
+    run_prepared(&prepared(path), logs)
 }
 
 /// Absolute path of a model file.
