@@ -191,20 +191,7 @@ fn too_little_friction_slips_and_fails() {
     let file = dir.path().join("icy.toml");
     std::fs::write(&file, text).unwrap();
     let o = run_file(&file, None);
-    assert!(!o.passed);
-    assert!(
-        o.failures
-            .iter()
-            .any(|f| f.starts_with("sim_goal_position")),
-        "{:?}",
-        o.failures
-    );
-    assert!(
-        o.metric("sim_goal_position").unwrap() > 0.05,
-        "{:?}",
-        o.metric("sim_goal_position")
-    );
-    assert!(o.metric("ideal_goal_position").unwrap() < 1e-9);
+    assert_slip_failure(&o, 0.05);
     let sim = replay_file(&file);
     let slip = max_abs(channel(&sim, "slip_speed"));
     eprintln!(

@@ -6,7 +6,7 @@
 //! towards +x, yaw from +x towards +y: yaw = π/2 − α). Translation is free:
 //! the disk moves only through wheel–ground friction.
 
-use super::urdf::{SimWorld, WorldOptions};
+use super::urdf::SimWorld;
 use super::{angles, PhysicsSystem};
 use crate::model::{Input, State};
 use crate::record::Pose;
@@ -59,22 +59,10 @@ impl DiskPhysics {
             Vector::new(start[0] as Real, start[1] as Real, radius as Real),
             Rotation::from_rotation_z(yaw0 as Real),
         );
-        let mut sw = SimWorld::new(
-            robot,
-            urdf_dir,
-            &WorldOptions {
-                sim,
-                root_pose: root,
-                ground: true,
-            },
-        );
-        let missing = |what: &str| format!("URDF has no {what}");
-        let yoke = sw.link(YOKE).ok_or_else(|| missing("link `yoke`"))?;
-        let wheel = sw.link(WHEEL).ok_or_else(|| missing("link `wheel`"))?;
-        let wheel_joint = *sw
-            .joints
-            .get(WHEEL_JOINT)
-            .ok_or_else(|| missing("joint `wheel_joint`"))?;
+        let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root);
+        let yoke = sw.require_link(YOKE)?;
+        let wheel = sw.require_link(WHEEL)?;
+        let wheel_joint = sw.require_joint(WHEEL_JOINT)?;
         // Balance controller: roll and pitch locked, yaw servoed, translation free.
         let balance = GenericJointBuilder::new(JointAxesMask::ANG_X | JointAxesMask::ANG_Y)
             .local_frame1(rapier3d::math::Pose::IDENTITY)

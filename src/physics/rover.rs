@@ -18,7 +18,7 @@
 //! applied input (`envelope_distance`, `sigma_estimate`: 0 = model a, 1 =
 //! model b, NaN when the models coincide, i.e. ψ = 0 or u1 = 0).
 
-use super::urdf::{SimWorld, WorldOptions};
+use super::urdf::SimWorld;
 use super::{angles, PhysicsSystem};
 use crate::model::rover::{envelope, RoverGeometry};
 use crate::model::{Input, State};
@@ -104,32 +104,15 @@ impl RoverPhysics {
             Vector::new(start[0] as Real, start[1] as Real, rho as Real),
             Rotation::from_rotation_z(start[2] as Real),
         );
-        let mut sw = SimWorld::new(
-            robot,
-            urdf_dir,
-            &WorldOptions {
-                sim,
-                root_pose: root,
-                ground: true,
-            },
-        );
-        let missing = |what: &str| format!("URDF has no {what}");
-        let chassis = sw.link(CHASSIS).ok_or_else(|| missing("link `chassis`"))?;
-        let steering = sw
-            .link("steering")
-            .ok_or_else(|| missing("link `steering`"))?;
+        let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root);
+        let chassis = sw.require_link(CHASSIS)?;
+        let steering = sw.require_link("steering")?;
         let wheels = WHEELS
             .iter()
-            .map(|w| sw.link(w).ok_or_else(|| missing(&format!("link `{w}`"))))
+            .map(|w| sw.require_link(w))
             .collect::<Result<Vec<_>, _>>()?;
-        let steer_joint = *sw
-            .joints
-            .get(STEER_JOINT)
-            .ok_or_else(|| missing("joint `steer_joint`"))?;
-        let front_joint = *sw
-            .joints
-            .get(FRONT_JOINT)
-            .ok_or_else(|| missing("joint `front_wheel_joint`"))?;
+        let steer_joint = sw.require_joint(STEER_JOINT)?;
+        let front_joint = sw.require_joint(FRONT_JOINT)?;
         // Initial steering angle: rotate the steering link and the front wheel about the
         // steering axis (the joint starts at ψ = 0 in the URDF pose).
         if start[3] != 0.0 {

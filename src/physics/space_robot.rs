@@ -240,19 +240,13 @@ impl SpaceRobotPhysics {
                 ground: false,
             },
         );
-        let missing = |what: &str| format!("URDF has no {what}");
         let mut bodies = [RigidBodyHandle::invalid(); 3];
         for (b, name) in bodies.iter_mut().zip(LINKS) {
-            *b = sw
-                .link(name)
-                .ok_or_else(|| missing(&format!("link `{name}`")))?;
+            *b = sw.require_link(name)?;
         }
         let mut joints = [ImpulseJointHandle::invalid(); 2];
         for (j, name) in joints.iter_mut().zip(JOINTS) {
-            *j = *sw
-                .joints
-                .get(name)
-                .ok_or_else(|| missing(&format!("joint `{name}`")))?;
+            *j = sw.require_joint(name)?;
         }
         // Place the links at the start joint angles: link frames sit at the joints.
         let phi1 = start[0] + start[1];
@@ -296,7 +290,7 @@ impl SpaceRobotPhysics {
                 .links
                 .iter()
                 .find(|l| l.name == *name)
-                .ok_or_else(|| missing(name))?;
+                .ok_or_else(|| format!("URDF has no link `{name}`"))?;
             let t = &l.inertial.inertia;
             mass[i] = l.inertial.mass.value;
             local_com[i] = l.inertial.origin.xyz.0;

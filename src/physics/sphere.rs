@@ -14,7 +14,7 @@
 //! the orientation the commanded ω produces when integrated exactly, i.e. the ideal
 //! orientation up to O(dt²)), `height` (centre height minus the radius, m).
 
-use super::urdf::{SimWorld, WorldOptions};
+use super::urdf::SimWorld;
 use super::PhysicsSystem;
 use crate::model::rolling_sphere::geodesic_angle;
 use crate::model::{Input, State};
@@ -67,18 +67,8 @@ impl SpherePhysics {
             Vector::new(start[0] as Real, start[1] as Real, radius as Real),
             rot,
         );
-        let mut sw = SimWorld::new(
-            robot,
-            urdf_dir,
-            &WorldOptions {
-                sim,
-                root_pose: root,
-                ground: true,
-            },
-        );
-        let ball = sw
-            .link(BALL)
-            .ok_or_else(|| format!("URDF has no link `{BALL}`"))?;
+        let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root);
+        let ball = sw.require_link(BALL)?;
         // The drive: no locked axes, angular velocity motors about the world axes.
         let mut b = GenericJointBuilder::new(JointAxesMask::empty())
             .local_frame1(rapier3d::math::Pose::IDENTITY)

@@ -226,6 +226,38 @@ impl SimWorld {
         self.link_index.get(name).map(|&i| self.links[i])
     }
 
+    /// Body of a link the system needs; the error names the missing link.
+    pub fn require_link(&self, name: &str) -> Result<RigidBodyHandle, String> {
+        self.link(name)
+            .ok_or_else(|| format!("URDF has no link `{name}`"))
+    }
+
+    /// Handle of a joint the system needs; the error names the missing joint.
+    pub fn require_joint(&self, name: &str) -> Result<ImpulseJointHandle, String> {
+        self.joints
+            .get(name)
+            .copied()
+            .ok_or_else(|| format!("URDF has no joint `{name}`"))
+    }
+
+    /// A world with a ground plane, the robot's root at `root_pose`.
+    pub fn on_ground(
+        robot: &Robot,
+        urdf_dir: &Path,
+        sim: &SimConfig,
+        root_pose: rapier3d::math::Pose,
+    ) -> SimWorld {
+        SimWorld::new(
+            robot,
+            urdf_dir,
+            &WorldOptions {
+                sim,
+                root_pose,
+                ground: true,
+            },
+        )
+    }
+
     /// World pose of every link, in URDF order.
     pub fn link_poses(&self) -> Vec<Pose> {
         self.links

@@ -35,6 +35,23 @@ pub fn run_file(path: &Path, logs: Option<&Path>) -> RunOutcome {
     run_prepared(&prepared(path), logs)
 }
 
+/// A run that slipped: it is reported as failing `sim_goal_position`, ends more
+/// than `min_error` m from the goal, while its ideal run hits the goal.
+pub fn assert_slip_failure(o: &RunOutcome, min_error: f64) {
+    assert!(!o.passed);
+    let broke = o
+        .failures
+        .iter()
+        .any(|f| f.starts_with("sim_goal_position"));
+    assert!(broke, "{:?}", o.failures);
+    let sim = o.metric("sim_goal_position").unwrap();
+    assert!(
+        sim > min_error,
+        "sim goal error {sim} not above {min_error}"
+    );
+    assert!(o.metric("ideal_goal_position").unwrap() < 1e-9);
+}
+
 /// Absolute path of a model file.
 pub fn model(name: &str) -> PathBuf {
     root().join("models").join(name)
