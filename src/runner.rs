@@ -213,7 +213,8 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
     let spec = metric_spec(model);
     let cmp = compare(&ideal, &sim.traj, sc.sim.dt, spec.angular, spec.position);
     let mut metrics = spec.compute(&goal, ideal.last(), sim.traj.last(), &cmp);
-    metrics.extend(prep.system.extra_metrics(&goal, &ideal, &sim, &cmp));
+    let (extra, series) = prep.system.analysis(&goal, &ideal, &sim, &cmp);
+    metrics.extend(extra);
     let mut failures = Vec::new();
     for (k, limit) in &sc.thresholds {
         let v = metrics
@@ -237,12 +238,17 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
     };
     if let Some(root) = &opts.log_root {
         let dir = root.join(&sc.name);
-        write_logs(prep, &plan, &ideal, &sim, &cmp, &mut outcome, &dir, &goal).map_err(
-            |message| Error::Log {
-                path: sc.path.clone(),
-                message,
-            },
-        )?;
+        let run = RunData {
+            plan: &plan,
+            ideal: &ideal,
+            sim: &sim,
+            cmp: &cmp,
+            series: &series,
+        };
+        write_logs(prep, &run, &mut outcome, &dir, &goal).map_err(|message| Error::Log {
+            path: sc.path.clone(),
+            message,
+        })?;
         outcome.log_dir = Some(dir);
     }
     outcome.timings.logs = t0.elapsed().as_secs_f64();
@@ -261,17 +267,29 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
     Ok(outcome)
 }
 
-#[allow(clippy::too_many_arguments)]
+/// What one run produced, for the log writers.
+struct RunData<'a> {
+    plan: &'a Plan,
+    ideal: &'a Trajectory,
+    sim: &'a SimTrajectory,
+    cmp: &'a crate::record::Comparison,
+    series: &'a [crate::record::Series],
+}
+
 fn write_logs(
     prep: &Prepared,
-    plan: &Plan,
-    ideal: &Trajectory,
-    sim: &SimTrajectory,
-    cmp: &crate::record::Comparison,
+    run: &RunData<'_>,
     outcome: &mut RunOutcome,
     dir: &Path,
     goal: &State,
 ) -> Result<(), String> {
+    let RunData {
+        plan,
+        ideal,
+        sim,
+        cmp,
+        series,
+    } = *run;
     std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
     let model = prep.model();
     let links = urdf::visuals(&prep.robot);
@@ -287,6 +305,7 @@ fn write_logs(
         goal: &goal_v,
         goal_heading: prep.system.goal_heading(goal),
         overlays: &overlays,
+        series: &series,
         labels: &plan.labels,
         ideal,
         sim,

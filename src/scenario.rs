@@ -23,6 +23,8 @@ pub enum ModelConfig {
     Rover(systems::rover::RoverConfig),
     /// Sphere rolling on a plane (seed 003).
     RollingSphere(systems::sphere::SphereConfig),
+    /// Mobile manipulators among ellipsoid obstacles (seed 004).
+    MobileManipulator(systems::dilf::MobileManipulatorConfig),
 }
 
 impl ModelConfig {
@@ -33,6 +35,7 @@ impl ModelConfig {
             ModelConfig::SpaceRobot(_) => "space_robot",
             ModelConfig::Rover(_) => "rover",
             ModelConfig::RollingSphere(_) => "rolling_sphere",
+            ModelConfig::MobileManipulator(_) => "mobile_manipulator",
         }
     }
 
@@ -43,6 +46,7 @@ impl ModelConfig {
             ModelConfig::SpaceRobot(m) => &m.urdf,
             ModelConfig::Rover(m) => &m.urdf,
             ModelConfig::RollingSphere(m) => &m.urdf,
+            ModelConfig::MobileManipulator(m) => &m.urdf,
         }
     }
 }
@@ -63,6 +67,8 @@ pub enum PlannerConfig {
     SphereGeometric(planner::sphere_geometric::SphereGeometricParams),
     /// Seed 003 §4 spherical-triangle planner.
     SphereTriangle(planner::sphere_triangle::SphereTriangleParams),
+    /// Seed 004 dipolar inverse Lyapunov function with the feedback law of Eq. 18.
+    Dilf(planner::dilf::DilfParams),
 }
 
 impl PlannerConfig {
@@ -75,6 +81,7 @@ impl PlannerConfig {
             PlannerConfig::RoverPrimitives(_) => "rover_primitives",
             PlannerConfig::SphereGeometric(_) => "sphere_geometric",
             PlannerConfig::SphereTriangle(_) => "sphere_triangle",
+            PlannerConfig::Dilf(_) => "dilf",
         }
     }
 }

@@ -162,6 +162,7 @@ impl Fixture {
             metrics: &self.metrics,
             goal_heading: self.goal.get(2).copied(),
             overlays: &[],
+            series: &[],
         }
     }
 }

@@ -240,6 +240,13 @@ fn log_all(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrError>
         series_style(stream, &p, name, None, false)?;
         send_scalars(stream, p, &sim.t, values.iter().copied())?;
     }
+    for s in rec.series {
+        let mut parts = vec!["analysis"];
+        parts.extend(s.name.split('/').filter(|p| !p.is_empty()));
+        let p = ep(&parts);
+        series_style(stream, &p, &s.name, None, false)?;
+        send_scalars(stream, p, &s.t, s.values.iter().copied())?;
+    }
 
     // Segment label: one text-log entry at every change.
     let mut times = Vec::new();
@@ -405,6 +412,13 @@ fn blueprint(rec: &RunRecord<'_>) -> Blueprint {
         lower.push(
             TimeSeriesView::new("sim channels")
                 .with_origin("/sim")
+                .into(),
+        );
+    }
+    if !rec.series.is_empty() {
+        lower.push(
+            TimeSeriesView::new("analysis")
+                .with_origin("/analysis")
                 .into(),
         );
     }

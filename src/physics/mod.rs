@@ -6,6 +6,7 @@
 
 pub mod angles;
 pub mod disk;
+pub mod mobile_manipulator;
 pub mod rover;
 pub mod space_robot;
 pub mod sphere;

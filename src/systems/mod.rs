@@ -5,6 +5,7 @@
 //! in `PlannerConfig`, a module here implementing [`System`], one arm in
 //! [`build`].
 
+pub mod dilf;
 pub mod disk;
 pub mod rover;
 pub mod space_robot;
@@ -15,7 +16,7 @@ use crate::model::{KinematicModel, State};
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::PlanError;
-use crate::record::{Comparison, Overlay, SimTrajectory};
+use crate::record::{Comparison, Overlay, Series, SimTrajectory};
 use crate::scenario::{ModelConfig, PlannerConfig, SimConfig};
 use std::path::Path;
 
@@ -67,6 +68,19 @@ pub trait System: Send + Sync {
     ) -> Vec<(String, f64)> {
         Vec::new()
     }
+    /// System metrics together with time series computed from the two runs
+    /// (logged beside the state: MCAP `/analysis/<name>`, Rerun
+    /// `analysis/<name>`). Systems whose series share work with their metrics
+    /// override this; the default is [`System::extra_metrics`] and no series.
+    fn analysis(
+        &self,
+        goal: &State,
+        ideal: &Trajectory,
+        sim: &SimTrajectory,
+        cmp: &Comparison,
+    ) -> (Vec<(String, f64)>, Vec<Series>) {
+        (self.extra_metrics(goal, ideal, sim, cmp), Vec::new())
+    }
 }
 
 /// The system for a scenario's model and planner; mismatches are user errors.
@@ -76,6 +90,7 @@ pub fn build(model: &ModelConfig, planner: &PlannerConfig) -> Result<Box<dyn Sys
         ModelConfig::SpaceRobot(m) => space_robot::build(m, planner),
         ModelConfig::Rover(m) => rover::build(m, planner),
         ModelConfig::RollingSphere(m) => sphere::build(m, planner),
+        ModelConfig::MobileManipulator(m) => dilf::build(m, planner),
     }
 }
 
