@@ -7,6 +7,7 @@
 
 pub mod compare;
 pub mod error;
+pub mod input;
 pub mod integrate;
 pub mod log;
 pub mod model;
@@ -19,5 +20,16 @@ pub mod runner;
 pub mod scenario;
 pub mod sweep;
 pub mod systems;
+pub mod validate;
 
 pub use error::Error;
+
+/// `println!` for command output that ignores a closed stdout (`| head`)
+/// instead of panicking.
+#[macro_export]
+macro_rules! say {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout().lock(), $($t)*);
+    }};
+}

@@ -11,10 +11,19 @@ fn help_explains_each_command() {
     for word in ["run", "check", "plan", "list", "Exit status"] {
         assert!(text.contains(word), "{word} missing from --help:\n{text}");
     }
-    for cmd in ["run", "check", "plan", "list"] {
+    for (cmd, words) in [
+        ("run", &["--logs", "--shard", "summary.json"][..]),
+        ("check", &["Exit status", "threshold", "--shard"][..]),
+        ("plan", &["--json", "validated", "ideal final state"][..]),
+        ("list", &["stderr", "exit status", "scenarios/"][..]),
+    ] {
         let out = cli(&root(), &[cmd, "--help"]);
         assert!(out.status.success(), "{cmd} --help");
-        assert!(out.stdout.len() > 100, "{cmd} --help too short");
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(text.len() > 400, "{cmd} --help too short:\n{text}");
+        for w in words {
+            assert!(text.contains(w), "{w} missing from {cmd} --help:\n{text}");
+        }
     }
 }
 
