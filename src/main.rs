@@ -81,7 +81,7 @@ enum Cmd {
 
 #[derive(Args)]
 struct RunArgs {
-    /// Scenario files, or directories whose *.toml files are all run (sorted).
+    /// Scenario files, or directories whose *.toml files (not hidden ones) are all run (sorted).
     #[arg(required = true)]
     paths: Vec<PathBuf>,
     /// Directory for run logs (created if needed; LOGS/<scenario>/ per scenario).

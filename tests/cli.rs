@@ -75,3 +75,27 @@ fn check_exits_1_on_a_broken_threshold_and_run_does_not() {
     assert_eq!(out.status.code(), Some(0));
     assert!(dir.path().join("out/tight/run.mcap").is_file());
 }
+
+/// Hidden entries of a directory (editor locks such as `.#a.toml`, often
+/// dangling symlinks) are not scenarios.
+#[cfg(unix)]
+#[test]
+fn hidden_entries_of_a_directory_are_skipped() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().join("set");
+    std::fs::create_dir(&d).unwrap();
+    std::fs::write(
+        d.join("a.toml"),
+        disk_scenario(&model("rolling_disk.urdf"), "", ""),
+    )
+    .unwrap();
+    std::os::unix::fs::symlink("nobody@host.1234", d.join(".#a.toml")).unwrap();
+    let out = cli(dir.path(), &["list", "set"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("rolling_disk"));
+}

@@ -398,8 +398,9 @@ impl Scenario {
     }
 }
 
-/// Expand files and directories (non-recursive, `*.toml`, sorted) into
-/// scenario paths. Every `*.toml` entry of a directory must be a regular file.
+/// Expand files and directories (non-recursive, `*.toml` except hidden
+/// files, sorted) into scenario paths. Each entry is read later, so one that
+/// is not a regular file is an error, not silently skipped.
 pub fn collect(paths: &[PathBuf]) -> Result<Vec<PathBuf>, Vec<Error>> {
     let mut out = Vec::new();
     let mut errors = Vec::new();
@@ -415,6 +416,11 @@ pub fn collect(paths: &[PathBuf]) -> Result<Vec<PathBuf>, Vec<Error>> {
             let mut files: Vec<PathBuf> = rd
                 .filter_map(|e| e.ok().map(|e| e.path()))
                 .filter(|f| f.extension().is_some_and(|x| x == "toml"))
+                // Hidden entries are editor locks and backups (`.#a.toml`).
+                .filter(|f| {
+                    !f.file_name()
+                        .is_some_and(|n| n.to_string_lossy().starts_with('.'))
+                })
                 .collect();
             files.sort();
             if files.is_empty() {
