@@ -2,8 +2,9 @@
 
 use anholonomy::error::Error;
 use anholonomy::integrate::simulate;
-use anholonomy::runner::{run, Prepared, RunOptions, RunOutcome};
-use anholonomy::scenario::{collect, Scenario};
+use anholonomy::runner::{run, RunOptions, RunOutcome};
+use anholonomy::say;
+use anholonomy::validate::{prepare_all, prepare_each, Call};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -13,8 +14,14 @@ use std::process::ExitCode;
 /// model in Rapier (loaded from URDF, with contact and friction), compares
 /// the two and logs everything to MCAP (Foxglove) and Rerun (.rrd).
 ///
+/// Every scenario of a call is validated (files, TOML, URDF, names, plan,
+/// physics at the start pose) before anything runs or is written. Paths are
+/// relative to the working directory; paths inside a scenario file are
+/// relative to that file.
+///
 /// Exit status: 0 success, 1 a threshold was broken (`check`), 2 bad input
-/// (scenario, URDF, or a goal the planner cannot reach), 3 runtime failure.
+/// (scenario, URDF, or a goal the planner cannot reach: one line per error,
+/// `error: FILE:LINE: key ...`, nothing written), 3 runtime failure.
 #[derive(Parser)]
 #[command(name = "anholonomy", version, about, long_about)]
 struct Cli {
@@ -27,16 +34,32 @@ enum Cmd {
     /// Run scenarios end to end and print a results table.
     ///
     /// For each scenario: plan, ideal run, physics replay, comparison, and
-    /// logs in LOGS/<scenario>/ (run.mcap, run.rrd, summary.json).
-    /// Broken thresholds are reported in the table but do not change the
-    /// exit status (use `check` for that).
+    /// logs in LOGS/<scenario>/ (run.mcap, run.rrd, summary.json), which
+    /// replace the previous run's files as one unit. A scenario with a
+    /// [sweep] table runs its Monte Carlo variants instead (LOGS/<scenario>/
+    /// sweep.json). Broken thresholds are reported in the table but do not
+    /// change the exit status (use `check` for that).
     Run(RunArgs),
-    /// Like `run`, but exit with status 1 when any scenario breaks a threshold (for CI).
+    /// Run scenarios like `run` and exit with status 1 when any breaks a threshold (for CI).
+    ///
+    /// Every metric named in a scenario's [thresholds] table must stay at or
+    /// below its value (a NaN metric breaks it); a sweep must reach its
+    /// `min_success_rate`. Broken thresholds are listed in the table's result
+    /// column and counted on stderr.
+    ///
+    /// Exit status: 0 all thresholds met, 1 at least one broken, 2 bad input
+    /// (nothing ran), 3 runtime failure. Typical CI use:
+    /// `anholonomy check scenarios/ --quiet --logs ci-logs`.
     Check(RunArgs),
     /// Plan one scenario without physics and print the plan.
     ///
-    /// Prints the segments, their timing and the planner's derived numbers,
-    /// and the ideal final state reached by integrating the plan.
+    /// The scenario is validated as for `run` (URDF, physics at the start
+    /// pose, [sweep] table included). Prints the segments with their timing,
+    /// the planner's derived numbers (`details`) and the ideal final state
+    /// reached by integrating the plan with RK4 at `sim.dt`. Nothing is
+    /// written. With --json the same as one JSON object (state and input
+    /// names, duration_s, labels, segments, details, ideal_final_state in SI
+    /// units, angles in radians); it is identical across runs.
     Plan {
         /// Scenario file.
         file: PathBuf,
@@ -44,19 +67,24 @@ enum Cmd {
         #[arg(long)]
         json: bool,
     },
-    /// List scenarios (default: the scenarios/ directory) with model and planner.
+    /// List scenarios with model, planner and description.
+    ///
+    /// Scenarios go through the same validation as `run` (so `list` also
+    /// tells whether they would run). Valid scenarios are listed on stdout;
+    /// each invalid one is reported on stderr (`error: FILE:LINE: ...`) and
+    /// the exit status is then 2.
     List {
-        /// Scenario files or directories.
+        /// Scenario files or directories (*.toml, not recursive) [default: scenarios/].
         paths: Vec<PathBuf>,
     },
 }
 
 #[derive(Args)]
 struct RunArgs {
-    /// Scenario files, or directories whose *.toml files are all run (sorted).
+    /// Scenario files, or directories whose *.toml files (not hidden ones) are all run (sorted).
     #[arg(required = true)]
     paths: Vec<PathBuf>,
-    /// Directory for run logs.
+    /// Directory for run logs (created if needed; LOGS/<scenario>/ per scenario).
     #[arg(long, default_value = "logs")]
     logs: PathBuf,
     /// Do not write any log files.
@@ -65,26 +93,11 @@ struct RunArgs {
     /// Never show progress bars.
     #[arg(long)]
     quiet: bool,
-    /// Sweep scenarios only: run the variants with index % N == I (writes sweep-shard-I-of-N.json).
+    /// Sweep scenarios only: run the variants with index % N == I and write
+    /// LOGS/<scenario>/sweep-shard-I-of-N.json. Every scenario of the call
+    /// must have a [sweep] table (others are an error, exit 2).
     #[arg(long, value_name = "I/N")]
     shard: Option<String>,
-}
-
-fn load_all(paths: &[PathBuf]) -> Result<Vec<Prepared>, Vec<Error>> {
-    let files = collect(paths).map_err(|e| vec![e])?;
-    let mut ok = Vec::new();
-    let mut errs = Vec::new();
-    for f in files {
-        match Scenario::load(&f).and_then(Prepared::new) {
-            Ok(p) => ok.push(p),
-            Err(e) => errs.push(e),
-        }
-    }
-    if errs.is_empty() {
-        Ok(ok)
-    } else {
-        Err(errs)
-    }
 }
 
 fn fmt_metric(o: &RunOutcome, name: &str) -> String {
@@ -102,7 +115,7 @@ fn primary(o: &RunOutcome) -> Option<&str> {
 }
 
 fn print_table(rows: &[RunOutcome]) {
-    println!(
+    say!(
         "{:<30} {:<17} {:>7} {:>9} {:>7} {:>14} {:>10} {:>10} {:>10} {:>10}  result",
         "scenario",
         "planner",
@@ -117,7 +130,7 @@ fn print_table(rows: &[RunOutcome]) {
     );
     for o in rows {
         let c = primary(o).unwrap_or("-");
-        println!(
+        say!(
             "{:<30} {:<17} {:>7} {:>9.0} {:>7.3} {:>14} {:>10} {:>10} {:>10} {:>10}  {}",
             o.name,
             o.planner,
@@ -139,16 +152,21 @@ fn print_table(rows: &[RunOutcome]) {
 }
 
 fn run_cmd(args: &RunArgs, gate: bool) -> Result<u8, Vec<Error>> {
-    let preps = load_all(&args.paths)?;
-    let opts = RunOptions {
-        log_root: (!args.no_logs).then(|| args.logs.clone()),
-        progress: !args.quiet,
-    };
     let shard = match &args.shard {
         Some(s) => {
             Some(anholonomy::sweep::Shard::parse(s).map_err(|m| vec![Error::input("--shard", m)])?)
         }
         None => None,
+    };
+    let log_root = (!args.no_logs).then(|| args.logs.clone());
+    let call = Call {
+        log_root: log_root.as_deref(),
+        sharded: shard.is_some(),
+    };
+    let preps = prepare_all(&args.paths, &call)?;
+    let opts = RunOptions {
+        log_root,
+        progress: !args.quiet,
     };
     let mut rows = Vec::new();
     let mut errors = Vec::new();
@@ -176,12 +194,17 @@ fn run_cmd(args: &RunArgs, gate: bool) -> Result<u8, Vec<Error>> {
 }
 
 fn plan_cmd(file: &std::path::Path, as_json: bool) -> Result<u8, Vec<Error>> {
-    let prep = Scenario::load(file)
-        .and_then(Prepared::new)
-        .map_err(|e| vec![e])?;
-    let plan = prep.plan().map_err(|e| vec![e])?;
+    if file.is_dir() {
+        return Err(vec![Error::input(
+            file,
+            "`plan` takes one scenario file, not a directory",
+        )]);
+    }
+    let preps = prepare_all(&[file.to_path_buf()], &Call::default())?;
+    let prep = &preps[0];
+    let plan = &prep.planned;
     let (start, _goal) = prep.start_goal();
-    let ideal = simulate(prep.model(), &plan, &start, prep.scenario.sim.dt);
+    let ideal = simulate(prep.model(), plan, &start, prep.scenario.sim.dt);
     let fin: Vec<f64> = ideal.last().iter().copied().collect();
     if as_json {
         let v = serde_json::json!({
@@ -195,24 +218,24 @@ fn plan_cmd(file: &std::path::Path, as_json: bool) -> Result<u8, Vec<Error>> {
             "details": plan.details,
             "ideal_final_state": fin,
         });
-        println!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
+        say!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
     } else {
-        println!(
+        say!(
             "{} ({}), duration {:.3} s",
             prep.scenario.name,
             prep.scenario.planner.kind(),
             plan.duration
         );
         for s in &plan.segments {
-            println!(
+            say!(
                 "  {:>8.3} – {:>8.3} s  {}",
                 s.start,
                 s.end,
                 plan.label_name(s.label)
             );
         }
-        println!("  details: {}", plan.details);
-        println!("  ideal final state: {fin:?}");
+        say!("  details: {}", plan.details);
+        say!("  ideal final state: {fin:?}");
     }
     Ok(0)
 }
@@ -223,27 +246,30 @@ fn list_cmd(paths: &[PathBuf]) -> Result<u8, Vec<Error>> {
     } else {
         paths.to_vec()
     };
-    let files = collect(&paths).map_err(|e| vec![e])?;
-    println!(
-        "{:<26} {:<14} {:<14} description",
-        "scenario", "model", "planner"
-    );
-    for f in files {
-        match Scenario::load(&f) {
-            Ok(s) => {
-                let model = s.model.kind();
-                println!(
-                    "{:<26} {:<14} {:<14} {}",
-                    s.name,
-                    model,
-                    s.planner.kind(),
-                    s.description
-                );
-            }
-            Err(e) => println!("{:<26} error: {e}", f.display()),
-        }
+    let (preps, errors) = prepare_each(&paths, &Call::default());
+    if !preps.is_empty() {
+        say!(
+            "{:<30} {:<14} {:<17} description",
+            "scenario",
+            "model",
+            "planner"
+        );
     }
-    Ok(0)
+    for p in &preps {
+        let s = &p.scenario;
+        say!(
+            "{:<30} {:<14} {:<17} {}",
+            s.name,
+            s.model.kind(),
+            s.planner.kind(),
+            s.description
+        );
+    }
+    if errors.is_empty() {
+        Ok(0)
+    } else {
+        Err(errors)
+    }
 }
 
 fn main() -> ExitCode {

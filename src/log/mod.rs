@@ -15,6 +15,7 @@ mod atomic;
 pub mod mcap;
 pub mod rerun;
 mod scene;
+pub mod unit;
 
 use std::path::{Path, PathBuf};
 

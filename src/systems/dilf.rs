@@ -18,7 +18,7 @@
 //! (policy samples with V̇ < 0 under the applied input: the paper's V̇ ≥ 0
 //! claim, Appendix G), `slip_lateral_max`, `joint_rate_error_max`.
 
-use super::{mismatch, System};
+use super::System;
 use crate::integrate::Trajectory;
 use crate::model::ellipsoid::Superellipsoid;
 use crate::model::mobile_manipulator::{self as mm, CollisionShape, Link, MobileManipulator};
@@ -31,7 +31,7 @@ use crate::planner::dilf::potential::{Obstacle, PotentialParams, Scene};
 use crate::planner::dilf::{self, DilfParams};
 use crate::planner::PlanError;
 use crate::record::{Comparison, Overlay, Series, SimTrajectory};
-use crate::scenario::{PlannerConfig, SimConfig};
+use crate::scenario::SimConfig;
 use rapier3d::parry::bounding_volume::Aabb;
 use rapier3d::parry::shape::{Ball, ConvexPolyhedron, Cuboid, Cylinder, Shape};
 use rapier3d::prelude::{Real, Rotation, Vector};
@@ -101,7 +101,7 @@ struct Dilf {
 /// Build the mobile-manipulator system.
 pub fn build(
     cfg: &MobileManipulatorConfig,
-    planner: &PlannerConfig,
+    params: &DilfParams,
 ) -> Result<Box<dyn System>, String> {
     if cfg.robots != 1 {
         return Err(format!(
@@ -132,13 +132,10 @@ pub fn build(
         }
         obstacles.push((o.name.clone(), shape));
     }
-    let params = match planner {
-        PlannerConfig::Dilf(p) => p.clone(),
-        other => return Err(mismatch("mobile_manipulator", other, &["dilf"])),
-    };
-    params
-        .validate()
-        .map_err(|e| format!("key `planner`: {e}"))?;
+    if let Err(crate::planner::PlanError::InvalidParameter { name, reason }) = params.validate() {
+        return Err(format!("key `planner.{name}`: {reason}"));
+    }
+    let params = params.clone();
     Ok(Box::new(Dilf {
         model: MobileManipulator { robots: cfg.robots },
         params,
@@ -262,6 +259,14 @@ impl System for Dilf {
         start: &[f64],
         sim: &SimConfig,
     ) -> Result<Box<dyn PhysicsSystem>, String> {
+        // The model's own check first, naming the key: a start inside an
+        // obstacle is bad input, not a physics failure.
+        let scene = self.scene(&State::from_vec(start.to_vec()))?;
+        if let Err(crate::planner::PlanError::InvalidParameter { name, reason }) =
+            dilf::check_configuration(&scene, start, "start")
+        {
+            return Err(format!("key `{name}`: {reason}"));
+        }
         let obstacles: Vec<ObstacleShape> = self
             .obstacles
             .iter()

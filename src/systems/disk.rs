@@ -1,6 +1,6 @@
 //! The rolling disk: seed 000 §4.2 Stokes planner, `models/rolling_disk.urdf`.
 
-use super::{mismatch, System};
+use super::System;
 use crate::model::disk::RollingDisk;
 use crate::model::{KinematicModel, State};
 use crate::physics::disk::DiskPhysics;
@@ -8,7 +8,7 @@ use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::stokes_disk::{self, StokesDiskParams};
 use crate::planner::PlanError;
-use crate::scenario::{PlannerConfig, SimConfig};
+use crate::scenario::SimConfig;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -28,18 +28,15 @@ struct Disk {
 }
 
 /// Build the disk system.
-pub fn build(cfg: &DiskModelConfig, planner: &PlannerConfig) -> Result<Box<dyn System>, String> {
+pub fn build(cfg: &DiskModelConfig, params: &StokesDiskParams) -> Result<Box<dyn System>, String> {
     // Written to also reject NaN (the scenario parser already rejects it).
     if cfg.radius.is_nan() || cfg.radius <= 0.0 {
         return Err("key `model.radius`: must be > 0".into());
     }
-    match planner {
-        PlannerConfig::StokesDisk(p) => Ok(Box::new(Disk {
-            model: RollingDisk { r: cfg.radius },
-            params: p.clone(),
-        })),
-        other => Err(mismatch("rolling_disk", other, &["stokes_disk"])),
-    }
+    Ok(Box::new(Disk {
+        model: RollingDisk { r: cfg.radius },
+        params: params.clone(),
+    }))
 }
 
 impl System for Disk {

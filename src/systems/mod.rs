@@ -1,9 +1,34 @@
 //! Systems: each pairs a kinematic model with its planners and its Rapier
-//! counterpart. One module per system; [`build`] picks it from the scenario.
+//! counterpart. One module per system, implementing [`System`].
 //!
-//! Adding a system: a `ModelConfig` variant (scenario.rs), planner variants
-//! in `PlannerConfig`, a module here implementing [`System`], one arm in
-//! [`build`].
+//! # Adding a system
+//!
+//! Configuration flows one way, from the scenario layer down: a system never
+//! imports `crate::scenario` (a test, `tests/layering.rs`, fails if it does).
+//!
+//! 1. In `src/systems/<name>.rs`, define the system's own plain `[model]`
+//!    parameter struct (`#[derive(Deserialize, Serialize)]`,
+//!    `#[serde(deny_unknown_fields)]`, without `kind`: the scenario layer
+//!    strips it), e.g. [`disk::DiskModelConfig`]. Planner parameters are
+//!    the planner's own structs (`crate::planner::*::*Params`); a system
+//!    with several planners defines an enum of them (e.g.
+//!    [`space_robot::SpacePlanner`]).
+//! 2. Write `pub fn build(cfg: &Config, planner: ...) -> Result<Box<dyn
+//!    System>, String>`: check the parameters that need no file (errors
+//!    start with `` key `model.<key>`: `` or `` key `planner.<key>`: ``, so
+//!    the scenario layer can add the line).
+//! 3. In `src/scenario/config.rs`: a variant of `ModelConfig` (and of
+//!    `PlannerConfig` for a new planner), its `kind` string in `KINDS` and
+//!    `parse`, its row in `PAIRS`, and the arm(s) of `build_system` that hand
+//!    the typed configs to `build`.
+//! 4. Everything else is checked by the validation pass before anything runs
+//!    (`crate::validate`): it builds the system, calls [`System::plan`] and
+//!    [`System::physics`] at the start pose, and reports their errors as bad
+//!    input (exit 2). So a task that cannot work (URDF that disagrees with
+//!    the model, unreachable goal, a start inside an obstacle) should be
+//!    refused by `plan` or `physics`, with a message that names the scenario
+//!    key (`model.radius`, `goal`, ...) or, for URDF problems, starts with
+//!    `URDF` and names the link or joint (`` link `wheel` ``).
 
 pub mod dilf;
 pub mod disk;
@@ -17,7 +42,9 @@ use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::PlanError;
 use crate::record::{Comparison, Overlay, Series, SimTrajectory};
-use crate::scenario::{ModelConfig, PlannerConfig, SimConfig};
+// The one remaining edge to the scenario layer: issue 10 gives physics its own
+// settings struct and changes `System::physics` to take it.
+use crate::scenario::SimConfig;
 use std::path::Path;
 
 /// A model, a configured planner and the physics counterpart.
@@ -81,24 +108,4 @@ pub trait System: Send + Sync {
     ) -> (Vec<(String, f64)>, Vec<Series>) {
         (self.extra_metrics(goal, ideal, sim, cmp), Vec::new())
     }
-}
-
-/// The system for a scenario's model and planner; mismatches are user errors.
-pub fn build(model: &ModelConfig, planner: &PlannerConfig) -> Result<Box<dyn System>, String> {
-    match model {
-        ModelConfig::RollingDisk(m) => disk::build(m, planner),
-        ModelConfig::SpaceRobot(m) => space_robot::build(m, planner),
-        ModelConfig::Rover(m) => rover::build(m, planner),
-        ModelConfig::RollingSphere(m) => sphere::build(m, planner),
-        ModelConfig::MobileManipulator(m) => dilf::build(m, planner),
-    }
-}
-
-/// The error for a planner that does not fit the model.
-pub fn mismatch(model: &str, planner: &PlannerConfig, expected: &[&str]) -> String {
-    format!(
-        "key `planner.kind`: `{}` does not plan for model `{model}` (use {})",
-        planner.kind(),
-        expected.join(" or ")
-    )
 }

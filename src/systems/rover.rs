@@ -8,7 +8,7 @@
 //! closed-loop run, replayed without feedback (it still reaches the goal in the ideal run,
 //! which is deterministic, but not on Rapier).
 
-use super::{mismatch, System};
+use super::System;
 use crate::integrate::{simulate, Trajectory};
 use crate::model::rover::{RoverGeometry, SwitchingRover, SwitchingSignal};
 use crate::model::{Input, KinematicModel, State};
@@ -19,7 +19,7 @@ use crate::planner::rover_primitives::{self, se2_distance, RoverPrimitiveParams}
 use crate::planner::PlanError;
 use crate::record::Comparison;
 use crate::record::{Overlay, SimTrajectory};
-use crate::scenario::{PlannerConfig, SimConfig};
+use crate::scenario::SimConfig;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -80,17 +80,14 @@ struct Rover {
 }
 
 /// Build the rover system.
-pub fn build(cfg: &RoverConfig, planner: &PlannerConfig) -> Result<Box<dyn System>, String> {
+pub fn build(cfg: &RoverConfig, params: &RoverPrimitiveParams) -> Result<Box<dyn System>, String> {
     cfg.geometry
         .validate()
         .map_err(|e| format!("key `model.geometry`: {e}"))?;
     if !(cfg.envelope_tolerance.is_finite() && cfg.envelope_tolerance >= 0.0) {
         return Err("key `model.envelope_tolerance`: must be finite and ≥ 0".into());
     }
-    let params = match planner {
-        PlannerConfig::RoverPrimitives(p) => p.clone(),
-        other => return Err(mismatch("rover", other, &["rover_primitives"])),
-    };
+    let params = params.clone();
     let horizon = if params.horizon.is_finite() {
         params.horizon.max(0.0)
     } else {

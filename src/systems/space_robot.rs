@@ -18,7 +18,7 @@
 //! `sim_via_error_deg`: the largest coordinate error (deg, wrapped) at the
 //! via times T, 2T, ….
 
-use super::{mismatch, System};
+use super::System;
 use crate::compare::{coord_error, sample};
 use crate::integrate::Trajectory;
 use crate::model::space_manipulator::SpaceManipulator;
@@ -32,7 +32,7 @@ use crate::planner::stokes_space::{self, StokesSpaceParams};
 use crate::planner::PlanError;
 use crate::record::Comparison;
 use crate::record::SimTrajectory;
-use crate::scenario::{PlannerConfig, SimConfig};
+use crate::scenario::SimConfig;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -45,10 +45,16 @@ pub struct SpaceRobotConfig {
     pub urdf: PathBuf,
 }
 
-enum Planner {
+/// The space robot's planners, with their parameters.
+#[derive(Debug, Clone)]
+pub enum SpacePlanner {
+    /// Seed 000 §4.1 Stokes planner.
     Stokes(StokesSpaceParams),
+    /// Seed 001 endogenous-configuration-space planner.
     Endogenous(EndogenousParams),
 }
+
+use SpacePlanner as Planner;
 
 struct Space {
     model: SpaceRobotModel,
@@ -69,29 +75,18 @@ const CHANNEL_METRICS: [(&str, &str); 6] = [
 ];
 
 /// Build the space-robot system.
-pub fn build(_cfg: &SpaceRobotConfig, planner: &PlannerConfig) -> Result<Box<dyn System>, String> {
-    let planner = match planner {
-        PlannerConfig::StokesSpace(p) => Planner::Stokes(p.clone()),
-        PlannerConfig::Endogenous(p) => {
-            if p.via_deg
-                .iter()
-                .any(|v| v.len() != 3 || v.iter().any(|x| !x.is_finite()))
-            {
-                return Err("key `planner.via_deg`: each via point needs 3 finite angles (θ0, θ1, θ2) in degrees".into());
-            }
-            if !(p.segment_time.is_finite() && p.segment_time > 0.0) {
-                return Err("key `planner.segment_time`: must be > 0".into());
-            }
-            Planner::Endogenous(p.clone())
+pub fn build(_cfg: &SpaceRobotConfig, planner: SpacePlanner) -> Result<Box<dyn System>, String> {
+    if let Planner::Endogenous(p) = &planner {
+        if p.via_deg
+            .iter()
+            .any(|v| v.len() != 3 || v.iter().any(|x| !x.is_finite()))
+        {
+            return Err("key `planner.via_deg`: each via point needs 3 finite angles (θ0, θ1, θ2) in degrees".into());
         }
-        other => {
-            return Err(mismatch(
-                "space_robot",
-                other,
-                &["stokes_space", "endogenous"],
-            ))
+        if !(p.segment_time.is_finite() && p.segment_time > 0.0) {
+            return Err("key `planner.segment_time`: must be > 0".into());
         }
-    };
+    }
     Ok(Box::new(Space {
         model: SpaceRobotModel::default(),
         planner,

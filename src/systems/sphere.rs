@@ -15,7 +15,7 @@
 //! `sim_goal_orientation_deg` and `tracking_orientation_deg_{rms,max,final}` (ideal vs
 //! simulated orientation on the common dt grid). Position metrics come from (x, y).
 
-use super::{mismatch, System};
+use super::System;
 use crate::compare::sample;
 use crate::integrate::Trajectory;
 use crate::model::rolling_sphere::{
@@ -30,7 +30,7 @@ use crate::planner::sphere_geometric::{self, SphereGeometricParams};
 use crate::planner::sphere_triangle::{self, SphereTriangleParams};
 use crate::planner::PlanError;
 use crate::record::{Comparison, Overlay, SimTrajectory};
-use crate::scenario::{PlannerConfig, SimConfig};
+use crate::scenario::SimConfig;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -44,10 +44,16 @@ pub struct SphereConfig {
     pub urdf: PathBuf,
 }
 
-enum Planner {
+/// The sphere's planners, with their parameters.
+#[derive(Debug, Clone)]
+pub enum SpherePlanner {
+    /// Seed 003 §3 geometric (A)-(B)-(A) planner.
     Geometric(SphereGeometricParams),
+    /// Seed 003 §4 spherical-triangle planner.
     Triangle(SphereTriangleParams),
 }
+
+use SpherePlanner as Planner;
 
 struct Sphere {
     euler: RollingSphere,
@@ -56,21 +62,10 @@ struct Sphere {
 }
 
 /// Build the sphere system.
-pub fn build(cfg: &SphereConfig, planner: &PlannerConfig) -> Result<Box<dyn System>, String> {
+pub fn build(cfg: &SphereConfig, planner: SpherePlanner) -> Result<Box<dyn System>, String> {
     if !(cfg.radius > 0.0 && cfg.radius.is_finite()) {
         return Err("key `model.radius`: must be > 0".into());
     }
-    let planner = match planner {
-        PlannerConfig::SphereGeometric(p) => Planner::Geometric(p.clone()),
-        PlannerConfig::SphereTriangle(p) => Planner::Triangle(p.clone()),
-        other => {
-            return Err(mismatch(
-                "rolling_sphere",
-                other,
-                &["sphere_geometric", "sphere_triangle"],
-            ))
-        }
-    };
     Ok(Box::new(Sphere {
         euler: RollingSphere { a: cfg.radius },
         quat: RollingSphereQuat::new(cfg.radius),

@@ -77,16 +77,22 @@ pub struct DilfParams {
     #[serde(default = "default_kv_exponent")]
     pub kv_exponent: f64,
     /// The speed gain k_v of Eq. 18a.
+    #[serde(default = "default_kv_gain")]
     pub kv_gain: f64,
     /// k_o of Eq. 18b.
+    #[serde(default = "default_ko")]
     pub ko: f64,
     /// K_a of Eq. 18c: one gain per joint.
+    #[serde(default = "default_ka")]
     pub ka: [f64; 6],
     /// Largest platform speed, m/s.
+    #[serde(default = "default_max_speed")]
     pub max_speed: f64,
     /// Largest platform turn rate, rad/s.
+    #[serde(default = "default_max_turn_rate")]
     pub max_turn_rate: f64,
     /// Largest joint rate, rad/s.
+    #[serde(default = "default_max_joint_rate")]
     pub max_joint_rate: f64,
     /// Hold the heading while the platform's planar field is below this
     /// fraction of ‖f‖ (θ_d is undefined there; 0 disables).
@@ -100,6 +106,7 @@ pub struct DilfParams {
     #[serde(default = "default_period")]
     pub period: f64,
     /// Run length if the goal is never reached, s.
+    #[serde(default = "default_horizon")]
     pub horizon: f64,
     /// Coordinates of the arm parts' goal points.
     #[serde(default)]
@@ -120,6 +127,29 @@ fn default_lambda() -> f64 {
 }
 fn default_kv_exponent() -> f64 {
     3.0
+}
+fn default_kv_gain() -> f64 {
+    5.0
+}
+fn default_ko() -> f64 {
+    1.0
+}
+/// K_a roughly ∝ 1/(lever arm)²: the wrist joints move the parts' points
+/// little, so their goal terms are weak.
+fn default_ka() -> [f64; 6] {
+    [50.0, 50.0, 50.0, 300.0, 300.0, 3000.0]
+}
+fn default_max_speed() -> f64 {
+    0.5
+}
+fn default_max_turn_rate() -> f64 {
+    0.8
+}
+fn default_max_joint_rate() -> f64 {
+    0.6
+}
+fn default_horizon() -> f64 {
+    60.0
 }
 fn default_period() -> f64 {
     0.02
@@ -282,32 +312,40 @@ impl PolicyFactory for Factory {
     }
 }
 
+/// Refuse a configuration (`what`: the scenario key, `start` or `goal`) that
+/// puts a robot part inside an obstacle or an arm inside a singularity
+/// enclosure: V is 0 there and Eq. 18 cannot start (or end).
+pub fn check_configuration(scene: &Scene, q: &[f64], what: &str) -> Result<(), PlanError> {
+    let bad = |reason: String| PlanError::InvalidParameter {
+        name: what.into(),
+        reason,
+    };
+    let closest = scene
+        .closest(q)
+        .map_err(|e| PlanError::NoConvergence(e.to_string()))?;
+    if let Some(c) = closest.filter(|c| c.beta <= 0.0) {
+        return Err(bad(format!(
+            "puts {} inside {} (their ellipsoids overlap: β = {:.3e} ≤ 0)",
+            c.part, c.obstacle, c.beta
+        )));
+    }
+    let e = scene
+        .evaluate::<f64>(q, &mut scene.warm())
+        .map_err(|e| PlanError::NoConvergence(e.to_string()))?;
+    if e.min_singular <= 0.0 {
+        return Err(bad(
+            "puts an arm inside a singularity enclosure (see planner.singularity)".into(),
+        ));
+    }
+    Ok(())
+}
+
 /// The feedback plan for `scene` (whose goal is the task's goal) from `start`.
 pub fn plan(scene: Arc<Scene>, start: &State, params: &DilfParams) -> Result<Plan, PlanError> {
     params.validate()?;
     let q = start.as_slice();
-    let check = |what: &str, q: &[f64]| -> Result<(), PlanError> {
-        let closest = scene
-            .closest(q)
-            .map_err(|e| PlanError::NoConvergence(e.to_string()))?;
-        if let Some(c) = closest.filter(|c| c.beta <= 0.0) {
-            return Err(PlanError::Unreachable(format!(
-                "the {what} configuration puts {} inside {} (β = {:.3e})",
-                c.part, c.obstacle, c.beta
-            )));
-        }
-        let e = scene
-            .evaluate::<f64>(q, &mut scene.warm())
-            .map_err(|e| PlanError::NoConvergence(e.to_string()))?;
-        if e.min_singular <= 0.0 {
-            return Err(PlanError::Unreachable(format!(
-                "the {what} configuration is inside a singularity enclosure (planner.singularity)"
-            )));
-        }
-        Ok(())
-    };
-    check("start", q)?;
-    check("goal", &scene.goal)?;
+    check_configuration(&scene, q, "start")?;
+    check_configuration(&scene, &scene.goal, "goal")?;
     let e = scene
         .evaluate::<f64>(q, &mut scene.warm())
         .map_err(|e| PlanError::NoConvergence(e.to_string()))?;
