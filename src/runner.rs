@@ -122,15 +122,24 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
     let mut metrics = spec.compute(&goal, ideal.last(), sim.traj.last(), &cmp);
     let (extra, series) = prep.system.analysis(&goal, &ideal, &sim, &cmp);
     metrics.extend(extra);
-    let mut failures = Vec::new();
-    for (k, limit) in &sc.thresholds {
-        let v = metrics
+    let value = |k: &str| {
+        metrics
             .iter()
             .find(|(n, _)| n == k)
             .map(|(_, v)| *v)
-            .unwrap_or(f64::NAN);
+            .unwrap_or(f64::NAN)
+    };
+    let mut failures = Vec::new();
+    for (k, limit) in &sc.thresholds {
+        let v = value(k);
         if v.is_nan() || v > *limit {
             failures.push(format!("{k} = {v:.6} > {limit}"));
+        }
+    }
+    for (k, floor) in &sc.minimums {
+        let v = value(k);
+        if v.is_nan() || v < *floor {
+            failures.push(format!("{k} = {v:.6} < {floor}"));
         }
     }
     let mut outcome = RunOutcome {
@@ -244,6 +253,7 @@ fn summary_json(
         "passed": o.passed,
         "failures": o.failures,
         "thresholds": sc.thresholds,
+        "minimums": sc.minimums,
         "model": sc.model,
         "planner": sc.planner,
         "plan": {

@@ -31,7 +31,11 @@ fn ok(out: &std::process::Output) {
 #[test]
 fn summaries_and_plans_are_identical_across_processes() {
     let dir = tempfile::tempdir().unwrap();
-    let files = ["disk_paper.toml", "space_manipulator_s2.toml"];
+    let files = [
+        "disk_paper.toml",
+        "space_manipulator_s2.toml",
+        "dilf_single_open.toml",
+    ];
     for logs in ["a", "b"] {
         let mut args = vec![
             "run".to_string(),
@@ -43,7 +47,7 @@ fn summaries_and_plans_are_identical_across_processes() {
         let args: Vec<&str> = args.iter().map(String::as_str).collect();
         ok(&cli(dir.path(), &args));
     }
-    for name in ["disk_paper", "space_manipulator_s2"] {
+    for name in ["disk_paper", "space_manipulator_s2", "dilf_single_open"] {
         let a = without_timings(&dir.path().join("a").join(name).join("summary.json"));
         let b = without_timings(&dir.path().join("b").join(name).join("summary.json"));
         assert_eq!(a, b, "{name}: summary.json differs outside wall_time_s");

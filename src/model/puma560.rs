@@ -145,7 +145,14 @@ pub fn frames<T: Scalar>(base: &Pose<T>, q: &[T]) -> [Pose<T>; 7] {
     for i in 0..6 {
         let li = prev.then(&Pose::rotation(spatial::rot_z(q[i])));
         out[i] = li;
-        prev = li.then(&row_offset(i));
+        // The row's constant part, multiplied in as constants (cheaper for
+        // dual numbers than lifting it).
+        let r = DH[i];
+        let off = row_offset::<f64>(i);
+        prev = Pose {
+            r: spatial::mul_mm_const(&li.r, &off.r),
+            p: spatial::add(spatial::mul_mv_const(&li.r, [r.a, 0.0, r.d]), li.p),
+        };
     }
     out[6] = prev;
     out

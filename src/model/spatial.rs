@@ -93,6 +93,24 @@ pub fn mul_mm<T: Scalar>(a: &M3<T>, b: &M3<T>) -> M3<T> {
     out
 }
 
+/// a · b with a constant `b` (cheaper for dual numbers than lifting b).
+#[inline]
+pub fn mul_mm_const<T: Scalar>(a: &M3<T>, b: &[[f64; 3]; 3]) -> M3<T> {
+    let mut out = [[k::<T>(0.0); 3]; 3];
+    for (i, row) in out.iter_mut().enumerate() {
+        for (j, x) in row.iter_mut().enumerate() {
+            *x = a[i][0] * b[0][j] + a[i][1] * b[1][j] + a[i][2] * b[2][j];
+        }
+    }
+    out
+}
+
+/// m · v with a constant `v`.
+#[inline]
+pub fn mul_mv_const<T: Scalar>(m: &M3<T>, v: [f64; 3]) -> V3<T> {
+    std::array::from_fn(|i| m[i][0] * v[0] + m[i][1] * v[1] + m[i][2] * v[2])
+}
+
 /// Column `j` of `m`.
 #[inline]
 pub fn col<T: Scalar>(m: &M3<T>, j: usize) -> V3<T> {

@@ -246,7 +246,15 @@ pub fn named_key(message: &str) -> Option<&str> {
 }
 
 /// Tables of a scenario file, for [`dotted_key`].
-const TABLES: [&str; 6] = ["model", "planner", "limits", "sim", "thresholds", "sweep"];
+const TABLES: [&str; 7] = [
+    "model",
+    "planner",
+    "limits",
+    "sim",
+    "thresholds",
+    "minimums",
+    "sweep",
+];
 
 /// The first `table.key` path (a scenario table, then a dot) in a message,
 /// e.g. `model.geometry.wheel_radius`.

@@ -96,6 +96,8 @@ struct ScenarioFile {
     sim: SimConfig,
     #[serde(default)]
     thresholds: BTreeMap<String, f64>,
+    #[serde(default)]
+    minimums: BTreeMap<String, f64>,
     sweep: Option<SweepConfig>,
 }
 
@@ -126,6 +128,8 @@ pub struct Scenario {
     pub sim: SimConfig,
     /// Metric name → maximum allowed value.
     pub thresholds: BTreeMap<String, f64>,
+    /// Metric name → minimum allowed value (`[minimums]`, e.g. a clearance).
+    pub minimums: BTreeMap<String, f64>,
     /// Monte Carlo variants (`[sweep]`): `run`/`check` run the sweep instead of one run.
     pub sweep: Option<SweepConfig>,
     /// Where each key is written, for errors found after parsing.
@@ -392,6 +396,7 @@ impl Scenario {
             ramp: file.limits.ramp,
             sim: file.sim,
             thresholds: file.thresholds,
+            minimums: file.minimums,
             sweep: file.sweep,
             keys: Arc::new(keys),
         })

@@ -58,10 +58,11 @@ impl Prepared {
         let system =
             build_system(&scenario.model, &scenario.planner).map_err(|m| scenario.error(m))?;
         let known = metric_names(system.as_ref());
-        for k in scenario.thresholds.keys() {
+        let gates = scenario.thresholds.keys().map(|k| ("thresholds", k));
+        for (table, k) in gates.chain(scenario.minimums.keys().map(|k| ("minimums", k))) {
             if !known.contains(k) {
                 return Err(scenario.error(format!(
-                    "key `thresholds.{k}`: unknown metric; known: {}",
+                    "key `{table}.{k}`: unknown metric; known: {}",
                     known.join(", ")
                 )));
             }

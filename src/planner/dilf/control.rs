@@ -23,11 +23,15 @@
 //! * The dipole's plane γ = 0 passes through the goal, so while the arm still
 //!   converges the field's maximum along the goal axis sits a little in front
 //!   of the goal (at |x| = √(arm part of Σ‖h2‖²)), and between it and the goal
-//!   the printed θ_d points backwards: a platform that drifts into that band
-//!   (it does in physics) turns around. Within `goal_heading_radius` of its
-//!   goal θ_d is whichever of the field's direction and its opposite lies
-//!   nearer the current heading (the printed rule picks by sign(x), which is
-//!   what flips in that band).
+//!   the field points away from the goal: the printed θ_d (the field's
+//!   direction for x < 0) then turns the platform around, and back again once
+//!   the arm has converged (seen in the ideal run and in physics). In that
+//!   band, recognised within 0.5 m of the goal as the part of the cone
+//!   |y| < |x| about the goal axis where x f_x > 0 (the pure dipole field
+//!   points towards the goal throughout the cone), θ_d is whichever of the field's direction and its
+//!   opposite lies on the goal heading's side: the platform backs off along
+//!   the axis instead. Outside the band both rules agree near the axis, so θ_d
+//!   stays continuous at its edge.
 //! * Where the planar field is negligible (below `heading_deadzone` · ‖f‖)
 //!   θ_d is undefined in effect: it flips by π from sample to sample and the
 //!   platform spins in place; there θ_d = θ.
@@ -71,9 +75,6 @@ pub struct Gains {
     /// θ_d is held at θ while the planar field ‖(f_x, f_y)‖ is below this
     /// fraction of ‖f‖ (see the module docs).
     pub heading_deadzone: f64,
-    /// Within this distance of its goal position a platform's θ_d never
-    /// points away from the goal heading (see the module docs), m.
-    pub goal_heading_radius: f64,
     /// Within this distance (the task's position tolerance) θ_d is the goal
     /// heading itself, m.
     pub goal_lock_radius: f64,
@@ -107,6 +108,12 @@ impl Branch {
     }
 }
 
+/// How far from its goal a platform looks for the band (see the module
+/// docs), m: beyond the arm-induced offset √(arm part of Σ‖h2‖²) of the
+/// shipped tasks; farther out, obstacles also turn the field away from the
+/// goal and there the printed rule must steer around them.
+const BAND_RADIUS: f64 = 0.5;
+
 /// sign with sign(0) = +1 (Appendix G).
 fn sign(x: f64) -> f64 {
     if x >= 0.0 {
@@ -135,16 +142,21 @@ pub fn control(q: &[f64], f: &[f64], goal: &[f64], g: &Gains) -> (Vec<f64>, Vec<
         let (gx, gy) = (fx * c + fy * s, -fx * s + fy * c);
         let sx = sign(x_goal);
         let dist = (q[i] - goal[i]).hypot(q[i + 1] - goal[i + 1]);
-        let theta_d = if dist <= g.goal_heading_radius {
-            // Along the field line, forwards or backwards, whichever needs
-            // less turning: lateral errors are still corrected, but the
-            // platform never turns around next to its goal.
-            let phi = gy.atan2(gx) + th_goal;
-            if wrap_angle(phi - th).abs() <= std::f64::consts::FRAC_PI_2 {
+        let y_goal = -(q[i] - goal[i]) * s + (q[i + 1] - goal[i + 1]) * c;
+        // The band next to the goal where the field points away from it
+        // although the platform is within 45° of the goal axis (the pure
+        // dipole field points towards the goal throughout that cone).
+        let band = dist <= BAND_RADIUS && x_goal * gx > 0.0 && y_goal.abs() < x_goal.abs();
+        let theta_d = if band {
+            // Of the field's direction and its opposite, the one on the goal
+            // heading's side: the platform backs off instead of turning round.
+            let phi = gy.atan2(gx);
+            let phi = if phi.abs() <= std::f64::consts::FRAC_PI_2 {
                 phi
             } else {
                 phi + std::f64::consts::PI
-            }
+            };
+            phi + th_goal
         } else if gx.hypot(gy) <= g.heading_deadzone * norm_f {
             th
         } else {
@@ -210,7 +222,6 @@ mod tests {
             max_turn_rate: 0.6,
             max_joint_rate: 0.5,
             heading_deadzone: 0.05,
-            goal_heading_radius: 0.1,
             goal_lock_radius: 0.02,
         }
     }

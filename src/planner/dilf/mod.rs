@@ -98,10 +98,6 @@ pub struct DilfParams {
     /// fraction of ‖f‖ (θ_d is undefined there; 0 disables).
     #[serde(default = "default_deadzone")]
     pub heading_deadzone: f64,
-    /// Within this distance of its goal position a platform steers to the
-    /// goal heading, m (see `control`; 0 disables).
-    #[serde(default = "default_goal_heading_radius")]
-    pub goal_heading_radius: f64,
     /// The policy is evaluated every `period` seconds and held in between.
     #[serde(default = "default_period")]
     pub period: f64,
@@ -155,10 +151,7 @@ fn default_period() -> f64 {
     0.02
 }
 fn default_deadzone() -> f64 {
-    0.05
-}
-fn default_goal_heading_radius() -> f64 {
-    0.1
+    0.0
 }
 fn default_field_power() -> f64 {
     2.0
@@ -181,11 +174,6 @@ impl DilfParams {
         check_param("max_turn_rate", pos(self.max_turn_rate), "must be > 0")?;
         check_param("max_joint_rate", pos(self.max_joint_rate), "must be > 0")?;
         check_param("period", pos(self.period), "must be > 0")?;
-        check_param(
-            "goal_heading_radius",
-            self.goal_heading_radius.is_finite() && self.goal_heading_radius >= 0.0,
-            "must be ≥ 0",
-        )?;
         check_param(
             "heading_deadzone",
             (0.0..1.0).contains(&self.heading_deadzone),
@@ -230,7 +218,6 @@ impl DilfParams {
             max_turn_rate: self.max_turn_rate,
             max_joint_rate: self.max_joint_rate,
             heading_deadzone: self.heading_deadzone,
-            goal_heading_radius: self.goal_heading_radius,
             goal_lock_radius: 0.5 * self.tolerance.position,
         }
     }

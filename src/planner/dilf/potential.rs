@@ -253,11 +253,6 @@ impl Scene {
     ) -> Result<Evaluation<T>, ContactError> {
         let n = self.parts.len();
         let placed = self.placed_parts(q);
-        let obst: Vec<PlacedEllipsoid<T>> = self
-            .obstacles
-            .iter()
-            .map(|o| lift_placed(&o.shape))
-            .collect();
         let ln_lambda = self.params.lambda.ln();
         let mut ln_num = k::<T>(0.0);
         let mut d = k::<T>(0.0);
@@ -286,18 +281,26 @@ impl Scene {
                     }
                 };
                 let h = spatial::sub(h_now, spatial::lift(self.goal_points[r * n + i]));
-                // Every obstacle this part sees: static ones, then the other robots' parts.
-                let others = (0..self.robots)
-                    .filter(|&o| o != r)
-                    .flat_map(|o| (0..n).map(move |j| o * n + j));
+                // Every obstacle this part sees: static ones (constant: only
+                // the part carries derivatives), then the other robots' parts.
                 let mut seen: Vec<(T, V3<T>)> = Vec::with_capacity(self.obstacles.len() + n);
-                for o in obst.iter().chain(others.map(|j| &placed[j])) {
+                for o in &self.obstacles {
+                    let sol = self.solve(&part_re, &o.shape, &mut warm.0[slot])?;
+                    slot += 1;
+                    min_beta = min_beta.min(sol.value);
+                    collided |= sol.value <= 0.0;
+                    let beta = part.value(spatial::lift(sol.x)) * sol.mu + sol.value;
+                    seen.push((beta, spatial::sub(c, spatial::lift(o.shape.center))));
+                }
+                for j in (0..self.robots)
+                    .filter(|&o| o != r)
+                    .flat_map(|o| (0..n).map(move |j| o * n + j))
+                {
+                    let o = &placed[j];
                     let sol = self.solve(&part_re, &o.re(), &mut warm.0[slot])?;
                     slot += 1;
                     min_beta = min_beta.min(sol.value);
-                    if sol.value <= 0.0 {
-                        collided = true;
-                    }
+                    collided |= sol.value <= 0.0;
                     seen.push((sol.beta(part, o), spatial::sub(c, o.center)));
                 }
                 if collided {
@@ -440,23 +443,17 @@ impl Scene {
     }
 }
 
-/// A constant shape as a `T` shape.
-fn lift_placed<T: Scalar>(e: &PlacedEllipsoid<f64>) -> PlacedEllipsoid<T> {
-    PlacedEllipsoid {
-        center: spatial::lift(e.center),
-        rot: e.rot.map(|r| r.map(k)),
-        semi: e.semi,
-        n: e.n,
-    }
-}
-
 /// A link-frame shape placed by a `T` pose.
 pub fn placed_generic<T: Scalar>(s: &Superellipsoid, pose: &Pose<T>) -> PlacedEllipsoid<T> {
-    let local = Pose::<T>::from_xyz_rpy(s.center, s.rpy);
-    let w = pose.then(&local);
+    // The local pose is constant: multiply by it in f64 terms.
+    let rot = if s.rpy == [0.0; 3] {
+        pose.r
+    } else {
+        spatial::mul_mm_const(&pose.r, &s.rotation())
+    };
     PlacedEllipsoid {
-        center: w.p,
-        rot: w.r,
+        center: spatial::add(spatial::mul_mv_const(&pose.r, s.center), pose.p),
+        rot,
         semi: s.semi_axes,
         n: s.exponent,
     }
@@ -559,5 +556,89 @@ pub(crate) mod tests {
                 }
             }
         }
+    }
+    /// Definition 1 (ii): V grows without bound as the goal is approached
+    /// along the dipole axis (every other coordinate at its goal): V ~ c/t.
+    #[test]
+    fn v_tends_to_infinity_at_the_goal() {
+        let s = scene(1, GoalFrame::Platform);
+        let g = s.goal.clone();
+        let mut last = 0.0;
+        let mut vt = Vec::new();
+        for t in [0.5, 0.1, 0.01, 1e-3, 1e-4] {
+            let mut q = g.clone();
+            q[0] -= t * g[2].cos();
+            q[1] -= t * g[2].sin();
+            let v = s.evaluate::<f64>(&q, &mut s.warm()).unwrap().v;
+            assert!(v > last, "V = {v} at {t} m not above {last}");
+            last = v;
+            vt.push(v * t);
+        }
+        // V·t tends to a positive constant: V grows like 1/t.
+        let (a, b) = (vt[3], vt[4]);
+        assert!((a - b).abs() < 0.01 * b && b > 0.0, "V·t = {vt:?}");
+        assert!(last > 1e3, "V = {last} at 0.1 mm from the goal");
+    }
+
+    /// Definition 1 (i) on the obstacle boundaries: V → 0 as a part closes in
+    /// on an obstacle (β → 0⁺), like β^{1/(2 k_v)} (the point-world distance
+    /// is ∝ √β), and is 0 once they touch.
+    #[test]
+    fn v_vanishes_on_obstacle_boundaries() {
+        let s = scene(1, GoalFrame::Platform);
+        // Drive the platform along +x towards the wall at x = 0 (y = 3 is
+        // behind `wall_left`): bisect for the first contact.
+        let q_at = |x: f64| {
+            let mut q = s.goal.clone();
+            q[0] = x;
+            q[1] = 3.0;
+            q
+        };
+        let beta = |x: f64| s.evaluate::<f64>(&q_at(x), &mut s.warm()).unwrap().min_beta;
+        let (mut free, mut hit) = (-3.0, 0.0);
+        assert!(beta(free) > 0.0 && beta(hit) <= 0.0);
+        for _ in 0..80 {
+            let mid = 0.5 * (free + hit);
+            if beta(mid) > 0.0 {
+                free = mid;
+            } else {
+                hit = mid;
+            }
+        }
+        let v = |x: f64| s.evaluate::<f64>(&q_at(x), &mut s.warm()).unwrap().v;
+        assert_eq!(v(hit), 0.0, "V on contact");
+        let far = v(-3.0);
+        let mut ratios = Vec::new();
+        for d in [1e-3, 1e-6, 1e-9] {
+            let x = free - d;
+            let (b, vv) = (beta(x), v(x));
+            assert!(b > 0.0 && vv > 0.0 && vv < far);
+            ratios.push(vv / b.powf(1.0 / (2.0 * s.params.kv)));
+        }
+        // V / β^{1/(2k_v)} settles: V → 0 at the rate the construction predicts.
+        let spread = ratios
+            .iter()
+            .fold(0.0f64, |m, r| m.max((r / ratios[2] - 1.0).abs()));
+        assert!(spread < 0.2, "ratios {ratios:?}");
+    }
+
+    /// Σ‖h2‖² (the denominator of V) vanishes only at the goal: the parts'
+    /// points fix every coordinate, the heading through the dipole.
+    #[test]
+    fn goal_distance_vanishes_only_at_the_goal() {
+        let s = scene(1, GoalFrame::Platform);
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..200 {
+            let mut q = s.goal.clone();
+            let i = rng.random_range(0..9);
+            if i == 2 {
+                continue; // the heading enters through γ, not Σ‖h2‖²
+            }
+            q[i] += rng.random_range(0.01..0.5) * if rng.random::<bool>() { 1.0 } else { -1.0 };
+            let e = s.evaluate::<f64>(&q, &mut s.warm()).unwrap();
+            assert!(e.d > 1e-8, "coordinate {i}: Σ‖h2‖² = {}", e.d);
+        }
+        let e = s.evaluate::<f64>(&s.goal, &mut s.warm()).unwrap();
+        assert!(e.d < 1e-24);
     }
 }
