@@ -3,6 +3,7 @@
 //! Every model in the harness implements [`KinematicModel`]; the ideal run
 //! integrates it with the shared fixed-step RK4 of [`crate::integrate`].
 
+pub mod beam;
 pub mod disk;
 pub mod ellipsoid;
 pub mod mobile_manipulator;
