@@ -5,16 +5,20 @@
 //! with a URDF) → [`compare`] → logs ([`log`]: MCAP, Rerun, summary.json).
 //! [`runner`] strings the stages together for one scenario.
 
+pub mod baseline;
 pub mod compare;
 pub mod error;
 pub mod integrate;
+pub mod junit;
 pub mod log;
 pub mod model;
+pub mod paper;
 pub mod physics;
 pub mod plan;
 pub mod planner;
 pub mod progress;
 pub mod record;
+pub mod report;
 pub mod runner;
 pub mod scenario;
 pub mod sweep;

@@ -44,6 +44,17 @@ impl Prepared {
                 ));
             }
         }
+        if scenario.sweep.is_some() {
+            known.extend(crate::sweep::metric_names());
+        }
+        if let Some(k) = scenario.regression.unknown_metrics(&known).next() {
+            let key = format!("regression.metrics.{k}");
+            return Err(Error::Input {
+                line: crate::baseline::toml_key_line(&scenario.path, k),
+                path: scenario.path.clone(),
+                message: format!("key `{key}`: unknown metric; known: {}", known.join(", ")),
+            });
+        }
         Ok(Prepared {
             scenario,
             system,
@@ -295,6 +306,7 @@ fn write_logs(
         metrics: &outcome.metrics,
     };
     crate::log::mcap::write_mcap(&dir.join("run.mcap"), &rec).map_err(|e| e.to_string())?;
+    crate::report::data::write(&dir.join("series.json"), &rec)?;
     crate::log::rerun::write_rrd(&dir.join("run.rrd"), &rec).map_err(|e| e.to_string())
 }
 
@@ -308,6 +320,7 @@ fn summary_json(
     let sc = &prep.scenario;
     let model = prep.model();
     let metric = |n: &str| o.metric(n);
+    let (start, goal) = prep.start_goal();
     json!({
         "scenario": sc.name,
         "file": sc.path,
@@ -323,6 +336,7 @@ fn summary_json(
             "segments": plan.segments,
             "details": plan.details,
         },
+        "paper": prep.system.paper(&start, &goal, plan),
         "sim_settings": sc.sim,
         "goal": display_state(model, &State::from_vec(sc.goal.clone())),
         "ideal": {

@@ -149,6 +149,8 @@ struct ScenarioFile {
     #[serde(default)]
     thresholds: BTreeMap<String, f64>,
     sweep: Option<crate::sweep::SweepConfig>,
+    #[serde(default)]
+    regression: crate::baseline::RegressionConfig,
 }
 
 /// A validated scenario with resolved paths and SI units.
@@ -180,6 +182,8 @@ pub struct Scenario {
     pub thresholds: BTreeMap<String, f64>,
     /// Monte Carlo variants (`[sweep]`): `run`/`check` run the sweep instead of one run.
     pub sweep: Option<crate::sweep::SweepConfig>,
+    /// Baseline tolerance overrides (`[regression]`).
+    pub regression: crate::baseline::RegressionConfig,
 }
 
 fn line_of(text: &str, offset: usize) -> usize {
@@ -361,6 +365,7 @@ impl Scenario {
         if let Some(sw) = &file.sweep {
             sw.validate().map_err(&bad)?;
         }
+        file.regression.validate().map_err(&bad)?;
         for (k, v) in &file.thresholds {
             if *v < 0.0 {
                 return Err(bad(format!("key `thresholds.{k}`: must be ≥ 0")));
@@ -380,6 +385,7 @@ impl Scenario {
             sim: file.sim,
             thresholds: file.thresholds,
             sweep: file.sweep,
+            regression: file.regression,
         })
     }
 }
