@@ -73,7 +73,7 @@ def main():
             time.sleep(0.2)
         if not targets:
             sys.exit("error: chromium DevTools endpoint did not come up")
-        ws = websocket.create_connection(targets[0]["webSocketDebuggerUrl"], timeout=120)
+        ws = websocket.create_connection(targets[0]["webSocketDebuggerUrl"], timeout=900)
         ids = iter(range(1, 1 << 30))
 
         def call(method, **params):

@@ -707,13 +707,15 @@ fn blueprint(rec: &RunRecord<'_>) -> (Blueprint, Vec<Property>) {
             .with_contents(["/robot/**", "/paths/**"])
             .into();
         if let Some(p) = view_path(&c) {
-            let at = rec.sim.link_poses[0][0].translation;
+            // Only the tracked entity: a fixed eye position in the blueprint would pin the
+            // camera and override the tracking.
             let target =
                 rr::components::EntityPath::from(ep(&["robot", &link.name]).to_string().as_str());
-            props.push((
-                format!("{p}/EyeControls3D"),
-                Box::new(eye(at, 1.5 * robot).with_tracking_entity(target)),
-            ));
+            let follow = EyeControls3D::new()
+                .with_kind(Eye3DKind::Orbital)
+                .with_eye_up([0.0f32, 0.0, 1.0])
+                .with_tracking_entity(target);
+            props.push((format!("{p}/EyeControls3D"), Box::new(follow)));
         }
         left.push(c);
     }

@@ -3,7 +3,7 @@
 //! Written by every run next to `run.mcap` (the MCAP holds every sample but
 //! reading it back for the whole suite takes far longer than the report's
 //! 2 s budget). Each series is min/max-decimated to at most
-//! 2 × [`BUCKETS`] points, so spikes survive; the planar paths are
+//! 2 × [`BUCKETS`] + 2 points, so spikes survive; the planar paths are
 //! stride-decimated to at most [`PATH_POINTS`] points (x and y must stay
 //! paired). Values are f32 (plenty for figures); NaN is `null`.
 
@@ -104,7 +104,9 @@ pub fn decimate(n: usize, v: impl Fn(usize) -> f64) -> Vec<usize> {
     if n <= 2 * BUCKETS {
         return (0..n).collect();
     }
-    let mut out = Vec::with_capacity(2 * BUCKETS + 1);
+    // The end points are always kept, so a decimated series spans the whole run.
+    let mut out = Vec::with_capacity(2 * BUCKETS + 2);
+    out.push(0);
     for b in 0..BUCKETS {
         let (lo, hi) = (b * n / BUCKETS, (b + 1) * n / BUCKETS);
         let (mut imin, mut imax, mut inan) = (lo, lo, None);
@@ -268,7 +270,7 @@ mod tests {
         #[test]
         fn decimation_keeps_extremes(v in proptest::collection::vec(-1e6f64..1e6, 1..5000)) {
             let idx = decimate(v.len(), |i| v[i]);
-            prop_assert!(idx.len() <= 2 * BUCKETS + 2 || idx.len() == v.len());
+            prop_assert!(idx.len() <= 2 * BUCKETS + 3 || idx.len() == v.len());
             prop_assert!(idx.windows(2).all(|w| w[0] < w[1]));
             prop_assert_eq!(idx[0], 0);
             prop_assert_eq!(*idx.last().unwrap(), v.len() - 1);
