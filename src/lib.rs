@@ -9,17 +9,21 @@
 //! [`planner`], [`model`] and [`physics`] define their own plain parameter
 //! types and never import [`scenario`].
 
+pub mod baseline;
 pub mod compare;
 pub mod error;
 pub mod input;
 pub mod integrate;
+pub mod junit;
 pub mod log;
 pub mod model;
+pub mod paper;
 pub mod physics;
 pub mod plan;
 pub mod planner;
 pub mod progress;
 pub mod record;
+pub mod report;
 pub mod runner;
 pub mod scenario;
 pub mod sweep;

@@ -233,6 +233,7 @@ fn write_logs(
         metrics: &outcome.metrics,
     };
     crate::log::mcap::write_mcap(&dir.join("run.mcap"), &rec).map_err(|e| e.to_string())?;
+    crate::report::data::write(&dir.join("series.json"), &rec)?;
     crate::log::rerun::write_rrd(&dir.join("run.rrd"), &rec).map_err(|e| e.to_string())
 }
 
@@ -246,6 +247,7 @@ fn summary_json(
     let sc = &prep.scenario;
     let model = prep.model();
     let metric = |n: &str| o.metric(n);
+    let (start, goal) = prep.start_goal();
     json!({
         "scenario": sc.name,
         "file": sc.path,
@@ -262,6 +264,7 @@ fn summary_json(
             "segments": plan.segments,
             "details": plan.details,
         },
+        "paper": prep.system.paper(&start, &goal, plan),
         "sim_settings": sc.sim,
         "goal": display_state(model, &State::from_vec(sc.goal.clone())),
         "ideal": {

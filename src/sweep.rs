@@ -107,6 +107,21 @@ fn run_variant(prep: &Prepared, cfg: &SweepConfig, v: Variant) -> VariantResult 
     }
 }
 
+/// Names of the metrics a sweep reports (the sweep's outcome carries these instead of the
+/// single-run metrics).
+pub fn metric_names() -> Vec<String> {
+    let mut out = vec![
+        "sweep_success_rate".to_string(),
+        "sweep_variants".to_string(),
+    ];
+    for name in ["sweep_final_error", "sweep_time_to_goal"] {
+        for s in ["median", "p95", "max"] {
+            out.push(format!("{name}_{s}"));
+        }
+    }
+    out
+}
+
 /// Median, 95th percentile (nearest rank) and maximum; None when empty.
 pub fn distribution(values: &[f64]) -> Option<[f64; 3]> {
     let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();

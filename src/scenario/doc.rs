@@ -246,7 +246,7 @@ pub fn named_key(message: &str) -> Option<&str> {
 }
 
 /// Tables of a scenario file, for [`dotted_key`].
-const TABLES: [&str; 7] = [
+const TABLES: [&str; 8] = [
     "model",
     "planner",
     "limits",
@@ -254,6 +254,7 @@ const TABLES: [&str; 7] = [
     "thresholds",
     "minimums",
     "sweep",
+    "regression",
 ];
 
 /// The first `table.key` path (a scenario table, then a dot) in a message,

@@ -99,6 +99,8 @@ struct ScenarioFile {
     #[serde(default)]
     minimums: BTreeMap<String, f64>,
     sweep: Option<SweepConfig>,
+    #[serde(default)]
+    regression: crate::baseline::RegressionConfig,
 }
 
 /// A validated scenario with resolved paths and SI units.
@@ -132,6 +134,8 @@ pub struct Scenario {
     pub minimums: BTreeMap<String, f64>,
     /// Monte Carlo variants (`[sweep]`): `run`/`check` run the sweep instead of one run.
     pub sweep: Option<SweepConfig>,
+    /// Baseline tolerance overrides (`[regression]`).
+    pub regression: crate::baseline::RegressionConfig,
     /// Where each key is written, for errors found after parsing.
     #[serde(skip)]
     keys: Arc<KeyIndex>,
@@ -378,6 +382,7 @@ impl Scenario {
                 )));
             }
         }
+        file.regression.validate().map_err(&bad)?;
         for (k, v) in &file.thresholds {
             if *v < 0.0 {
                 return Err(bad(format!("key `thresholds.{k}`: must be ≥ 0")));
@@ -398,6 +403,7 @@ impl Scenario {
             thresholds: file.thresholds,
             minimums: file.minimums,
             sweep: file.sweep,
+            regression: file.regression,
             keys: Arc::new(keys),
         })
     }

@@ -36,8 +36,10 @@ pub mod rover;
 pub mod space_robot;
 pub mod sphere;
 
+use crate::baseline::Direction;
 use crate::integrate::Trajectory;
 use crate::model::{KinematicModel, State};
+use crate::paper::PaperRow;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::PlanError;
@@ -107,5 +109,16 @@ pub trait System: Send + Sync {
         cmp: &Comparison,
     ) -> (Vec<(String, f64)>, Vec<Series>) {
         (self.extra_metrics(goal, ideal, sim, cmp), Vec::new())
+    }
+    /// Which way one of this system's metrics regresses, when the harness convention
+    /// ([`Direction::conventional`]: `min`/`clearance`/`margin` tokens and success rates are
+    /// higher-is-better, the rest lower-is-better) does not fit. Default: no declaration.
+    fn metric_direction(&self, _name: &str) -> Option<Direction> {
+        None
+    }
+    /// The paper's printed numbers next to the values `plan` computes, when the scenario
+    /// poses the paper's worked example (see [`crate::paper`]). Default: none.
+    fn paper(&self, _start: &State, _goal: &State, _plan: &Plan) -> Vec<PaperRow> {
+        Vec::new()
     }
 }

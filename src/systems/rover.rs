@@ -9,13 +9,15 @@
 //! which is deterministic, but not on Rapier).
 
 use super::System;
+use crate::baseline::Direction;
 use crate::integrate::{simulate, Trajectory};
 use crate::model::rover::{RoverGeometry, SwitchingRover, SwitchingSignal};
 use crate::model::{Input, KinematicModel, State};
+use crate::paper::{rows_from, same, PaperRow};
 use crate::physics::rover::RoverPhysics;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Command, ControlLaw, Controller, Limits, Plan, PolicyFactory};
-use crate::planner::rover_primitives::{self, se2_distance, RoverPrimitiveParams};
+use crate::planner::rover_primitives::{self, se2_distance, RoverPrimitiveParams, TurnDirection};
 use crate::planner::PlanError;
 use crate::record::Comparison;
 use crate::record::{Overlay, SimTrajectory};
@@ -214,6 +216,31 @@ impl System for Rover {
             start,
             sim,
         )?))
+    }
+    /// `envelope_fraction` (samples inside the allowed velocity set) regresses when it falls.
+    fn metric_direction(&self, name: &str) -> Option<Direction> {
+        (name == "envelope_fraction").then_some(Direction::HigherIsBetter)
+    }
+    /// Seed 002 Fig. 2: from (0, 0, 90°) to (8, 2, 90°) the paper's run turns 330° left in P1.
+    fn paper(&self, start: &State, goal: &State, plan: &Plan) -> Vec<PaperRow> {
+        use std::f64::consts::FRAC_PI_2;
+        let task = same(start.as_slice(), &[0.0, 0.0, FRAC_PI_2, 0.0], 1e-9)
+            && same(goal.as_slice(), &[8.0, 2.0, FRAC_PI_2, 0.0], 1e-9)
+            && self.params.turn == TurnDirection::Left;
+        if !task {
+            return Vec::new();
+        }
+        rows_from(
+            &plan.details,
+            &[(
+                "P1 turn (left), Fig. 2",
+                "330",
+                "/p1_turn_rad",
+                180.0 / std::f64::consts::PI,
+                "deg",
+                "",
+            )],
+        )
     }
     fn extra_metric_names(&self) -> Vec<String> {
         [

@@ -24,11 +24,12 @@ use crate::integrate::Trajectory;
 use crate::model::space_manipulator::SpaceManipulator;
 use crate::model::space_robot::{SpaceRobot, SpaceRobotModel};
 use crate::model::{KinematicModel, State};
+use crate::paper::{rows_from, same, PaperRow};
 use crate::physics::space_robot::SpaceRobotPhysics;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::endogenous::{self, EndogenousParams};
-use crate::planner::stokes_space::{self, StokesSpaceParams};
+use crate::planner::stokes_space::{self, FixedSide, StokesSpaceParams};
 use crate::planner::PlanError;
 use crate::record::Comparison;
 use crate::record::SimTrajectory;
@@ -153,6 +154,71 @@ impl System for Space {
     ) -> Result<Box<dyn PhysicsSystem>, String> {
         let p = SpaceRobotPhysics::new(robot, urdf_dir, &self.model.robot, start, sim)?;
         Ok(Box::new(p))
+    }
+    /// Seed 000 §4.1's example ((0°, 15°, 15°) → (−20°, 45°, 0°)) with λ = 125° or
+    /// γ = 75°. Seed 001 prints no numbers for its tasks (only qualitative claims).
+    fn paper(&self, start: &State, goal: &State, plan: &Plan) -> Vec<PaperRow> {
+        let Planner::Stokes(p) = &self.planner else {
+            return Vec::new();
+        };
+        let deg = |v: &[f64]| v.iter().map(|x| x.to_radians()).collect::<Vec<_>>();
+        if !(same(start.as_slice(), &deg(&[0.0, 15.0, 15.0]), 1e-9)
+            && same(goal.as_slice(), &deg(&[-20.0, 45.0, 0.0]), 1e-9))
+        {
+            return Vec::new();
+        }
+        let mut spec = vec![
+            ("A (Eq. 19)", "−89.848", "/A", 1.0, "", ""),
+            ("B (Eq. 19)", "−13.92", "/B", 1.0, "", "truncated"),
+            (
+                "θ0 drift along OA, θ0d",
+                "−12.87",
+                "/theta0_d_deg",
+                1.0,
+                "deg",
+                "",
+            ),
+            (
+                "θ0 left for the cycles, θ̄0",
+                "−7.13",
+                "/theta0_bar_deg",
+                1.0,
+                "deg",
+                "",
+            ),
+            ("k (Eq. 20)", "−7.696e-4", "/k", 1.0, "", ""),
+        ];
+        let fixed = p.fixed_value_deg;
+        match p.fixed_side {
+            FixedSide::Lambda if (fixed - 125.0).abs() < 1e-9 => spec.extend([
+                (
+                    "γ for λ = 125° (3 cycles)",
+                    "53.36",
+                    "/gamma_deg",
+                    1.0,
+                    "deg",
+                    "truncated (53.3679°)",
+                ),
+                (
+                    "γ for λ = 125° (3 cycles)",
+                    "0.596",
+                    "/gamma_deg",
+                    1f64.to_radians(),
+                    "rad",
+                    "0.5967 is cos γ; γ = 0.931 rad",
+                ),
+            ]),
+            FixedSide::Gamma if (fixed - 75.0).abs() < 1e-9 => spec.push((
+                "λ for γ = 75° (4 cycles)",
+                "76.084",
+                "/lambda_deg",
+                1.0,
+                "deg",
+                "follows from the rounded θ̄0 = −7.13°",
+            )),
+            _ => {}
+        }
+        rows_from(&plan.details, &spec)
     }
     fn extra_metric_names(&self) -> Vec<String> {
         let mut out: Vec<String> = CHANNEL_METRICS.iter().map(|(_, m)| m.to_string()).collect();

@@ -80,6 +80,16 @@ impl Prepared {
                 }
             }
         }
+        let mut regressable = known.clone();
+        if scenario.sweep.is_some() {
+            regressable.extend(crate::sweep::metric_names());
+        }
+        if let Some(k) = scenario.regression.unknown_metrics(&regressable).next() {
+            return Err(scenario.error(format!(
+                "key `regression.metrics.{k}`: unknown metric; known: {}",
+                regressable.join(", ")
+            )));
+        }
         // The physics first: a URDF that disagrees with the model explains a
         // planner refusal better than the refusal does.
         build_physics(&scenario, system.as_ref(), &robot)?;
