@@ -60,9 +60,9 @@ impl FeBeam {
         let k = assemble(&element_stiffness(beam, beam.length / 2.0));
         let koo: SMatrix<f64, 6, 6> = k.fixed_view::<6, 6>(6, 6).into_owned();
         let kos: SMatrix<f64, 6, 6> = k.fixed_view::<6, 6>(6, 12).into_owned();
-        let chol = koo
-            .cholesky()
-            .ok_or_else(|| "beam stiffness: middle-node block is not positive definite".to_string())?;
+        let chol = koo.cholesky().ok_or_else(|| {
+            "beam stiffness: middle-node block is not positive definite".to_string()
+        })?;
         let cond = -chol.solve(&kos);
         let g = unit_gravity_load(beam);
         let go: SMatrix<f64, 6, 3> = g.fixed_view::<6, 3>(6, 0).into_owned();

@@ -78,7 +78,11 @@ pub fn se3_log<T: Scalar>(g: &Pose<T>) -> [T; 6] {
         let f = if s2.re() < 1e-3 {
             // asin(s)/s; the first omitted term is 63/2816 s¹⁰ < 3e-17.
             let s4 = s2 * s2;
-            k::<T>(1.0) + s2 / 6.0 + s4 * 3.0 / 40.0 + s4 * s2 * 5.0 / 112.0 + s4 * s4 * 35.0 / 1152.0
+            k::<T>(1.0)
+                + s2 / 6.0
+                + s4 * 3.0 / 40.0
+                + s4 * s2 * 5.0 / 112.0
+                + s4 * s4 * 35.0 / 1152.0
         } else {
             let s = s2.sqrt();
             s.atan2(c) / s
