@@ -13,7 +13,16 @@
 //! orientation). Each end frame is fixed to a robot's grasp frame by a
 //! constant offset (see the cooperative system).
 //!
-//! [`fe`] (finite elements) and the physics beam build on these types.
+//! [`fe`] (finite elements, with exponential coordinates from [`se3`]) and
+//! the physics beam build on these types.
+
+pub mod fe;
+#[cfg(test)]
+mod fe_tests;
+pub mod se3;
+
+pub use fe::FeBeam;
+pub use se3::{se3_exp, se3_log};
 
 use serde::{Deserialize, Serialize};
 
