@@ -224,3 +224,53 @@ proptest! {
         prop_assert!(t.is_finite(), "did not converge within 80 s: start {start:?} goal {goal:?}");
     }
 }
+
+/// Table I's initial configuration, both robots (degrees).
+const PAIR_START: &str = "[-11.0, 3.0, -90.0, 90.0, -90.0, 120.0, 0.0, -30.0, 0.0, \
+                          -8.0, 3.0, -90.0, -60.0, -90.0, 120.0, 0.0, -45.0, 0.0]";
+const PAIR_GOAL: &str = "[-11.0, 1.0, -90.0, 90.0, -90.0, 120.0, 0.0, -30.0, 0.0, \
+                         -8.0, 1.0, -90.0, -60.0, -90.0, 120.0, 0.0, -45.0, 0.0]";
+
+fn pair_text(beam: &str) -> String {
+    dilf_text(
+        PAIR_START,
+        PAIR_GOAL,
+        &format!("robots = 2\n\n[model.beam]\n{beam}"),
+    )
+}
+
+#[test]
+fn a_beam_the_table_i_grasps_cannot_hold_is_bad_input() {
+    // Table I's grasp points are 3.28 m apart: a 3 m beam does not fit.
+    bad(
+        &pair_text("max_deformation = 4.0\nlength = 3.0"),
+        "model.beam.length",
+        "length =",
+    );
+}
+
+#[test]
+fn negative_stiffness_and_bound_are_bad_input() {
+    bad(
+        &pair_text("max_deformation = 4.0\nyoungs_modulus = -40e9"),
+        "model.beam.youngs_modulus",
+        "youngs_modulus =",
+    );
+    bad(
+        &pair_text("max_deformation = -1.0"),
+        "model.beam.max_deformation",
+        "max_deformation =",
+    );
+}
+
+#[test]
+fn the_pair_is_refused_until_its_physics_exists() {
+    // The ideal side is built (and unit-tested in planner::dilf::object); a
+    // replay of robot 1 alone would answer another question, so the pair is
+    // refused with the key, not run half.
+    bad(
+        &pair_text("max_deformation = 4.0"),
+        "model.robots",
+        "robots = 2",
+    );
+}

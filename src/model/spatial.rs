@@ -47,6 +47,16 @@ pub fn dot<T: Scalar>(a: V3<T>, b: V3<T>) -> T {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
+/// a × b.
+#[inline]
+pub fn cross<T: Scalar>(a: V3<T>, b: V3<T>) -> V3<T> {
+    [
+        a[1] * b[2] - a[2] * b[1],
+        a[2] * b[0] - a[0] * b[2],
+        a[0] * b[1] - a[1] * b[0],
+    ]
+}
+
 /// ‖a‖.
 #[inline]
 pub fn norm<T: Scalar>(a: V3<T>) -> T {
@@ -216,6 +226,24 @@ impl<T: Scalar> Pose<T> {
     #[inline]
     pub fn apply_inv(&self, x: V3<T>) -> V3<T> {
         mul_mtv(&self.r, sub(x, self.p))
+    }
+
+    /// The inverse transform.
+    pub fn inverse(&self) -> Pose<T> {
+        let rt: M3<T> = std::array::from_fn(|i| std::array::from_fn(|j| self.r[j][i]));
+        Pose {
+            p: scale(mul_mv(&rt, self.p), k(-1.0)),
+            r: rt,
+        }
+    }
+
+    /// self ∘ other for a constant `other` (cheaper than lifting it).
+    #[inline]
+    pub fn then_const(&self, other: &Pose<f64>) -> Pose<T> {
+        Pose {
+            r: mul_mm_const(&self.r, &other.r),
+            p: add(mul_mv_const(&self.r, other.p), self.p),
+        }
     }
 
     /// Real parts.

@@ -27,6 +27,7 @@ use crate::physics::mobile_manipulator::{MobileManipulatorPhysics, ObstacleShape
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::dilf::control::{self, vdot_scaled, Gains};
+use crate::planner::dilf::object::Carried;
 use crate::planner::dilf::potential::{Obstacle, PotentialParams, Scene};
 use crate::planner::dilf::{self, DilfParams};
 use crate::planner::PlanError;
@@ -73,15 +74,105 @@ impl ObstacleConfig {
     }
 }
 
+/// `[model.beam]`: the deformable beam two robots carry (seed 004 §II, §VI).
+/// Defaults: a 10 mm pultruded GFRP rod ([`crate::model::beam::GFRP_ROD_10MM`]).
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct BeamConfig {
+    /// Young's modulus E, Pa.
+    #[serde(default = "default_e")]
+    pub youngs_modulus: f64,
+    /// Shear modulus G, Pa.
+    #[serde(default = "default_g")]
+    pub shear_modulus: f64,
+    /// Density, kg/m³.
+    #[serde(default = "default_rho")]
+    pub density: f64,
+    /// Outer diameter of the solid round section, m.
+    #[serde(default = "default_diameter")]
+    pub diameter: f64,
+    /// Rest length between the grasps, m; default: their distance at the start
+    /// (the beam is straight there). Given, it must match that distance.
+    pub length: Option<f64>,
+    /// q_F of Eq. 5, the bound on ‖q_f‖∞ (m and rad, SI reading of the paper's units).
+    pub max_deformation: f64,
+    /// Ellipsoids along the beam (obstacles of the robot parts).
+    #[serde(default = "default_segments")]
+    pub segments: usize,
+    /// Their cross semi-axes, m (the rod's radius plus a margin).
+    #[serde(default = "default_beam_radius")]
+    pub radius: f64,
+}
+
+fn default_e() -> f64 {
+    crate::model::beam::GFRP_ROD_10MM.0.youngs_modulus
+}
+fn default_g() -> f64 {
+    crate::model::beam::GFRP_ROD_10MM.0.shear_modulus
+}
+fn default_rho() -> f64 {
+    crate::model::beam::GFRP_ROD_10MM.0.density
+}
+fn default_diameter() -> f64 {
+    crate::model::beam::GFRP_ROD_10MM.1.outer_diameter
+}
+fn default_segments() -> usize {
+    8
+}
+fn default_beam_radius() -> f64 {
+    0.02
+}
+
+impl BeamConfig {
+    /// The beam (rest length filled in later) or the offending key.
+    fn beam(&self) -> Result<crate::model::beam::Beam, String> {
+        use crate::model::beam::{Beam, Material, Section};
+        let b = Beam {
+            material: Material {
+                youngs_modulus: self.youngs_modulus,
+                shear_modulus: self.shear_modulus,
+                density: self.density,
+            },
+            section: Section {
+                outer_diameter: self.diameter,
+                inner_diameter: 0.0,
+            },
+            length: self.length.unwrap_or(1.0),
+        };
+        let pos = |v: f64| v.is_finite() && v > 0.0;
+        for (key, v) in [
+            ("youngs_modulus", self.youngs_modulus),
+            ("shear_modulus", self.shear_modulus),
+            ("density", self.density),
+            ("diameter", self.diameter),
+            ("radius", self.radius),
+            ("max_deformation", self.max_deformation),
+        ] {
+            if !pos(v) {
+                return Err(format!("key `model.beam.{key}`: must be > 0, got {v}"));
+            }
+        }
+        if let Some(l) = self.length.filter(|l| !pos(*l)) {
+            return Err(format!("key `model.beam.length`: must be > 0, got {l}"));
+        }
+        if !(1..=64).contains(&self.segments) {
+            return Err("key `model.beam.segments`: must be in 1..=64".into());
+        }
+        Ok(b)
+    }
+}
+
 /// `[model] kind = "mobile_manipulator"`.
 #[derive(Debug, Clone, Deserialize, Serialize)]
 #[serde(deny_unknown_fields)]
 pub struct MobileManipulatorConfig {
     /// URDF file (one robot), relative to the scenario file.
     pub urdf: PathBuf,
-    /// Number of robots (1).
+    /// Number of robots (1, or 2 carrying `[model.beam]`).
     #[serde(default = "one_robot")]
     pub robots: usize,
+    /// The beam two robots carry (required with `robots = 2`).
+    pub beam: Option<BeamConfig>,
     /// Obstacles.
     #[serde(default)]
     pub obstacles: Vec<ObstacleConfig>,
@@ -93,6 +184,7 @@ fn one_robot() -> usize {
 
 struct Dilf {
     model: MobileManipulator,
+    beam: Option<BeamConfig>,
     params: DilfParams,
     obstacles: Vec<(String, Superellipsoid)>,
     probe: ClearanceProbe,
@@ -103,11 +195,18 @@ pub fn build(
     cfg: &MobileManipulatorConfig,
     params: &DilfParams,
 ) -> Result<Box<dyn System>, String> {
-    if cfg.robots != 1 {
-        return Err(format!(
-            "key `model.robots`: {} robots are not supported yet (1)",
-            cfg.robots
-        ));
+    match (cfg.robots, &cfg.beam) {
+        (1, None) | (2, Some(_)) => {}
+        (1, Some(_)) => {
+            return Err("key `model.beam`: one robot cannot carry a beam (robots = 2)".into())
+        }
+        (2, None) => {
+            return Err("key `model.robots`: two robots carry a beam: add [model.beam]".into())
+        }
+        (n, _) => return Err(format!("key `model.robots`: {n} robots (1 or 2)")),
+    }
+    if let Some(b) = &cfg.beam {
+        b.beam()?;
     }
     let mut obstacles = Vec::new();
     for (i, o) in cfg.obstacles.iter().enumerate() {
@@ -138,6 +237,7 @@ pub fn build(
     let params = params.clone();
     Ok(Box::new(Dilf {
         model: MobileManipulator { robots: cfg.robots },
+        beam: cfg.beam.clone(),
         params,
         probe: ClearanceProbe::new(&obstacles),
         obstacles,
@@ -145,7 +245,32 @@ pub fn build(
 }
 
 impl Dilf {
-    fn scene(&self, goal: &State) -> Result<Scene, String> {
+    /// The scene for a task; `start` fixes the beam's grasps (it is straight there).
+    fn scene(&self, start: &[f64], goal: &State) -> Result<Scene, String> {
+        let scene = self.scene_without_beam(goal)?;
+        let Some(b) = &self.beam else {
+            return Ok(scene);
+        };
+        let carried = Carried::at_rest(
+            &b.beam()?,
+            b.length,
+            start,
+            b.max_deformation,
+            b.segments,
+            b.radius,
+        )
+        .map_err(|e| {
+            let key = if b.length.is_some() {
+                "model.beam.length"
+            } else {
+                "start"
+            };
+            format!("key `{key}`: {e}")
+        })?;
+        Ok(scene.with_object(carried))
+    }
+
+    fn scene_without_beam(&self, goal: &State) -> Result<Scene, String> {
         let p = &self.params;
         Scene::new(
             self.model.robots,
@@ -193,6 +318,7 @@ impl Dilf {
 /// Metrics of the V̇ ≥ 0 claim and the ellipsoid model along one run.
 struct Along {
     min_beta: f64,
+    max_deformation: f64,
     vdot_violations: usize,
     v: Series,
     beta: Series,
@@ -202,6 +328,7 @@ fn along(scene: &Scene, gains: &Gains, tr: &Trajectory, samples: &[usize], name:
     let mut warm = scene.warm();
     let mut out = Along {
         min_beta: f64::INFINITY,
+        max_deformation: 0.0,
         vdot_violations: 0,
         v: Series::new(format!("V/{name}")),
         beta: Series::new(format!("min_obstacle_function/{name}")),
@@ -211,6 +338,7 @@ fn along(scene: &Scene, gains: &Gains, tr: &Trajectory, samples: &[usize], name:
         match scene.field(q, &mut warm) {
             Ok((e, f)) => {
                 out.min_beta = out.min_beta.min(e.min_beta);
+                out.max_deformation = out.max_deformation.max(e.max_deformation);
                 // The law's input at this very state (the recorded one may have
                 // been computed a step earlier when sample times round).
                 let (u, branches) = control::control(q, &f, &scene.goal, gains);
@@ -244,12 +372,21 @@ impl System for Dilf {
         vec![1.0; 8 * self.model.robots]
     }
     fn plan(&self, start: &State, goal: &State, _limits: &Limits) -> Result<Plan, PlanError> {
-        let scene = self
-            .scene(goal)
-            .map_err(|reason| PlanError::InvalidParameter {
-                name: "planner".into(),
-                reason,
-            })?;
+        let scene = self.scene(start.as_slice(), goal).map_err(|reason| {
+            match reason
+                .strip_prefix("key `")
+                .and_then(|r| r.split_once("`: "))
+            {
+                Some((key, why)) => PlanError::InvalidParameter {
+                    name: key.into(),
+                    reason: why.into(),
+                },
+                None => PlanError::InvalidParameter {
+                    name: "planner".into(),
+                    reason,
+                },
+            }
+        })?;
         dilf::plan(Arc::new(scene), start, &self.params)
     }
     fn physics(
@@ -261,11 +398,21 @@ impl System for Dilf {
     ) -> Result<Box<dyn PhysicsSystem>, String> {
         // The model's own check first, naming the key: a start inside an
         // obstacle is bad input, not a physics failure.
-        let scene = self.scene(&State::from_vec(start.to_vec()))?;
+        let scene = self.scene(start, &State::from_vec(start.to_vec()))?;
         if let Err(crate::planner::PlanError::InvalidParameter { name, reason }) =
             dilf::check_configuration(&scene, start, "start")
         {
             return Err(format!("key `{name}`: {reason}"));
+        }
+        if self.model.robots == 2 {
+            // Refused rather than replaying robot 1 alone: a replay without
+            // the second robot and the beam would answer another question.
+            return Err(
+                "key `model.robots`: two robots carrying a beam have no physics \
+                 counterpart yet (the beam in Rapier is issue 11's open part); the ideal \
+                 side (FE beam, b_f, beam obstacles) is in `planner::dilf::object`"
+                    .into(),
+            );
         }
         let obstacles: Vec<ObstacleShape> = self
             .obstacles
@@ -305,7 +452,7 @@ impl System for Dilf {
         out
     }
     fn extra_metric_names(&self) -> Vec<String> {
-        [
+        let mut names: Vec<String> = [
             "ideal_time_to_goal",
             "sim_time_to_goal",
             "ideal_min_clearance",
@@ -319,7 +466,11 @@ impl System for Dilf {
             "joint_rate_error_max",
         ]
         .map(String::from)
-        .to_vec()
+        .to_vec();
+        if self.beam.is_some() {
+            names.extend(["ideal_max_deformation", "sim_max_deformation"].map(String::from));
+        }
+        names
     }
     fn analysis(
         &self,
@@ -328,7 +479,7 @@ impl System for Dilf {
         sim: &SimTrajectory,
         _cmp: &Comparison,
     ) -> (Vec<(String, f64)>, Vec<Series>) {
-        let Ok(scene) = self.scene(goal) else {
+        let Ok(scene) = self.scene(ideal.q[0].as_slice(), goal) else {
             return (Vec::new(), Vec::new());
         };
         let gains = self.params.gains();
@@ -348,7 +499,7 @@ impl System for Dilf {
         let chan = |n: &str| sim.channel(n).unwrap_or(&[]);
         let min_of = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
         let max_abs = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
-        let metrics = vec![
+        let mut metrics = vec![
             ("ideal_time_to_goal".into(), self.time_to_goal(ideal, goal)),
             (
                 "sim_time_to_goal".into(),
@@ -373,6 +524,12 @@ impl System for Dilf {
                 max_abs(chan("joint_rate_error")),
             ),
         ];
+        if self.beam.is_some() {
+            // ‖q_f‖∞ of the FE model at the ideal and at the simulated grasps,
+            // at every policy sample.
+            metrics.push(("ideal_max_deformation".into(), a_ideal.max_deformation));
+            metrics.push(("sim_max_deformation".into(), a_sim.max_deformation));
+        }
         (
             metrics,
             vec![a_ideal.v, a_sim.v, a_ideal.beta, a_sim.beta, clear],
@@ -490,8 +647,14 @@ impl ClearanceProbe {
         ClearanceProbe { obstacles, links }
     }
 
-    /// Least distance at configuration q (one robot), m.
+    /// Least distance at configuration q (every robot), m.
     fn clearance(&self, q: &[f64]) -> f64 {
+        q.chunks(mm::DOF)
+            .map(|r| self.clearance_one(r))
+            .fold(f64::INFINITY, f64::min)
+    }
+
+    fn clearance_one(&self, q: &[f64]) -> f64 {
         let f = mm::frames::<f64>(q);
         let mut best = f64::INFINITY;
         for (link, shape, local) in &self.links {

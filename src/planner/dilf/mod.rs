@@ -14,6 +14,7 @@
 
 pub mod contact;
 pub mod control;
+pub mod object;
 pub mod point_world;
 pub mod potential;
 
@@ -324,6 +325,16 @@ pub fn check_configuration(scene: &Scene, q: &[f64], what: &str) -> Result<(), P
             "puts an arm inside a singularity enclosure (see planner.singularity)".into(),
         ));
     }
+    if let (true, Some(o)) = (e.overstrained, &scene.object) {
+        return Err(bad(format!(
+            "deforms the beam beyond its bound: a node leaves the ball ‖q_fi‖ ≤ q_F = {} \
+             (‖q_f‖∞ = {:.3}, grasp points {:.3} m apart, beam {:.3} m)",
+            o.q_max,
+            e.max_deformation,
+            object::grasp_distance(q),
+            o.fe.beam().length
+        )));
+    }
     Ok(())
 }
 
@@ -344,6 +355,7 @@ pub fn plan(scene: Arc<Scene>, start: &State, params: &DilfParams) -> Result<Pla
         "start_v": e.v,
         "start_min_beta": e.min_beta,
         "start_sum_h2": e.d,
+        "start_max_deformation": e.max_deformation,
     });
     let labels = labels(scene.robots);
     let policy = Policy {

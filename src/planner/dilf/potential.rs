@@ -37,6 +37,7 @@
 //! ([`super::contact::Contact::beta`]).
 
 use super::contact::{self, Contact, ContactError};
+use super::object::Carried;
 use super::point_world::switches_log;
 use crate::model::ellipsoid::{PlacedEllipsoid, Superellipsoid};
 use crate::model::mobile_manipulator::{self as mm, Link, Part, DOF};
@@ -140,6 +141,9 @@ pub struct Scene {
     pub goal: Vec<f64>,
     /// Parameters.
     pub params: PotentialParams,
+    /// The carried beam (two robots), if any: its deformation enters V
+    /// through b_f and its ellipsoids are obstacles of every part.
+    pub object: Option<Carried>,
     /// Per (robot, part): the goal point in the part's goal coordinates.
     goal_points: Vec<[f64; 3]>,
 }
@@ -159,6 +163,10 @@ pub struct Evaluation<T: Scalar> {
     pub min_beta: f64,
     /// Least singularity function s_k over arms and factors (< 0: inside an enclosure).
     pub min_singular: f64,
+    /// ‖q_f‖∞ of the carried beam (Eq. 5); 0 without one.
+    pub max_deformation: f64,
+    /// Whether b_f ≤ 0: a node of the beam outside its admissible ball.
+    pub overstrained: bool,
 }
 
 /// Which pair is closest (for messages).
@@ -197,6 +205,7 @@ impl Scene {
             obstacles,
             goal,
             params,
+            object: None,
             goal_points: Vec::new(),
         };
         let goal = s.goal.clone();
@@ -221,10 +230,17 @@ impl Scene {
         Ok(s)
     }
 
-    /// Number of (part, obstacle) pairs, robot-robot pairs included.
+    /// The scene with a carried beam (two robots).
+    pub fn with_object(mut self, object: Carried) -> Scene {
+        self.object = Some(object);
+        self
+    }
+
+    /// Number of (part, obstacle) pairs, robot-robot and robot-beam pairs included.
     pub fn pair_count(&self) -> usize {
         let n = self.parts.len();
-        self.robots * n * (self.obstacles.len() + (self.robots - 1) * n)
+        let beam = self.object.as_ref().map_or(0, |o| o.segments);
+        self.robots * n * (self.obstacles.len() + (self.robots - 1) * n + beam)
     }
 
     /// A fresh warm-start cache.
@@ -253,6 +269,14 @@ impl Scene {
     ) -> Result<Evaluation<T>, ContactError> {
         let n = self.parts.len();
         let placed = self.placed_parts(q);
+        let beam = self.object.as_ref().map(|o| {
+            let st = o.state(q);
+            (
+                o.ellipsoids(&st),
+                o.ln_admissible(&st.q_f),
+                st.max_deformation(),
+            )
+        });
         let ln_lambda = self.params.lambda.ln();
         let mut ln_num = k::<T>(0.0);
         let mut d = k::<T>(0.0);
@@ -303,6 +327,22 @@ impl Scene {
                     collided |= sol.value <= 0.0;
                     seen.push((sol.beta(part, o), spatial::sub(c, o.center)));
                 }
+                if let (Some(obj), Some((segs, _, _))) = (&self.object, &beam) {
+                    for (j, o) in segs.iter().enumerate() {
+                        let s_slot = slot;
+                        slot += 1;
+                        if obj.held(r, &self.parts[i], j) {
+                            continue;
+                        }
+                        // Roles swapped: the minimum of the part's function over the
+                        // thin segment. Zero at contact like the other order, and far
+                        // better conditioned than a 2 cm-thin obstacle function.
+                        let sol = self.solve(&o.re(), &part_re, &mut warm.0[s_slot])?;
+                        min_beta = min_beta.min(sol.value);
+                        collided |= sol.value <= 0.0;
+                        seen.push((sol.beta(o, part), spatial::sub(c, o.center)));
+                    }
+                }
                 if collided {
                     continue;
                 }
@@ -343,7 +383,15 @@ impl Scene {
                 }
             }
         }
-        let v = if collided || min_singular <= 0.0 {
+        let (max_deformation, overstrained) = match &beam {
+            Some((_, Some(ln_bf), m)) => {
+                ln_num += *ln_bf;
+                (*m, false)
+            }
+            Some((_, None, m)) => (*m, true),
+            None => (0.0, false),
+        };
+        let v = if collided || overstrained || min_singular <= 0.0 {
             k(0.0)
         } else {
             gamma * (ln_num * (1.0 / self.params.kv)).exp() / d
@@ -353,6 +401,8 @@ impl Scene {
             d: d.re(),
             min_beta,
             min_singular,
+            max_deformation,
+            overstrained,
         })
     }
 
@@ -401,6 +451,8 @@ impl Scene {
                 d: e.d,
                 min_beta: e.min_beta,
                 min_singular: e.min_singular,
+                max_deformation: e.max_deformation,
+                overstrained: e.overstrained,
             },
             grad.iter().map(|g| d2 * g).collect(),
         ))

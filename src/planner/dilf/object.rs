@@ -1,0 +1,439 @@
+//! The carried object of seed 004 as the planner sees it (§II, §III-B): a
+//! beam rigidly grasped by two robots, its nodal deformations q_f from the
+//! grasps (the finite-element model [`FeBeam`]), the admissible balls of its
+//! nodes (Eqs. 11–12) and its ellipsoids, which every robot part meets as
+//! obstacles in its own workspace copy.
+//!
+//! Grasps: end 0 of the beam is fixed to robot 1's tool frame, end 2 to robot
+//! 2's, each by a constant offset ([`Carried::grasp`]). [`Carried::at_rest`]
+//! chooses the offsets so that the beam is straight (q_s = 0) at a given
+//! configuration of both robots: end 0 at robot 1's grasp point with its x
+//! axis towards robot 2's grasp point and its z axis as close to world up as
+//! that allows; end 2 the same frame translated by the beam length.
+//!
+//! b_f: Eq. 12 multiplies, per node, q_F² − ‖q_fi‖² (the ball under the
+//! ∞-norm box of Eq. 5, |q_fi,j| ≤ q_F). Like the proximities of V, each
+//! factor is normalised by q_F², b_fi = 1 − ‖q_fi‖²/q_F² ∈ (−∞, 1], so that
+//! b_f keeps its zero set and does not scale V by q_F^4; b_f ≤ 0 is the
+//! deformation "collision" (V = 0).
+
+use crate::model::beam::{Beam, FeBeam};
+use crate::model::ellipsoid::PlacedEllipsoid;
+use crate::model::mobile_manipulator::{self as mm, DOF};
+use crate::model::spatial::{self, k, Pose, Scalar, M3};
+
+/// Standard gravity, world frame (z up), m/s².
+pub const GRAVITY: [f64; 3] = [0.0, 0.0, -9.81];
+
+/// A beam held by robots 1 and 2.
+#[derive(Debug, Clone)]
+pub struct Carried {
+    /// Finite-element model.
+    pub fe: FeBeam,
+    /// Tool frame → beam end frame, robot 1 (end 0) and robot 2 (end 2).
+    pub grasp: [Pose<f64>; 2],
+    /// q_F of Eq. 5 (m and rad, as q_f mixes them).
+    pub q_max: f64,
+    /// Number of ellipsoids along the beam.
+    pub segments: usize,
+    /// Cross semi-axes of the beam's ellipsoids, m (the rod's radius plus a margin).
+    pub radius: f64,
+}
+
+/// The beam at one configuration.
+#[derive(Debug, Clone)]
+pub struct BeamState<T: Scalar> {
+    /// World pose of end 0.
+    pub end0: Pose<T>,
+    /// q_f = (q_s, q_o): node 2 then node 1 (see [`FeBeam`]).
+    pub q_f: [T; 12],
+}
+
+impl<T: Scalar> BeamState<T> {
+    /// ‖q_f‖∞ (Eq. 5).
+    pub fn max_deformation(&self) -> f64 {
+        self.q_f.iter().fold(0.0f64, |m, x| m.max(x.re().abs()))
+    }
+}
+
+/// A frame at `p` whose x axis points along `x` and whose z axis is as close
+/// to world up as that allows.
+fn frame_along(p: [f64; 3], x: [f64; 3]) -> Result<Pose<f64>, String> {
+    let n = spatial::dot(x, x).sqrt();
+    if n < 1e-6 {
+        return Err("the two grasp points coincide".into());
+    }
+    let ex = [x[0] / n, x[1] / n, x[2] / n];
+    let up = if ex[2].abs() < 0.99 {
+        [0.0, 0.0, 1.0]
+    } else {
+        [1.0, 0.0, 0.0]
+    };
+    let ey = spatial::cross(up, ex);
+    let m = spatial::dot(ey, ey).sqrt();
+    let ey = [ey[0] / m, ey[1] / m, ey[2] / m];
+    let ez = spatial::cross(ex, ey);
+    let r: M3<f64> = std::array::from_fn(|i| [ex[i], ey[i], ez[i]]);
+    Ok(Pose { r, p })
+}
+
+impl Carried {
+    /// A beam straight (q_s = 0) at configuration `q` (both robots). `length`:
+    /// the beam's rest length, or `None` for the distance between the grasp
+    /// points at `q`. Errors (user-facing): the grasps cannot hold a beam of
+    /// that length at `q`, or the beam is invalid.
+    pub fn at_rest(
+        beam: &Beam,
+        length: Option<f64>,
+        q: &[f64],
+        q_max: f64,
+        segments: usize,
+        radius: f64,
+    ) -> Result<Carried, String> {
+        let (t1, t2) = (mm::frames(&q[..DOF]).tool, mm::frames(&q[DOF..]).tool);
+        let (p1, p2) = (mm::grasp_point(&q[..DOF]), mm::grasp_point(&q[DOF..]));
+        let d = spatial::sub(p2, p1);
+        let dist = spatial::dot(d, d).sqrt();
+        let length = length.unwrap_or(dist);
+        if (dist - length).abs() > 1e-3 {
+            return Err(format!(
+                "the grasp points are {dist:.4} m apart at the start, the beam is {length:.4} m long: \
+                 the grasps cannot hold it undeformed"
+            ));
+        }
+        let beam = Beam { length, ..*beam };
+        let fe = FeBeam::new(&beam)?;
+        let end0 = frame_along(p1, d)?;
+        let end2 = end0.then(&Pose::translation([length, 0.0, 0.0]));
+        Ok(Carried {
+            fe,
+            grasp: [t1.inverse().then(&end0), t2.inverse().then(&end2)],
+            q_max,
+            segments: segments.max(1),
+            radius,
+        })
+    }
+
+    /// End-0 pose and q_f at q (both robots), generic for exact derivatives.
+    pub fn state<T: Scalar>(&self, q: &[T]) -> BeamState<T> {
+        let g0 = mm::frames(&q[..DOF]).tool.then_const(&self.grasp[0]);
+        let g2 = mm::frames(&q[DOF..2 * DOF]).tool.then_const(&self.grasp[1]);
+        let rel = g0.inverse().then(&g2);
+        let g = spatial::mul_mtv(&g0.r, spatial::lift(GRAVITY));
+        BeamState {
+            end0: g0,
+            q_f: self.fe.deformation(&rel, g),
+        }
+    }
+
+    /// ln b_f (Eq. 12, normalised per node), or `None` when a node leaves
+    /// its admissible ball.
+    pub fn ln_admissible<T: Scalar>(&self, q_f: &[T; 12]) -> Option<T> {
+        let mut out = k::<T>(0.0);
+        for node in q_f.chunks(6) {
+            let mut s = k::<T>(0.0);
+            for x in node {
+                s += *x * *x;
+            }
+            let b = k::<T>(1.0) - s * (1.0 / (self.q_max * self.q_max));
+            if b.re() <= 0.0 {
+                return None;
+            }
+            out += b.ln();
+        }
+        Some(out)
+    }
+
+    /// The beam's ellipsoids (world), segment j centred at s = (j + ½) L / N
+    /// on the deformed centreline, its long axis along the tangent.
+    pub fn ellipsoids<T: Scalar>(&self, st: &BeamState<T>) -> Vec<PlacedEllipsoid<T>> {
+        let l = self.fe.beam().length;
+        let n = self.segments;
+        (0..n)
+            .map(|j| {
+                let s = (j as f64 + 0.5) * l / n as f64;
+                let f = st.end0.then(&self.fe.centerline(&st.q_f, s));
+                PlacedEllipsoid {
+                    center: f.p,
+                    rot: f.r,
+                    semi: [0.5 * l / n as f64, self.radius, self.radius],
+                    n: 1.0,
+                }
+            })
+            .collect()
+    }
+
+    /// Whether robot `r`'s part `part` carries segment `seg`: robot r's arm,
+    /// gripper and column against its own half of the beam. The gripper
+    /// holds its end by construction, and with the arm folded as in Table I
+    /// (grippers up, wrist by the shoulder, grasp 1.05 m high) the upper arm
+    /// lies along that half and the column's ellipsoid (up to 1.2 m) reaches
+    /// it: such pairs are part of one kinematic chain, not obstacles (nor
+    /// collision pairs in physics). The platforms, and each robot against the
+    /// other robot's half, are checked.
+    pub fn held(&self, r: usize, part: &mm::Part, seg: usize) -> bool {
+        let own_half = if r == 0 {
+            2 * seg < self.segments
+        } else {
+            2 * seg >= self.segments
+        };
+        own_half && part.name != "platform"
+    }
+}
+
+/// Distance between the grasp points of two robots at q (for messages).
+pub fn grasp_distance(q: &[f64]) -> f64 {
+    let d = spatial::sub(
+        mm::grasp_point(&q[DOF..2 * DOF]),
+        mm::grasp_point(&q[..DOF]),
+    );
+    spatial::dot(d, d).sqrt()
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::model::beam::GFRP_ROD_10MM;
+    use crate::planner::dilf::potential::{
+        GoalFrame, PotentialParams, Scene, SingularityEnclosure,
+    };
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+    use std::f64::consts::PI;
+
+    /// Table I's initial configuration (both robots).
+    pub(crate) fn table_start() -> Vec<f64> {
+        vec![
+            -11.0,
+            3.0,
+            -PI / 2.0,
+            PI / 2.0,
+            -PI / 2.0,
+            2.0 * PI / 3.0,
+            0.0,
+            -PI / 6.0,
+            0.0,
+            -8.0,
+            3.0,
+            -PI / 2.0,
+            -PI / 3.0,
+            -PI / 2.0,
+            2.0 * PI / 3.0,
+            0.0,
+            -PI / 4.0,
+            0.0,
+        ]
+    }
+
+    fn beam() -> Beam {
+        let (material, section) = GFRP_ROD_10MM;
+        Beam {
+            material,
+            section,
+            length: 1.0,
+        }
+    }
+
+    fn carried(q: &[f64], q_max: f64) -> Carried {
+        Carried::at_rest(&beam(), None, q, q_max, 8, 0.02).unwrap()
+    }
+
+    fn scene(q0: &[f64], goal: Vec<f64>, q_max: f64) -> Scene {
+        Scene::new(
+            2,
+            mm::default_parts(),
+            Vec::new(),
+            goal,
+            PotentialParams {
+                lambda: 1.0,
+                kv: 3.0,
+                goal_frame: GoalFrame::Platform,
+                singularity: SingularityEnclosure::default(),
+                field_power: 2.0,
+            },
+        )
+        .unwrap()
+        .with_object(carried(q0, q_max))
+    }
+
+    fn perturbed(q: &[f64], rng: &mut ChaCha8Rng, size: f64) -> Vec<f64> {
+        q.iter()
+            .map(|x| x + rng.random_range(-size..size))
+            .collect()
+    }
+
+    #[test]
+    fn at_rest_only_gravity_deforms_the_beam() {
+        let q = table_start();
+        let c = carried(&q, 4.0);
+        let st = c.state(&q);
+        // q_s (node 2) vanishes: the grasps hold the beam straight.
+        for x in &st.q_f[..6] {
+            assert!(x.abs() < 1e-9, "{:?}", st.q_f);
+        }
+        // Node 1 sags under its weight: clamped–clamped w L⁴ / (384 E I).
+        let b = c.fe.beam();
+        let w = b.mass_per_length() * 9.81;
+        let sag = w * b.length.powi(4) / (384.0 * b.bending_stiffness());
+        let z_world = spatial::mul_mv(&st.end0.r, [st.q_f[6], st.q_f[7], st.q_f[8]])[2];
+        assert!(
+            (z_world + sag).abs() < 1e-6 * sag.max(1.0),
+            "sag {z_world} vs {sag}"
+        );
+        // A wrong rest length is refused.
+        let err = Carried::at_rest(&beam(), Some(3.0), &q, 4.0, 4, 0.03).unwrap_err();
+        assert!(err.contains("cannot hold"), "{err}");
+    }
+
+    /// q_f depends only on the grasps' relative pose: moving and turning both
+    /// platforms together (a rigid motion of the whole system) leaves it.
+    #[test]
+    fn deformation_is_invariant_under_a_common_rigid_motion() {
+        let q0 = table_start();
+        let c = carried(&q0, 4.0);
+        let mut rng = ChaCha8Rng::seed_from_u64(7);
+        for _ in 0..20 {
+            let q = perturbed(&q0, &mut rng, 0.2);
+            let (dx, dy, a) = (
+                rng.random_range(-5.0..5.0),
+                rng.random_range(-5.0..5.0),
+                rng.random_range(-PI..PI),
+            );
+            let mut moved = q.clone();
+            for r in 0..2 {
+                let (x, y) = (q[DOF * r], q[DOF * r + 1]);
+                moved[DOF * r] = a.cos() * x - a.sin() * y + dx;
+                moved[DOF * r + 1] = a.sin() * x + a.cos() * y + dy;
+                moved[DOF * r + 2] += a;
+            }
+            let (s0, s1) = (c.state(&q), c.state(&moved));
+            for (u, v) in s0.q_f.iter().zip(&s1.q_f) {
+                assert!((u - v).abs() < 1e-9, "{:?} vs {:?}", s0.q_f, s1.q_f);
+            }
+        }
+    }
+
+    #[test]
+    fn v_with_the_beam_has_exact_gradients() {
+        let q0 = table_start();
+        let mut goal = q0.clone();
+        goal[0] += 2.0;
+        goal[DOF] += 2.0;
+        let s = scene(&q0, goal, 1.0);
+        let mut rng = ChaCha8Rng::seed_from_u64(11);
+        let mut checked = 0;
+        while checked < 8 {
+            let q = perturbed(&q0, &mut rng, 0.15);
+            let e = s.evaluate::<f64>(&q, &mut s.warm()).unwrap();
+            if !(e.v > 0.0 && e.min_beta > 0.02) {
+                continue;
+            }
+            checked += 1;
+            let (e, f) = s.field(&q, &mut s.warm()).unwrap();
+            let d2 = e.d * e.d;
+            let v = |q: &[f64]| s.evaluate::<f64>(q, &mut s.warm()).unwrap().v;
+            let scale = f.iter().map(|x| x.abs()).fold(0.0, f64::max) / d2;
+            for i in 0..q.len() {
+                let h = 1e-6;
+                let (mut qp, mut qm) = (q.clone(), q.clone());
+                qp[i] += h;
+                qm[i] -= h;
+                let fd = (v(&qp) - v(&qm)) / (2.0 * h);
+                let exact = f[i] / d2;
+                assert!(
+                    (fd - exact).abs() <= 1e-5 * scale.max(exact.abs()),
+                    "coord {i}: exact {exact:e}, fd {fd:e}"
+                );
+            }
+        }
+    }
+
+    /// b_f (Eq. 12): V vanishes exactly when a node leaves its ball, and the
+    /// start/goal check refuses such a configuration.
+    #[test]
+    fn overstraining_the_beam_zeroes_v() {
+        let q0 = table_start();
+        // The goal 2 m ahead of both robots (their heading is −y), so the
+        // dipole terms do not vanish.
+        let mut goal = q0.clone();
+        goal[1] -= 2.0;
+        goal[DOF + 1] -= 2.0;
+        let s = scene(&q0, goal, 0.5);
+        let mut q = q0.clone();
+        let mut last_v = f64::INFINITY;
+        // Pull robot 2 away along the beam: q_s grows by the same amount.
+        for step in 1..=12 {
+            q[DOF + 1] = q0[DOF + 1];
+            q[DOF] = q0[DOF] + 0.05 * step as f64;
+            let e = s.evaluate::<f64>(&q, &mut s.warm()).unwrap();
+            let stretch = grasp_distance(&q) - grasp_distance(&q0);
+            if e.overstrained {
+                assert_eq!(e.v, 0.0);
+                assert!(
+                    e.max_deformation > 0.5 / 3f64.sqrt(),
+                    "{}",
+                    e.max_deformation
+                );
+                let err = crate::planner::dilf::check_configuration(&s, &q, "goal").unwrap_err();
+                assert!(err.to_string().contains("beyond its bound"), "{err}");
+                return;
+            }
+            assert!(
+                stretch < 0.5 + 1e-9,
+                "stretched {stretch} m and still admissible"
+            );
+            assert!(e.v > 0.0 && e.v.is_finite());
+            last_v = e.v;
+        }
+        panic!("never overstrained (last V {last_v})");
+    }
+
+    /// The pair carries the beam 2 m forward (a rigid motion of the
+    /// formation, so the goal leaves the beam straight). The ideal run (RK4
+    /// on the kinematic model, independent of the potential's code) keeps
+    /// ‖q_f‖∞ within q_F and every pair apart at every sample, and closes
+    /// most of the distance within 40 s (convergence is asymptotic).
+    #[test]
+    fn the_pair_carries_the_beam_forward_within_its_bound() {
+        use crate::model::mobile_manipulator::MobileManipulator;
+        use crate::model::State;
+        use crate::planner::dilf::{self, DilfParams};
+        let q0 = table_start();
+        let mut goal = q0.clone();
+        goal[1] -= 2.0;
+        goal[DOF + 1] -= 2.0;
+        let q_max = 0.3;
+        let s = std::sync::Arc::new(scene(&q0, goal.clone(), q_max));
+        let params: DilfParams = toml::from_str(
+            "field_power = 1.75\nhorizon = 40.0\nka = [50.0, 50.0, 50.0, 300.0, 300.0, 3000.0]",
+        )
+        .unwrap();
+        let plan = dilf::plan(s.clone(), &State::from_vec(q0.clone()), &params).unwrap();
+        let model = MobileManipulator { robots: 2 };
+        let tr = crate::integrate::simulate(&model, &plan, &State::from_vec(q0.clone()), 0.01);
+        let dist = |q: &[f64]| {
+            (0..2)
+                .map(|r| (q[DOF * r] - goal[DOF * r]).hypot(q[DOF * r + 1] - goal[DOF * r + 1]))
+                .fold(0.0, f64::max)
+        };
+        let c = s.object.as_ref().unwrap();
+        for (q, t) in tr.q.iter().zip(&tr.t).step_by(10) {
+            let q = q.as_slice();
+            let st = c.state(q);
+            assert!(
+                st.max_deformation() < q_max,
+                "t = {t}: ‖q_f‖∞ = {}",
+                st.max_deformation()
+            );
+            let e = s.evaluate::<f64>(q, &mut s.warm()).unwrap();
+            assert!(e.min_beta > 0.0, "t = {t}: contact");
+        }
+        let end = tr.q.last().unwrap().as_slice();
+        assert!(
+            dist(end) < 0.1 * dist(&q0),
+            "{} of {} m left",
+            dist(end),
+            dist(&q0)
+        );
+    }
+}
