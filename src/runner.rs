@@ -5,7 +5,7 @@ use crate::compare::{compare, MetricSpec};
 use crate::error::Error;
 use crate::integrate::{simulate, Trajectory};
 use crate::model::{KinematicModel, State};
-use crate::physics::{replay, urdf, PhysicsSystem};
+use crate::physics::{replay_with, urdf, PhysicsSystem, ReplayOptions};
 use crate::plan::{Limits, Plan};
 use crate::record::{RunRecord, SimTrajectory};
 use crate::scenario::Scenario;
@@ -97,7 +97,7 @@ impl Prepared {
         let sc = &self.scenario;
         let dir = sc.urdf.parent().unwrap_or(Path::new("."));
         self.system
-            .physics(&self.robot, dir, &sc.start, &sc.sim)
+            .physics(&self.robot, dir, &sc.start, &sc.sim.physics())
             .map_err(|m| Error::input(&sc.path, m))
     }
 }
@@ -199,13 +199,19 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
     let t0 = Instant::now();
     let mut sys = prep.physics()?;
     let bar = crate::progress::Delayed::new(&sc.name, opts.progress);
-    let sim = replay(sys.as_mut(), &plan, sc.sim.dt, sc.sim.settle, &mut |f| {
-        bar.set(f)
-    })
-    .map_err(|message| Error::Physics {
-        path: sc.path.clone(),
-        message,
-    })?;
+    let replay_opts = ReplayOptions {
+        dt: sc.sim.dt,
+        settle: sc.sim.settle,
+        // Only the 3D logs read link poses.
+        link_poses: opts.log_root.is_some(),
+    };
+    let sim =
+        replay_with(sys.as_mut(), &plan, &replay_opts, &mut |f| bar.set(f)).map_err(|message| {
+            Error::Physics {
+                path: sc.path.clone(),
+                message,
+            }
+        })?;
     bar.finish();
     timings.physics = t0.elapsed().as_secs_f64();
 

@@ -32,13 +32,13 @@
 //! out-of-plane excursion (|z| of a body CoM, m, plus tilt of a body's z axis,
 //! rad) and the number of active contact pairs.
 
-use super::urdf::{SimWorld, WorldOptions};
-use super::{angles, PhysicsSystem};
+use super::rapier::prelude::*;
+use super::real::{arr, quat, r, vector};
+use super::urdf::{Drive, SimWorld, WorldOptions};
+use super::{angles, PhysicsSettings, PhysicsSystem};
 use crate::model::space_robot::SpaceRobot;
 use crate::model::{Input, State};
 use crate::record::Pose;
-use crate::scenario::SimConfig;
-use rapier3d::prelude::*;
 
 use std::path::Path;
 
@@ -58,7 +58,7 @@ pub const CHANNELS: [&str; 6] = [
 ];
 
 /// Angle about z of a rotation (exact for rotations about z).
-fn angle_z(q: &rapier3d::math::Rotation) -> f64 {
+fn angle_z(q: &super::rapier::math::Rotation) -> f64 {
     angles::about_axis(q, 2)
 }
 
@@ -159,9 +159,8 @@ pub fn check_urdf(robot: &urdf_rs::Robot, model: &SpaceRobot) -> Result<(), Stri
 pub struct SpaceRobotPhysics {
     sim: SimWorld,
     bodies: [RigidBodyHandle; 3],
-    joints: [ImpulseJointHandle; 2],
-    gain: f64,
-    max_torque: f64,
+    /// Drives of joints θ1, θ2.
+    drives: [Drive; 2],
     /// Unwrapped (θ0, θ1, θ2).
     q: [f64; 3],
     /// System CoM at the start.
@@ -172,15 +171,11 @@ pub struct SpaceRobotPhysics {
     local_com: [[f64; 3]; 3],
     /// Body inertia tensors about their CoMs in body axes.
     inertia: [[[f64; 3]; 3]; 3],
-    channels: Vec<f64>,
+    channels: [f64; CHANNELS.len()],
 }
 
-fn rot(angle: f64) -> rapier3d::math::Rotation {
-    Rotation::from_rotation_z(angle as Real)
-}
-
-fn v3(v: Vector) -> [f64; 3] {
-    [v.x as f64, v.y as f64, v.z as f64]
+fn rot(angle: f64) -> super::rapier::math::Rotation {
+    Rotation::from_rotation_z(r(angle))
 }
 
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -192,8 +187,8 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 }
 
 /// Rotate `v` by the quaternion `q` (f64).
-fn rotate(q: &rapier3d::math::Rotation, v: [f64; 3]) -> [f64; 3] {
-    let (x, y, z, w) = (q.x as f64, q.y as f64, q.z as f64, q.w as f64);
+fn rotate(q: &super::rapier::math::Rotation, v: [f64; 3]) -> [f64; 3] {
+    let [x, y, z, w] = quat(q);
     let u = [x, y, z];
     let t = cross(u, v).map(|c| 2.0 * c);
     let c = cross(u, t);
@@ -204,7 +199,7 @@ fn rotate(q: &rapier3d::math::Rotation, v: [f64; 3]) -> [f64; 3] {
     ]
 }
 
-fn conj(q: &rapier3d::math::Rotation) -> rapier3d::math::Rotation {
+fn conj(q: &super::rapier::math::Rotation) -> super::rapier::math::Rotation {
     q.inverse()
 }
 
@@ -215,7 +210,7 @@ impl SpaceRobotPhysics {
         urdf_dir: &Path,
         model: &SpaceRobot,
         start: &[f64],
-        sim: &SimConfig,
+        sim: &PhysicsSettings,
     ) -> Result<Self, String> {
         check_urdf(robot, model)?;
         if sim.gravity.iter().any(|g| *g != 0.0) {
@@ -227,15 +222,12 @@ impl SpaceRobotPhysics {
         let poses = model.body_poses(&State::from_column_slice(start));
         // Vehicle frame = vehicle CoM (joint 1).
         let p0 = poses[0].position;
-        let root = rapier3d::math::Pose::from_parts(
-            Vector::new(p0.x as Real, p0.y as Real, 0.0),
-            rot(start[0]),
-        );
+        let root = super::rapier::math::Pose::from_parts(vector(p0.x, p0.y, 0.0), rot(start[0]));
         let mut sw = SimWorld::new(
             robot,
             urdf_dir,
             &WorldOptions {
-                sim,
+                settings: sim,
                 root_pose: root,
                 ground: false,
             },
@@ -251,14 +243,10 @@ impl SpaceRobotPhysics {
         // Place the links at the start joint angles: link frames sit at the joints.
         let phi1 = start[0] + start[1];
         let joint1 = sw.world.bodies[bodies[0]].position().translation;
-        let frame1 = rapier3d::math::Pose::from_parts(joint1, rot(phi1));
+        let frame1 = super::rapier::math::Pose::from_parts(joint1, rot(phi1));
         let l1 = model.l1;
-        let joint2 = Vector::new(
-            (p0.x + l1 * phi1.cos()) as Real,
-            (p0.y + l1 * phi1.sin()) as Real,
-            0.0,
-        );
-        let frame2 = rapier3d::math::Pose::from_parts(joint2, rot(phi1 + start[2]));
+        let joint2 = vector(p0.x + l1 * phi1.cos(), p0.y + l1 * phi1.sin(), 0.0);
+        let frame2 = super::rapier::math::Pose::from_parts(joint2, rot(phi1 + start[2]));
         for (h, pose) in [(bodies[1], frame1), (bodies[2], frame2)] {
             if let Some(b) = sw.world.bodies.get_mut(h) {
                 b.set_position(pose, true);
@@ -266,6 +254,10 @@ impl SpaceRobotPhysics {
                 b.set_angvel(Vector::ZERO, true);
             }
         }
+        let drives = [
+            sw.drive_for(joints[0], JointAxis::AngX, start[1]),
+            sw.drive_for(joints[1], JointAxis::AngX, start[2]),
+        ];
         // No self-contacts at all (non-adjacent pairs included).
         let groups = InteractionGroups::new(
             Group::GROUP_1,
@@ -303,15 +295,13 @@ impl SpaceRobotPhysics {
         let mut me = SpaceRobotPhysics {
             sim: sw,
             bodies,
-            joints,
-            gain: sim.motor_gain,
-            max_torque: sim.motor_max_torque,
+            drives,
             q: [start[0], start[1], start[2]],
             com0: [0.0; 3],
             mass,
             local_com,
             inertia,
-            channels: vec![0.0; CHANNELS.len()],
+            channels: [0.0; CHANNELS.len()],
         };
         // Rapier updates world CoMs on the first step; compute them from the poses now.
         me.com0 = me.system_com();
@@ -324,7 +314,7 @@ impl SpaceRobotPhysics {
     fn body_com(&self, i: usize) -> [f64; 3] {
         let p = self.sim.world.bodies[self.bodies[i]].position();
         let c = rotate(&p.rotation, self.local_com[i]);
-        let t = v3(p.translation);
+        let t = arr(p.translation);
         [t[0] + c[0], t[1] + c[1], t[2] + c[2]]
     }
 
@@ -349,8 +339,8 @@ impl SpaceRobotPhysics {
         for (i, h) in self.bodies.iter().enumerate() {
             let b = &self.sim.world.bodies[*h];
             let m = self.mass[i];
-            let v = v3(b.linvel());
-            let w = v3(b.angvel());
+            let v = arr(b.linvel());
+            let w = arr(b.angvel());
             let c = self.body_com(i);
             let r = [c[0] - com[0], c[1] - com[1], c[2] - com[2]];
             let rv = cross(r, v);
@@ -368,7 +358,7 @@ impl SpaceRobotPhysics {
         (p, l)
     }
 
-    fn measure(&self) -> Vec<f64> {
+    fn measure(&self) -> [f64; CHANNELS.len()] {
         let (p, l) = self.momentum();
         let com = self.system_com();
         let drift = (0..3)
@@ -390,7 +380,7 @@ impl SpaceRobotPhysics {
             .contact_pairs()
             .filter(|c| c.has_any_active_contact())
             .count();
-        vec![
+        [
             l[2],
             l[0].hypot(l[1]),
             (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt(),
@@ -407,17 +397,15 @@ impl PhysicsSystem for SpaceRobotPhysics {
     }
 
     fn apply(&mut self, u: &Input) {
-        let (gain, tmax) = (self.gain, self.max_torque);
-        for (j, rate) in self.joints.into_iter().zip(u.iter()) {
-            self.sim.drive_joint(j, *rate, gain, tmax);
+        for (d, rate) in self.drives.iter_mut().zip(u.iter()) {
+            self.sim.drive(d, *rate);
         }
     }
 
     fn step(&mut self) {
         self.sim.world.step();
         let b = &self.sim.world.bodies;
-        let r: Vec<rapier3d::math::Rotation> =
-            self.bodies.iter().map(|h| *b[*h].rotation()).collect();
+        let r = self.bodies.map(|h| *b[h].rotation());
         let read = [
             angle_z(&r[0]),
             angle_z(&(conj(&r[0]) * r[1])),
@@ -438,6 +426,6 @@ impl PhysicsSystem for SpaceRobotPhysics {
     }
 
     fn channels(&self) -> Vec<f64> {
-        self.channels.clone()
+        self.channels.to_vec()
     }
 }

@@ -4,11 +4,12 @@ use super::{mismatch, System};
 use crate::model::disk::RollingDisk;
 use crate::model::{KinematicModel, State};
 use crate::physics::disk::DiskPhysics;
+use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::stokes_disk::{self, StokesDiskParams};
 use crate::planner::PlanError;
-use crate::scenario::{PlannerConfig, SimConfig};
+use crate::scenario::PlannerConfig;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -61,7 +62,7 @@ impl System for Disk {
         robot: &urdf_rs::Robot,
         urdf_dir: &Path,
         start: &[f64],
-        sim: &SimConfig,
+        sim: &PhysicsSettings,
     ) -> Result<Box<dyn PhysicsSystem>, String> {
         let p = DiskPhysics::new(robot, urdf_dir, self.model.r, start, sim)?;
         Ok(Box::new(p))

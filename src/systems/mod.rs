@@ -12,11 +12,12 @@ pub mod sphere;
 
 use crate::integrate::Trajectory;
 use crate::model::{KinematicModel, State};
+use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::PlanError;
 use crate::record::{Comparison, Overlay, SimTrajectory};
-use crate::scenario::{ModelConfig, PlannerConfig, SimConfig};
+use crate::scenario::{ModelConfig, PlannerConfig};
 use std::path::Path;
 
 /// A model, a configured planner and the physics counterpart.
@@ -42,7 +43,7 @@ pub trait System: Send + Sync {
         robot: &urdf_rs::Robot,
         urdf_dir: &Path,
         start: &[f64],
-        sim: &SimConfig,
+        sim: &PhysicsSettings,
     ) -> Result<Box<dyn PhysicsSystem>, String>;
     /// Goal heading as a world yaw (rad) for the 3D views, if the model has one.
     fn goal_heading(&self, _goal: &State) -> Option<f64> {

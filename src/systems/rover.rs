@@ -13,13 +13,14 @@ use crate::integrate::{simulate, Trajectory};
 use crate::model::rover::{RoverGeometry, SwitchingRover, SwitchingSignal};
 use crate::model::{Input, KinematicModel, State};
 use crate::physics::rover::RoverPhysics;
+use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Command, ControlLaw, Controller, Limits, Plan, PolicyFactory};
 use crate::planner::rover_primitives::{self, se2_distance, RoverPrimitiveParams};
 use crate::planner::PlanError;
 use crate::record::Comparison;
 use crate::record::{Overlay, SimTrajectory};
-use crate::scenario::{PlannerConfig, SimConfig};
+use crate::scenario::PlannerConfig;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -208,7 +209,7 @@ impl System for Rover {
         robot: &urdf_rs::Robot,
         urdf_dir: &Path,
         start: &[f64],
-        sim: &SimConfig,
+        sim: &PhysicsSettings,
     ) -> Result<Box<dyn PhysicsSystem>, String> {
         Ok(Box::new(RoverPhysics::new(
             robot,

@@ -25,6 +25,7 @@ use crate::model::space_manipulator::SpaceManipulator;
 use crate::model::space_robot::{SpaceRobot, SpaceRobotModel};
 use crate::model::{KinematicModel, State};
 use crate::physics::space_robot::SpaceRobotPhysics;
+use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::endogenous::{self, EndogenousParams};
@@ -32,7 +33,7 @@ use crate::planner::stokes_space::{self, StokesSpaceParams};
 use crate::planner::PlanError;
 use crate::record::Comparison;
 use crate::record::SimTrajectory;
-use crate::scenario::{PlannerConfig, SimConfig};
+use crate::scenario::PlannerConfig;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -154,7 +155,7 @@ impl System for Space {
         robot: &urdf_rs::Robot,
         urdf_dir: &Path,
         start: &[f64],
-        sim: &SimConfig,
+        sim: &PhysicsSettings,
     ) -> Result<Box<dyn PhysicsSystem>, String> {
         let p = SpaceRobotPhysics::new(robot, urdf_dir, &self.model.robot, start, sim)?;
         Ok(Box::new(p))
