@@ -17,6 +17,7 @@ pub mod progress;
 pub mod record;
 pub mod runner;
 pub mod scenario;
+pub mod suite;
 pub mod sweep;
 pub mod systems;
 

@@ -2,7 +2,7 @@
 
 use anholonomy::error::Error;
 use anholonomy::integrate::simulate;
-use anholonomy::runner::{run, Prepared, RunOptions, RunOutcome};
+use anholonomy::runner::{Prepared, RunOptions, RunOutcome};
 use anholonomy::scenario::{collect, Scenario};
 use clap::{Args, Parser, Subcommand};
 use std::path::PathBuf;
@@ -152,12 +152,7 @@ fn run_cmd(args: &RunArgs, gate: bool) -> Result<u8, Vec<Error>> {
     };
     let mut rows = Vec::new();
     let mut errors = Vec::new();
-    for p in &preps {
-        let res = if p.scenario.sweep.is_some() {
-            anholonomy::sweep::run_sweep(p, &opts, shard)
-        } else {
-            run(p, &opts)
-        };
+    for res in anholonomy::suite::run_all(&preps, &opts, shard) {
         match res {
             Ok(o) => rows.push(o),
             Err(e) => errors.push(e),

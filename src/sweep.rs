@@ -270,6 +270,18 @@ pub fn run_sweep(
     opts: &RunOptions,
     shard: Option<Shard>,
 ) -> Result<RunOutcome, Error> {
+    let (outcome, table) = run_sweep_report(prep, opts, shard)?;
+    print!("{table}");
+    Ok(outcome)
+}
+
+/// [`run_sweep`] without printing: the outcome and the table text (so parallel callers can
+/// print tables in a fixed order).
+pub fn run_sweep_report(
+    prep: &Prepared,
+    opts: &RunOptions,
+    shard: Option<Shard>,
+) -> Result<(RunOutcome, String), Error> {
     let t_all = Instant::now();
     let sc = &prep.scenario;
     let cfg = sc
@@ -365,7 +377,10 @@ pub fn run_sweep(
         Some([a, b, c]) => format!("{a:>9.4} {b:>9.4} {c:>9.4}"),
         None => format!("{:>9} {:>9} {:>9}", "-", "-", "-"),
     };
-    println!(
+    use std::fmt::Write as _;
+    let mut table = String::new();
+    let _ = writeln!(
+        table,
         "sweep {} ({} variants{}, {:.1} s): success {}/{} = {:.1} %",
         sc.name,
         n,
@@ -377,13 +392,23 @@ pub fn run_sweep(
         n,
         100.0 * rate
     );
-    println!("  {:<28} {:>9} {:>9} {:>9}", "", "median", "p95", "max");
-    println!(
+    let _ = writeln!(
+        table,
+        "  {:<28} {:>9} {:>9} {:>9}",
+        "", "median", "p95", "max"
+    );
+    let _ = writeln!(
+        table,
         "  {:<28} {}",
         format!("final error ({})", cfg.success_metric),
         fmt(err_d)
     );
-    println!("  {:<28} {}", "time to goal, s (successes)", fmt(time_d));
+    let _ = writeln!(
+        table,
+        "  {:<28} {}",
+        "time to goal, s (successes)",
+        fmt(time_d)
+    );
 
     let mut outcome = RunOutcome {
         name: sc.name.clone(),
@@ -437,5 +462,5 @@ pub fn run_sweep(
         })?;
         outcome.log_dir = Some(dir);
     }
-    Ok(outcome)
+    Ok((outcome, table))
 }
