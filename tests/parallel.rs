@@ -10,9 +10,10 @@ use std::process::Command;
 
 /// A shipped scenario's text with its URDF path made absolute.
 fn shipped(file: &str) -> String {
-    std::fs::read_to_string(scenario(file))
-        .unwrap()
-        .replace("../models/", &format!("{}/", root().join("models").display()))
+    std::fs::read_to_string(scenario(file)).unwrap().replace(
+        "../models/",
+        &format!("{}/", root().join("models").display()),
+    )
 }
 
 /// `check` on `dir` with `threads` rayon threads, logs under `logs`; stdout.
@@ -71,7 +72,10 @@ fn one_and_two_threads_print_and_log_the_same() {
     // Two files with one name: the later file's logs must be the ones left.
     let disk = disk_scenario(&model("rolling_disk.urdf"), "name = \"dup\"", "");
     std::fs::write(d.join("a_dup.toml"), &disk).unwrap();
-    let other = disk.replace("goal = [-0.4, 1.0, 180.0, 22.5]", "goal = [0.3, 0.5, 90.0, 10.0]");
+    let other = disk.replace(
+        "goal = [-0.4, 1.0, 180.0, 22.5]",
+        "goal = [0.3, 0.5, 90.0, 10.0]",
+    );
     std::fs::write(d.join("b_dup.toml"), other).unwrap();
 
     let one = check(d, "1", "logs1");
