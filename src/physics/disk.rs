@@ -1,9 +1,9 @@
 //! Rigid-body rolling disk: `models/rolling_disk.urdf` on a ground plane.
 //!
-//! The wheel joint's velocity motor realises θ'. A joint between the world
-//! and the yoke locks roll and pitch (the balance controller the paper takes
-//! for granted) and servoes the yaw rate to −α' (α is measured from +y
-//! towards +x, yaw from +x towards +y: yaw = π/2 − α). Translation is free:
+//! The wheel joint's servo drive realises θ'. A joint between the world and
+//! the yoke locks roll and pitch (the balance controller the paper takes for
+//! granted) and drives the yaw with −α' (α is measured from +y towards +x,
+//! yaw from +x towards +y: yaw = π/2 − α). Translation is free:
 //! the disk moves only through wheel–ground friction.
 
 use super::rapier::prelude::*;

@@ -6,9 +6,9 @@
 //! which rear axle holds and which one slips (σ of the seed's multiple-model
 //! system) is decided by the contact solver.
 //!
-//! Actuation: a velocity motor on `front_wheel_joint` at u1 / ρ (u1 is the
-//! front wheel's ground speed) and a velocity motor on `steer_joint` at u2
-//! (the URDF joint limit bounds ψ). Read-back: (x, y, θ) of the chassis
+//! Actuation: servo drives on `front_wheel_joint` at u1 / ρ (u1 is the
+//! front wheel's ground speed) and on `steer_joint` at u2 (the URDF joint
+//! limit bounds ψ and the drive's commanded angle). Read-back: (x, y, θ) of the chassis
 //! frame, whose origin is the middle-axle centre (the model's reference
 //! point), and ψ the steering joint angle.
 //!

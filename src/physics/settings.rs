@@ -19,7 +19,7 @@ pub struct PhysicsSettings {
     pub friction: f64,
     /// Gravity, m/s².
     pub gravity: [f64; 3],
-    /// Maximum torque of each velocity motor, N·m.
+    /// Maximum torque of each joint drive (motor), N·m.
     pub motor_max_torque: f64,
     /// Velocity motor gain (Rapier's motor damping factor); higher tracks tighter.
     pub motor_gain: f64,

@@ -1,22 +1,23 @@
 //! Rigid-body free-floating space robot: `models/space_robot.urdf` in Rapier.
 //!
 //! Design (measured choices, see the scenarios and `tests/space_robot.rs`):
-//! * **Impulse joints** (rapier3d-urdf `insert_using_impulse_joints`): every
-//!   joint impulse acts equally and oppositely on two bodies, so the solver
-//!   conserves the system's linear and angular momentum up to f32 round-off.
-//!   Multibody joints drifted ~0.3 % in base attitude and injected momentum
-//!   in an earlier prototype (not re-measured here), so they are not used.
-//!   The remaining leak is small and grows with the solver iteration count
-//!   (substeps): max |L_z| on `space_robot_paper` measured 3.0e-4, 4.7e-4,
-//!   9.2e-4, 1.9e-3 kg m²/s for 4, 8, 16, 32 iterations (the vehicle alone
-//!   carries up to ~0.7 kg m²/s), so the scenarios keep Rapier's default 4.
+//! * **Impulse joints** ([`super::world`]): every joint impulse acts equally
+//!   and oppositely on two bodies, so the solver conserves the system's
+//!   linear and angular momentum. Multibody joints drifted ~0.3 % in base
+//!   attitude and injected momentum in an earlier prototype (not re-measured
+//!   here), so they are not used. What leaks (f32 round-off, Rapier's relax
+//!   pass, several substeps with position-targeting drives) is measured in
+//!   the README's space-robot section; with f64, one substep, 4 sweeps and no
+//!   relax pass (no ground) max |L_z| on `space_robot_paper` is 1.5e-6
+//!   kg m²/s (the vehicle alone carries up to ~0.7 kg m²/s).
 //! * No ground, **gravity must be zero**, bodies never sleep. Nothing holds
-//!   the vehicle: θ0 changes only because the joint motors exchange angular
+//!   the vehicle: θ0 changes only because the joint drives exchange angular
 //!   momentum between the bodies.
-//! * Joints θ1, θ2 are driven by velocity motors (the model inputs θ1', θ2').
+//! * Joints θ1, θ2 have servo drives ([`super::world::Drive`]) for the model
+//!   inputs θ1', θ2'.
 //! * **All robot self-contacts are disabled**: the loader already skips the
-//!   jointed pairs (vehicle/link 1, link 1/link 2: `enable_joint_collisions`
-//!   is false), and the non-adjacent pair vehicle/link 2 is excluded with
+//!   jointed pairs (vehicle/link 1, link 1/link 2: its joints have contacts
+//!   disabled), and the non-adjacent pair vehicle/link 2 is excluded with
 //!   collision groups (the arm may fold over the vehicle; the kinematic model
 //!   has no contacts). The `contact_pairs` channel counts active contact
 //!   pairs every step so a scenario can assert it stays 0.
@@ -264,14 +265,8 @@ impl SpaceRobotPhysics {
             Group::ALL.difference(Group::GROUP_1),
             InteractionTestMode::And,
         );
-        for h in bodies {
-            let colliders: Vec<ColliderHandle> = sw.world.bodies[h].colliders().to_vec();
-            for c in colliders {
-                if let Some(c) = sw.world.colliders.get_mut(c) {
-                    c.set_collision_groups(groups);
-                }
-            }
-        }
+        let colliders = sw.colliders.clone();
+        sw.set_collision_groups(&colliders, groups);
         // Mass properties as written in the URDF (checked against the model
         // above; Rapier computes its own copy only on the first step).
         let mut mass = [0.0; 3];
