@@ -1,4 +1,4 @@
-//! Rolling-disk benchmarks: physics step rate, plan + ideal run, full pipeline.
+//! Rolling-disk benchmarks: physics step rate, plan + ideal run, full run of a validated scenario.
 //!
 //! `cargo bench --bench disk`. Medians are quoted in the README.
 
@@ -43,7 +43,8 @@ fn full_run(c: &mut Criterion) {
     };
     let mut g = c.benchmark_group("disk_paper_full_run");
     g.sample_size(10);
-    g.bench_function("plan_ideal_physics_logs", |b| {
+    // The plan was made by validation (`prepared`); `run` replays it.
+    g.bench_function("ideal_physics_logs", |b| {
         b.iter(|| run(&prep, &opts).expect("run"))
     });
     g.finish();

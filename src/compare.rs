@@ -91,6 +91,15 @@ pub fn stats(series: &[f64]) -> (f64, f64, f64) {
     (rms, max, series[series.len() - 1].abs())
 }
 
+/// The metric names and units of a model.
+pub fn metric_spec(model: &dyn crate::model::KinematicModel) -> MetricSpec<'_> {
+    MetricSpec {
+        names: model.state_names(),
+        angular: model.angular_states(),
+        position: model.position_states(),
+    }
+}
+
 /// Everything needed to name and compute metrics for one model.
 pub struct MetricSpec<'a> {
     /// State coordinate names.

@@ -16,11 +16,15 @@ pub enum Error {
         /// One-line description naming the key.
         message: String,
     },
-    /// The planner refused the task.
-    #[error("{path}: planner: {source}")]
+    /// The planner refused the task (bad input: exit 2).
+    #[error("{path}{}: key `{key}`: planner: {source}", .line.map(|l| format!(":{l}")).unwrap_or_default())]
     Plan {
         /// Scenario file.
         path: PathBuf,
+        /// 1-based line of `key`, when it is written in the file.
+        line: Option<usize>,
+        /// The scenario key the refusal is about (`planner.<parameter>`, `goal`, `planner`).
+        key: String,
         /// Reason.
         source: crate::planner::PlanError,
     },

@@ -1,24 +1,44 @@
 //! anholonomy: validation harness for nonholonomic motion planners.
 //!
-//! Pipeline: [`scenario`] → [`planner`] → [`plan`] → ideal run
-//! ([`integrate`], RK4 on a [`model`]) → physics replay ([`physics`], Rapier
-//! with a URDF) → [`compare`] → logs ([`log`]: MCAP, Rerun, summary.json).
-//! [`runner`] strings the stages together for one scenario.
+//! Pipeline: [`scenario`] (TOML → typed configuration) → [`validate`] (every
+//! scenario of a call checked, planned and its physics built before anything
+//! runs) → [`runner`]: ideal run ([`integrate`], RK4 on a [`model`]) →
+//! physics replay ([`physics`], Rapier with a URDF) → [`compare`] → logs
+//! ([`log`]: MCAP, Rerun, summary.json, written as one unit); [`sweep`] runs
+//! Monte Carlo variants. Configuration flows one way: [`systems`],
+//! [`planner`], [`model`] and [`physics`] define their own plain parameter
+//! types and never import [`scenario`].
 
+pub mod baseline;
 pub mod compare;
 pub mod error;
+pub mod input;
 pub mod integrate;
+pub mod junit;
 pub mod log;
 pub mod model;
+pub mod paper;
 pub mod physics;
 pub mod plan;
 pub mod planner;
 pub mod progress;
 pub mod record;
+pub mod report;
 pub mod runner;
 pub mod scenario;
 pub mod suite;
 pub mod sweep;
 pub mod systems;
+pub mod validate;
 
 pub use error::Error;
+
+/// `println!` for command output that ignores a closed stdout (`| head`)
+/// instead of panicking.
+#[macro_export]
+macro_rules! say {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout().lock(), $($t)*);
+    }};
+}

@@ -1,20 +1,32 @@
 //! `anholonomy` command-line interface.
 
+use anholonomy::baseline::{self, Baseline, Delta};
 use anholonomy::error::Error;
 use anholonomy::integrate::simulate;
-use anholonomy::runner::{Prepared, RunOptions, RunOutcome};
-use anholonomy::scenario::{collect, Scenario};
+use anholonomy::junit::{self, CaseResult};
+use anholonomy::runner::{RunOptions, RunOutcome};
+use anholonomy::say;
+use anholonomy::validate::{prepare_all, prepare_each, Call};
 use clap::{Args, Parser, Subcommand};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::time::Instant;
 
 /// Does the plan survive physics? Plans nonholonomic motions, integrates them
 /// on the ideal kinematic model, replays the same commands on a rigid-body
 /// model in Rapier (loaded from URDF, with contact and friction), compares
 /// the two and logs everything to MCAP (Foxglove) and Rerun (.rrd).
 ///
-/// Exit status: 0 success, 1 a threshold was broken (`check`), 2 bad input
-/// (scenario, URDF, or a goal the planner cannot reach), 3 runtime failure.
+/// Every scenario of a call is validated (files, TOML, URDF, names, plan,
+/// physics at the start pose, baselines) before anything runs or is written.
+/// Paths are relative to the working directory; paths inside a scenario file
+/// are relative to that file.
+///
+/// Exit status: 0 success, 1 a threshold was broken or a metric regressed
+/// against its baseline (`check`), 2 bad input (scenario, URDF, baseline
+/// file, a goal the planner cannot reach, an unwritable `--junit` path, a log
+/// directory `report` cannot read: one line per error, `error: FILE:LINE:
+/// key ...`, nothing written), 3 runtime failure.
 #[derive(Parser)]
 #[command(name = "anholonomy", version, about, long_about)]
 struct Cli {
@@ -27,16 +39,45 @@ enum Cmd {
     /// Run scenarios end to end and print a results table.
     ///
     /// For each scenario: plan, ideal run, physics replay, comparison, and
-    /// logs in LOGS/<scenario>/ (run.mcap, run.rrd, summary.json).
-    /// Broken thresholds are reported in the table but do not change the
-    /// exit status (use `check` for that).
+    /// logs in LOGS/<scenario>/ (run.mcap, run.rrd, summary.json), which
+    /// replace the previous run's files as one unit. A scenario with a
+    /// [sweep] table runs its Monte Carlo variants instead (LOGS/<scenario>/
+    /// sweep.json). Broken thresholds are reported in the table but do not
+    /// change the exit status (use `check` for that).
     Run(RunArgs),
-    /// Like `run`, but exit with status 1 when any scenario breaks a threshold (for CI).
+    /// Run scenarios like `run` and exit with status 1 when any breaks a threshold or, with
+    /// `--baseline DIR`, when any metric regressed against its baseline (for CI).
+    ///
+    /// Every metric named in a scenario's [thresholds] table must stay at or
+    /// below its value and every one in [minimums] at or above it (a NaN
+    /// metric breaks it); a sweep must reach its `min_success_rate`. Broken
+    /// thresholds are listed in the table's result column and counted on
+    /// stderr; regressions are printed as a table scenario / metric /
+    /// baseline / now / change.
+    ///
+    /// Exit status: 0 all thresholds met and nothing regressed, 1 otherwise,
+    /// 2 bad input (nothing ran), 3 runtime failure. Typical CI use:
+    /// `anholonomy check scenarios/ --baseline baselines/ --junit report.xml --report --quiet`.
     Check(RunArgs),
+    /// Run scenarios and write their baselines (one JSON per scenario) into `--baseline DIR`
+    /// (default `baselines/`); same as `check --update-baseline` without the gate.
+    Baseline(RunArgs),
+    /// Write the HTML report of a log directory: LOGDIR/index.html and
+    /// LOGDIR/<scenario>/report.html (self-contained: inline SVG figures).
+    Report {
+        /// Log directory written by `run`/`check` (default `logs`).
+        #[arg(default_value = "logs")]
+        logdir: PathBuf,
+    },
     /// Plan one scenario without physics and print the plan.
     ///
-    /// Prints the segments, their timing and the planner's derived numbers,
-    /// and the ideal final state reached by integrating the plan.
+    /// The scenario is validated as for `run` (URDF, physics at the start
+    /// pose, [sweep] table included). Prints the segments with their timing,
+    /// the planner's derived numbers (`details`) and the ideal final state
+    /// reached by integrating the plan with RK4 at `sim.dt`. Nothing is
+    /// written. With --json the same as one JSON object (state and input
+    /// names, duration_s, labels, segments, details, ideal_final_state in SI
+    /// units, angles in radians); it is identical across runs.
     Plan {
         /// Scenario file.
         file: PathBuf,
@@ -44,19 +85,24 @@ enum Cmd {
         #[arg(long)]
         json: bool,
     },
-    /// List scenarios (default: the scenarios/ directory) with model and planner.
+    /// List scenarios with model, planner and description.
+    ///
+    /// Scenarios go through the same validation as `run` (so `list` also
+    /// tells whether they would run). Valid scenarios are listed on stdout;
+    /// each invalid one is reported on stderr (`error: FILE:LINE: ...`) and
+    /// the exit status is then 2.
     List {
-        /// Scenario files or directories.
+        /// Scenario files or directories (*.toml, not recursive) [default: scenarios/].
         paths: Vec<PathBuf>,
     },
 }
 
 #[derive(Args)]
 struct RunArgs {
-    /// Scenario files, or directories whose *.toml files are all run (sorted).
+    /// Scenario files, or directories whose *.toml files (not hidden ones) are all run (sorted).
     #[arg(required = true)]
     paths: Vec<PathBuf>,
-    /// Directory for run logs.
+    /// Directory for run logs (created if needed; LOGS/<scenario>/ per scenario).
     #[arg(long, default_value = "logs")]
     logs: PathBuf,
     /// Do not write any log files.
@@ -65,26 +111,33 @@ struct RunArgs {
     /// Never show progress bars.
     #[arg(long)]
     quiet: bool,
-    /// Sweep scenarios only: run the variants with index % N == I (writes sweep-shard-I-of-N.json).
+    /// Sweep scenarios only: run the variants with index % N == I and write
+    /// LOGS/<scenario>/sweep-shard-I-of-N.json. Every scenario of the call
+    /// must have a [sweep] table (others are an error, exit 2).
     #[arg(long, value_name = "I/N")]
     shard: Option<String>,
+    /// Compare every metric with the baselines in DIR (DIR/<scenario>.json); `check` exits 1
+    /// on a regression. All baselines are read before anything runs.
+    #[arg(long, value_name = "DIR")]
+    baseline: Option<PathBuf>,
+    /// Write the baselines from this run (into --baseline DIR, default baselines/) instead of
+    /// comparing.
+    #[arg(long)]
+    update_baseline: bool,
+    /// Write a JUnit XML report to FILE (one testcase per scenario).
+    #[arg(long, value_name = "FILE")]
+    junit: Option<PathBuf>,
+    /// Also write the HTML report of this run into the log directory.
+    #[arg(long)]
+    report: bool,
 }
 
-fn load_all(paths: &[PathBuf]) -> Result<Vec<Prepared>, Vec<Error>> {
-    let files = collect(paths).map_err(|e| vec![e])?;
-    let mut ok = Vec::new();
-    let mut errs = Vec::new();
-    for f in files {
-        match Scenario::load(&f).and_then(Prepared::new) {
-            Ok(p) => ok.push(p),
-            Err(e) => errs.push(e),
-        }
-    }
-    if errs.is_empty() {
-        Ok(ok)
-    } else {
-        Err(errs)
-    }
+/// What `run_cmd` does with the baselines.
+#[derive(Clone, Copy, PartialEq)]
+enum Mode {
+    Run,
+    Check,
+    WriteBaselines,
 }
 
 fn fmt_metric(o: &RunOutcome, name: &str) -> String {
@@ -102,7 +155,7 @@ fn primary(o: &RunOutcome) -> Option<&str> {
 }
 
 fn print_table(rows: &[RunOutcome]) {
-    println!(
+    say!(
         "{:<30} {:<17} {:>7} {:>9} {:>7} {:>14} {:>10} {:>10} {:>10} {:>10}  result",
         "scenario",
         "planner",
@@ -117,7 +170,7 @@ fn print_table(rows: &[RunOutcome]) {
     );
     for o in rows {
         let c = primary(o).unwrap_or("-");
-        println!(
+        say!(
             "{:<30} {:<17} {:>7} {:>9.0} {:>7.3} {:>14} {:>10} {:>10} {:>10} {:>10}  {}",
             o.name,
             o.planner,
@@ -138,46 +191,251 @@ fn print_table(rows: &[RunOutcome]) {
     }
 }
 
-fn run_cmd(args: &RunArgs, gate: bool) -> Result<u8, Vec<Error>> {
-    let preps = load_all(&args.paths)?;
-    let opts = RunOptions {
-        log_root: (!args.no_logs).then(|| args.logs.clone()),
-        progress: !args.quiet,
+/// Options that only make sense together are checked before anything runs.
+fn check_options(args: &RunArgs, mode: Mode) -> Result<Option<PathBuf>, Vec<Error>> {
+    let bad = |opt: &str, m: &str| vec![Error::input(opt, m)];
+    let updating = args.update_baseline || mode == Mode::WriteBaselines;
+    let dir = args
+        .baseline
+        .clone()
+        .or_else(|| updating.then(|| PathBuf::from("baselines")));
+    if args.shard.is_some() && dir.is_some() {
+        return Err(bad(
+            "--shard",
+            "baselines need the whole sweep: do not combine --shard with --baseline/--update-baseline",
+        ));
+    }
+    if args.report && args.no_logs {
+        return Err(bad(
+            "--report",
+            "the report is written into the logs: drop --no-logs",
+        ));
+    }
+    if let Some(d) = &dir {
+        if d.exists() && !d.is_dir() {
+            return Err(vec![Error::input(
+                d,
+                "option `--baseline`: not a directory",
+            )]);
+        }
+    }
+    if let Some(j) = &args.junit {
+        junit::check_writable(j).map_err(|e| vec![e])?;
+    }
+    Ok(dir)
+}
+
+/// `regression.json` next to the run's logs (read by the report); removed when no
+/// comparison was made so a stale one is never shown.
+fn record_regression(o: &RunOutcome, deltas: Option<&[Delta]>) -> Result<(), Error> {
+    let Some(dir) = &o.log_dir else {
+        return Ok(());
     };
+    let path = dir.join("regression.json");
+    let log_err = |message: String| Error::Log {
+        path: path.clone(),
+        message,
+    };
+    match deltas {
+        Some(d) => anholonomy::runner::write_atomic(&path, |w| {
+            serde_json::to_writer_pretty(w, d).map_err(std::io::Error::other)
+        })
+        .map_err(log_err),
+        None => match std::fs::remove_file(&path) {
+            Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(log_err(e.to_string())),
+            _ => Ok(()),
+        },
+    }
+}
+
+/// A scenario's outcome, or its error and wall time (s) for JUnit.
+type Outcome = Result<RunOutcome, (Error, f64)>;
+
+fn run_cmd(args: &RunArgs, mode: Mode) -> Result<u8, Vec<Error>> {
+    let t_all = Instant::now();
     let shard = match &args.shard {
         Some(s) => {
             Some(anholonomy::sweep::Shard::parse(s).map_err(|m| vec![Error::input("--shard", m)])?)
         }
         None => None,
     };
+    let log_root = (!args.no_logs).then(|| args.logs.clone());
+    let call = Call {
+        log_root: log_root.as_deref(),
+        sharded: shard.is_some(),
+    };
+    let preps = prepare_all(&args.paths, &call)?;
+    let base_dir = check_options(args, mode)?;
+    let updating = args.update_baseline || mode == Mode::WriteBaselines;
+    // Every baseline is read (and checked) before anything runs.
+    let baselines: Vec<Option<Baseline>> = match (&base_dir, updating) {
+        (Some(dir), false) => {
+            let mut out = Vec::new();
+            let mut errs = Vec::new();
+            for p in &preps {
+                let path = baseline::path_for(dir, &p.scenario.name);
+                match Baseline::load(&path, &p.scenario.name, p.scenario.planner.kind()) {
+                    Ok(b) => out.push(Some(b)),
+                    Err(e) => errs.push(e),
+                }
+            }
+            if !errs.is_empty() {
+                return Err(errs);
+            }
+            out
+        }
+        _ => preps.iter().map(|_| None).collect(),
+    };
+    let opts = RunOptions {
+        log_root,
+        progress: !args.quiet,
+    };
     let mut rows = Vec::new();
-    let mut errors = Vec::new();
-    for res in anholonomy::suite::run_all(&preps, &opts, shard) {
+    let mut results: Vec<(usize, Outcome)> = Vec::new();
+    // Independent scenarios run in parallel; results come back in input order.
+    let ran = anholonomy::suite::run_all(&preps, &opts, shard);
+    for (i, (res, wall)) in ran.into_iter().enumerate() {
         match res {
-            Ok(o) => rows.push(o),
-            Err(e) => errors.push(e),
+            Ok(o) => {
+                rows.push(o.clone());
+                results.push((i, Ok(o)));
+            }
+            Err(e) => results.push((i, Err((e, wall)))),
         }
     }
     print_table(&rows);
+
+    // Baselines: compare or write.
+    let mut deltas: Vec<Option<Vec<Delta>>> = results.iter().map(|_| None).collect();
+    let mut errors = Vec::new();
+    for (k, (i, res)) in results.iter().enumerate() {
+        let Ok(o) = res else { continue };
+        let p = &preps[*i];
+        if let (Some(dir), true) = (&base_dir, updating) {
+            let path = baseline::path_for(dir, &o.name);
+            if let Err(m) = Baseline::from_outcome(o).write(&path) {
+                errors.push(Error::Log { path, message: m });
+            }
+        } else if let Some(b) = &baselines[*i] {
+            let d = baseline::compare(b, o, &p.scenario.regression, |m| {
+                baseline::direction(p.system.as_ref(), m)
+            });
+            deltas[k] = Some(d);
+        }
+        if let Err(e) = record_regression(o, deltas[k].as_deref()) {
+            errors.push(e);
+        }
+    }
+    let mut regressed = 0;
+    if base_dir.is_some() && !updating {
+        let table: Vec<(String, Vec<Delta>)> = results
+            .iter()
+            .zip(&deltas)
+            .filter_map(|((_, r), d)| Some((r.as_ref().ok()?.name.clone(), d.clone()?)))
+            .collect();
+        regressed = table
+            .iter()
+            .filter(|(_, d)| d.iter().any(|d| d.status.fails()))
+            .count();
+        say!(
+            "\nbaseline comparison ({}):",
+            base_dir
+                .as_ref()
+                .map(|d| d.display().to_string())
+                .unwrap_or_default()
+        );
+        say!("{}", baseline::format_table(&table).trim_end());
+    } else if let (Some(dir), true) = (&base_dir, updating) {
+        let n = results.iter().filter(|(_, r)| r.is_ok()).count();
+        say!("wrote {n} baseline(s) to {}", dir.display());
+    }
+
+    if let Some(path) = &args.junit {
+        let cases: Vec<CaseResult<'_>> = results
+            .iter()
+            .zip(&deltas)
+            .map(|((i, r), d)| match r {
+                Ok(o) => CaseResult::Ran {
+                    outcome: o,
+                    deltas: d.as_deref(),
+                    sweep: preps[*i].scenario.sweep.is_some(),
+                },
+                Err((e, wall)) => CaseResult::Failed {
+                    name: &preps[*i].scenario.name,
+                    planner: preps[*i].scenario.planner.kind(),
+                    error: e,
+                    wall_s: *wall,
+                },
+            })
+            .collect();
+        let rep = junit::report(&cases, t_all.elapsed().as_secs_f64());
+        if let Err(m) = junit::write(path, &rep) {
+            errors.push(Error::Log {
+                path: path.clone(),
+                message: m,
+            });
+        }
+    }
+    if args.report {
+        let names: Vec<String> = rows.iter().map(|o| o.name.clone()).collect();
+        match anholonomy::report::write_report(&args.logs, Some(&names)) {
+            Ok(n) => say!(
+                "report: {} ({n} scenarios)",
+                args.logs.join("index.html").display()
+            ),
+            Err(e) => errors.push(e),
+        }
+    }
+    errors.extend(
+        results
+            .into_iter()
+            .filter_map(|(_, r)| r.err().map(|(e, _)| e)),
+    );
     if !errors.is_empty() {
         return Err(errors);
     }
     let failed = rows.iter().filter(|o| !o.passed).count();
-    if gate && failed > 0 {
-        eprintln!("{failed} of {} scenarios broke a threshold", rows.len());
+    if mode == Mode::Check && (failed > 0 || regressed > 0) {
+        if failed > 0 {
+            eprintln!("{failed} of {} scenarios broke a threshold", rows.len());
+        }
+        if regressed > 0 {
+            eprintln!(
+                "{regressed} of {} scenarios regressed against their baseline",
+                rows.len()
+            );
+        }
         return Ok(1);
     }
     Ok(0)
 }
 
+fn report_cmd(logdir: &Path) -> Result<u8, Vec<Error>> {
+    let t0 = Instant::now();
+    let n = anholonomy::report::write_report(logdir, None).map_err(|e| vec![e])?;
+    say!(
+        "report: {} ({n} scenarios, {:.2} s)",
+        logdir.join("index.html").display(),
+        t0.elapsed().as_secs_f64()
+    );
+    Ok(0)
+}
+
 fn plan_cmd(file: &std::path::Path, as_json: bool) -> Result<u8, Vec<Error>> {
-    let prep = Scenario::load(file)
-        .and_then(Prepared::new)
-        .map_err(|e| vec![e])?;
-    let plan = prep.plan().map_err(|e| vec![e])?;
+    if file.is_dir() {
+        return Err(vec![Error::input(
+            file,
+            "`plan` takes one scenario file, not a directory",
+        )]);
+    }
+    let preps = prepare_all(&[file.to_path_buf()], &Call::default())?;
+    let prep = &preps[0];
+    let plan = &prep.planned;
     let (start, _goal) = prep.start_goal();
-    let ideal = simulate(prep.model(), &plan, &start, prep.scenario.sim.dt);
+    let ideal = simulate(prep.model(), plan, &start, prep.scenario.sim.dt);
     let fin: Vec<f64> = ideal.last().iter().copied().collect();
+    let (_, goal) = prep.start_goal();
+    let paper = prep.system.paper(&start, &goal, plan);
     if as_json {
         let v = serde_json::json!({
             "scenario": prep.scenario.name,
@@ -189,25 +447,29 @@ fn plan_cmd(file: &std::path::Path, as_json: bool) -> Result<u8, Vec<Error>> {
             "segments": plan.segments,
             "details": plan.details,
             "ideal_final_state": fin,
+            "paper": paper,
         });
-        println!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
+        say!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
     } else {
-        println!(
+        say!(
             "{} ({}), duration {:.3} s",
             prep.scenario.name,
             prep.scenario.planner.kind(),
             plan.duration
         );
         for s in &plan.segments {
-            println!(
+            say!(
                 "  {:>8.3} – {:>8.3} s  {}",
                 s.start,
                 s.end,
                 plan.label_name(s.label)
             );
         }
-        println!("  details: {}", plan.details);
-        println!("  ideal final state: {fin:?}");
+        say!("  details: {}", plan.details);
+        say!("  ideal final state: {fin:?}");
+        if !paper.is_empty() {
+            say!("{}", anholonomy::paper::format_table(&paper).trim_end());
+        }
     }
     Ok(0)
 }
@@ -218,34 +480,39 @@ fn list_cmd(paths: &[PathBuf]) -> Result<u8, Vec<Error>> {
     } else {
         paths.to_vec()
     };
-    let files = collect(&paths).map_err(|e| vec![e])?;
-    println!(
-        "{:<26} {:<14} {:<14} description",
-        "scenario", "model", "planner"
-    );
-    for f in files {
-        match Scenario::load(&f) {
-            Ok(s) => {
-                let model = s.model.kind();
-                println!(
-                    "{:<26} {:<14} {:<14} {}",
-                    s.name,
-                    model,
-                    s.planner.kind(),
-                    s.description
-                );
-            }
-            Err(e) => println!("{:<26} error: {e}", f.display()),
-        }
+    let (preps, errors) = prepare_each(&paths, &Call::default());
+    if !preps.is_empty() {
+        say!(
+            "{:<30} {:<14} {:<17} description",
+            "scenario",
+            "model",
+            "planner"
+        );
     }
-    Ok(0)
+    for p in &preps {
+        let s = &p.scenario;
+        say!(
+            "{:<30} {:<14} {:<17} {}",
+            s.name,
+            s.model.kind(),
+            s.planner.kind(),
+            s.description
+        );
+    }
+    if errors.is_empty() {
+        Ok(0)
+    } else {
+        Err(errors)
+    }
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let res = match &cli.cmd {
-        Cmd::Run(a) => run_cmd(a, false),
-        Cmd::Check(a) => run_cmd(a, true),
+        Cmd::Run(a) => run_cmd(a, Mode::Run),
+        Cmd::Check(a) => run_cmd(a, Mode::Check),
+        Cmd::Baseline(a) => run_cmd(a, Mode::WriteBaselines),
+        Cmd::Report { logdir } => report_cmd(logdir),
         Cmd::Plan { file, json } => plan_cmd(file, *json),
         Cmd::List { paths } => list_cmd(paths),
     };

@@ -77,6 +77,34 @@ impl SimTrajectory {
     }
 }
 
+/// A named time series computed after the run by the system (e.g. the
+/// planner's potential along each run), on its own time grid.
+#[derive(Debug, Clone, Default, PartialEq, Serialize)]
+pub struct Series {
+    /// Name, `/`-separated (e.g. `V/ideal`).
+    pub name: String,
+    /// Sample times, s.
+    pub t: Vec<f64>,
+    /// Values.
+    pub values: Vec<f64>,
+}
+
+impl Series {
+    /// An empty series.
+    pub fn new(name: String) -> Self {
+        Series {
+            name,
+            ..Default::default()
+        }
+    }
+
+    /// Append a sample.
+    pub fn push(&mut self, t: f64, v: f64) {
+        self.t.push(t);
+        self.values.push(v);
+    }
+}
+
 /// Errors of the simulated run against the ideal run on one time grid.
 #[derive(Debug, Clone, Default, Serialize)]
 pub struct Comparison {
@@ -119,6 +147,8 @@ pub struct RunRecord<'a> {
     pub goal_heading: Option<f64>,
     /// Extra polylines for the 3D views.
     pub overlays: &'a [Overlay],
+    /// System series (e.g. the potential along each run).
+    pub series: &'a [Series],
     /// Label names (plan segments / primitives).
     pub labels: &'a [String],
     /// The ideal kinematic run.

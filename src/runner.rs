@@ -1,115 +1,22 @@
-//! The pipeline for one scenario: validate → plan → ideal run → physics
-//! replay → compare → thresholds → logs.
+//! The pipeline for one prepared scenario (see [`crate::validate`], which
+//! already planned it): ideal run → physics replay → compare → thresholds →
+//! logs (one unit, [`crate::log::unit`]).
 
-use crate::compare::{compare, MetricSpec};
+use crate::compare::compare;
 use crate::error::Error;
 use crate::integrate::{simulate, Trajectory};
+use crate::log::unit::LogUnit;
 use crate::model::{KinematicModel, State};
-use crate::physics::{replay_with, urdf, PhysicsSystem, ReplayOptions};
-use crate::plan::{Limits, Plan};
+use crate::physics::{replay_with, urdf, ReplayOptions};
+use crate::plan::Plan;
 use crate::record::{RunRecord, SimTrajectory};
-use crate::scenario::Scenario;
-use crate::systems::{self, System};
 use serde::Serialize;
 use serde_json::json;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-/// A scenario with its model and URDF loaded and its thresholds checked.
-pub struct Prepared {
-    /// The scenario.
-    pub scenario: Scenario,
-    /// Model, planner and physics counterpart.
-    pub system: Box<dyn System>,
-    /// Parsed, validated URDF.
-    pub robot: urdf_rs::Robot,
-}
-
-impl Prepared {
-    /// Load everything a run needs; every failure here is a user input error.
-    pub fn new(scenario: Scenario) -> Result<Prepared, Error> {
-        let robot = urdf::read(&scenario.urdf).map_err(|m| Error::input(&scenario.urdf, m))?;
-        let system = systems::build(&scenario.model, &scenario.planner)
-            .map_err(|m| Error::input(&scenario.path, m))?;
-        let mut known = metric_spec(system.model()).names();
-        known.extend(system.extra_metric_names());
-        for k in scenario.thresholds.keys() {
-            if !known.contains(k) {
-                return Err(Error::input(
-                    &scenario.path,
-                    format!(
-                        "key `thresholds.{k}`: unknown metric; known: {}",
-                        known.join(", ")
-                    ),
-                ));
-            }
-        }
-        Ok(Prepared {
-            scenario,
-            system,
-            robot,
-        })
-    }
-
-    /// The kinematic model.
-    pub fn model(&self) -> &dyn KinematicModel {
-        self.system.model()
-    }
-
-    /// Start and goal as model states.
-    pub fn start_goal(&self) -> (State, State) {
-        (
-            State::from_vec(self.scenario.start.clone()),
-            State::from_vec(self.scenario.goal.clone()),
-        )
-    }
-
-    /// Run the planner.
-    pub fn plan(&self) -> Result<Plan, Error> {
-        let sc = &self.scenario;
-        let (start, goal) = self.start_goal();
-        let limits = Limits {
-            max_rate: sc.max_rate.clone(),
-            ramp: sc.ramp,
-            step: sc.sim.dt,
-        };
-        let plan = self
-            .system
-            .plan(&start, &goal, &limits)
-            .map_err(|source| Error::Plan {
-                path: sc.path.clone(),
-                source,
-            })?;
-        if !plan.duration.is_finite() || plan.duration > 1e6 {
-            return Err(Error::Plan {
-                path: sc.path.clone(),
-                source: crate::planner::PlanError::Unreachable(format!(
-                    "plan duration {} s is not usable",
-                    plan.duration
-                )),
-            });
-        }
-        Ok(plan)
-    }
-
-    /// Build the physics counterpart at the start state.
-    pub fn physics(&self) -> Result<Box<dyn PhysicsSystem>, Error> {
-        let sc = &self.scenario;
-        let dir = sc.urdf.parent().unwrap_or(Path::new("."));
-        self.system
-            .physics(&self.robot, dir, &sc.start, &sc.sim.physics())
-            .map_err(|m| Error::input(&sc.path, m))
-    }
-}
-
-/// The metric names and units of a model.
-pub fn metric_spec(model: &dyn KinematicModel) -> MetricSpec<'_> {
-    MetricSpec {
-        names: model.state_names(),
-        angular: model.angular_states(),
-        position: model.position_states(),
-    }
-}
+pub use crate::compare::metric_spec;
+pub use crate::validate::Prepared;
 
 /// Where logs go, and whether to show progress.
 #[derive(Debug, Clone)]
@@ -188,12 +95,12 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
     let (start, goal) = prep.start_goal();
     let mut timings = Timings::default();
 
-    let t0 = Instant::now();
-    let plan = prep.plan()?;
-    timings.plan = t0.elapsed().as_secs_f64();
+    // Planned by the validation pass.
+    let plan = &prep.planned;
+    timings.plan = prep.plan_wall_s;
 
     let t0 = Instant::now();
-    let ideal = simulate(model, &plan, &start, sc.sim.dt);
+    let ideal = simulate(model, plan, &start, sc.sim.dt);
     timings.ideal = t0.elapsed().as_secs_f64();
 
     let t0 = Instant::now();
@@ -206,7 +113,7 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
         link_poses: opts.log_root.is_some(),
     };
     let sim =
-        replay_with(sys.as_mut(), &plan, &replay_opts, &mut |f| bar.set(f)).map_err(|message| {
+        replay_with(sys.as_mut(), plan, &replay_opts, &mut |f| bar.set(f)).map_err(|message| {
             Error::Physics {
                 path: sc.path.clone(),
                 message,
@@ -219,16 +126,26 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
     let spec = metric_spec(model);
     let cmp = compare(&ideal, &sim.traj, sc.sim.dt, spec.angular, spec.position);
     let mut metrics = spec.compute(&goal, ideal.last(), sim.traj.last(), &cmp);
-    metrics.extend(prep.system.extra_metrics(&goal, &ideal, &sim, &cmp));
-    let mut failures = Vec::new();
-    for (k, limit) in &sc.thresholds {
-        let v = metrics
+    let (extra, series) = prep.system.analysis(&goal, &ideal, &sim, &cmp);
+    metrics.extend(extra);
+    let value = |k: &str| {
+        metrics
             .iter()
             .find(|(n, _)| n == k)
             .map(|(_, v)| *v)
-            .unwrap_or(f64::NAN);
+            .unwrap_or(f64::NAN)
+    };
+    let mut failures = Vec::new();
+    for (k, limit) in &sc.thresholds {
+        let v = value(k);
         if v.is_nan() || v > *limit {
             failures.push(format!("{k} = {v:.6} > {limit}"));
+        }
+    }
+    for (k, floor) in &sc.minimums {
+        let v = value(k);
+        if v.is_nan() || v < *floor {
+            failures.push(format!("{k} = {v:.6} < {floor}"));
         }
     }
     let mut outcome = RunOutcome {
@@ -241,44 +158,64 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
         timings,
         log_dir: None,
     };
-    if let Some(root) = &opts.log_root {
-        let dir = root.join(&sc.name);
-        write_logs(prep, &plan, &ideal, &sim, &cmp, &mut outcome, &dir, &goal).map_err(
-            |message| Error::Log {
-                path: sc.path.clone(),
-                message,
-            },
-        )?;
-        outcome.log_dir = Some(dir);
-    }
+    let log_error = |message: String| Error::Log {
+        path: sc.path.clone(),
+        message,
+    };
+    let unit = match &opts.log_root {
+        Some(root) => {
+            let unit = LogUnit::begin(root, &sc.name).map_err(|e| log_error(e.to_string()))?;
+            let run = RunData {
+                plan,
+                ideal: &ideal,
+                sim: &sim,
+                cmp: &cmp,
+                series: &series,
+            };
+            write_logs(prep, &run, &outcome, unit.dir(), &goal).map_err(log_error)?;
+            Some(unit)
+        }
+        None => None,
+    };
     outcome.timings.logs = t0.elapsed().as_secs_f64();
-    outcome.timings.total = t_all.elapsed().as_secs_f64();
-    if let Some(dir) = &outcome.log_dir {
-        // The summary carries the final timings, so it is written last.
-        let summary = summary_json(prep, &plan, &ideal, &sim, &outcome);
-        write_atomic(&dir.join("summary.json"), |w| {
+    // Planning happened during validation: count it in.
+    outcome.timings.total = t_all.elapsed().as_secs_f64() + prep.plan_wall_s;
+    if let Some(unit) = unit {
+        // The summary carries the final timings, so it is written last; then
+        // the three files replace the previous run's as one unit.
+        let summary = summary_json(prep, plan, &ideal, &sim, &outcome);
+        write_atomic(&unit.dir().join("summary.json"), |w| {
             serde_json::to_writer_pretty(w, &summary).map_err(std::io::Error::other)
         })
-        .map_err(|message| Error::Log {
-            path: sc.path.clone(),
-            message,
-        })?;
+        .map_err(log_error)?;
+        outcome.log_dir = Some(unit.commit().map_err(|e| log_error(e.to_string()))?);
     }
     Ok(outcome)
 }
 
-#[allow(clippy::too_many_arguments)]
+/// What one run produced, for the log writers.
+struct RunData<'a> {
+    plan: &'a Plan,
+    ideal: &'a Trajectory,
+    sim: &'a SimTrajectory,
+    cmp: &'a crate::record::Comparison,
+    series: &'a [crate::record::Series],
+}
+
 fn write_logs(
     prep: &Prepared,
-    plan: &Plan,
-    ideal: &Trajectory,
-    sim: &SimTrajectory,
-    cmp: &crate::record::Comparison,
-    outcome: &mut RunOutcome,
+    run: &RunData<'_>,
+    outcome: &RunOutcome,
     dir: &Path,
     goal: &State,
 ) -> Result<(), String> {
-    std::fs::create_dir_all(dir).map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+    let RunData {
+        plan,
+        ideal,
+        sim,
+        cmp,
+        series,
+    } = *run;
     let model = prep.model();
     let links = urdf::visuals(&prep.robot);
     let goal_v: Vec<f64> = goal.iter().copied().collect();
@@ -293,6 +230,7 @@ fn write_logs(
         goal: &goal_v,
         goal_heading: prep.system.goal_heading(goal),
         overlays: &overlays,
+        series,
         labels: &plan.labels,
         ideal,
         sim,
@@ -301,6 +239,7 @@ fn write_logs(
         metrics: &outcome.metrics,
     };
     crate::log::mcap::write_mcap(&dir.join("run.mcap"), &rec).map_err(|e| e.to_string())?;
+    crate::report::data::write(&dir.join("series.json"), &rec)?;
     crate::log::rerun::write_rrd(&dir.join("run.rrd"), &rec).map_err(|e| e.to_string())
 }
 
@@ -314,6 +253,7 @@ fn summary_json(
     let sc = &prep.scenario;
     let model = prep.model();
     let metric = |n: &str| o.metric(n);
+    let (start, goal) = prep.start_goal();
     json!({
         "scenario": sc.name,
         "file": sc.path,
@@ -321,6 +261,7 @@ fn summary_json(
         "passed": o.passed,
         "failures": o.failures,
         "thresholds": sc.thresholds,
+        "minimums": sc.minimums,
         "model": sc.model,
         "planner": sc.planner,
         "plan": {
@@ -329,6 +270,7 @@ fn summary_json(
             "segments": plan.segments,
             "details": plan.details,
         },
+        "paper": prep.system.paper(&start, &goal, plan),
         "sim_settings": sc.sim,
         "goal": display_state(model, &State::from_vec(sc.goal.clone())),
         "ideal": {
@@ -341,9 +283,17 @@ fn summary_json(
         },
         "metrics": o.metrics.iter().cloned().collect::<std::collections::BTreeMap<_, _>>(),
         "sim_steps": o.steps,
-        "sim_steps_per_second": o.steps as f64 / o.timings.physics.max(1e-9),
-        "wall_time_s": o.timings,
+        // Everything that depends on the clock, and only that, sits here: the
+        // rest of the summary is identical across runs.
+        "wall_time_s": timing_json(o),
     })
+}
+
+/// The `wall_time_s` object: stage timings, s, and the physics step rate.
+pub fn timing_json(o: &RunOutcome) -> serde_json::Value {
+    let mut t = serde_json::to_value(&o.timings).unwrap_or_default();
+    t["sim_steps_per_second"] = json!(o.steps as f64 / o.timings.physics.max(1e-9));
+    t
 }
 
 /// Write a file via a temporary name in the same directory, renamed on success.

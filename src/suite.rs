@@ -2,82 +2,80 @@
 //!
 //! Scenarios are independent (each builds its own world, single-threaded and
 //! deterministic), so they run on rayon's pool; results come back in input
-//! order, sweep tables are printed in input order once everything is done,
-//! and scenarios that share a name (hence a log directory) run one after the
-//! other in input order, so the logs left behind are those of the last one,
-//! as in a serial run. A single scenario runs on the calling thread with its
-//! own progress bar; several share one bar counting finished scenarios.
+//! order and sweep tables are printed in input order once everything is done.
+//! No two scenarios of one call share a name, hence a log directory (the
+//! validation pass refuses it). A single scenario runs on the calling thread
+//! with its own progress bar; several share one bar counting finished
+//! scenarios.
 
 use crate::error::Error;
-use crate::runner::{run, Prepared, RunOptions, RunOutcome};
+use crate::runner::{run, RunOptions, RunOutcome};
 use crate::sweep::{run_sweep_report, Shard};
+use crate::validate::Prepared;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
-use std::collections::BTreeMap;
+use std::time::Instant;
+
+/// The result of one scenario and its wall time, s (JUnit reports it for failures too).
+pub type Ran = (Result<RunOutcome, Error>, f64);
 
 /// Run every prepared scenario (sweeps as sweeps, restricted to `shard`);
 /// one result per scenario, in input order.
-pub fn run_all(
-    preps: &[Prepared],
-    opts: &RunOptions,
-    shard: Option<Shard>,
-) -> Vec<Result<RunOutcome, Error>> {
+pub fn run_all(preps: &[Prepared], opts: &RunOptions, shard: Option<Shard>) -> Vec<Ran> {
     if preps.len() == 1 {
-        return vec![run_one_report(&preps[0], opts, shard).map(|(o, table)| {
-            print!("{table}");
-            o
-        })];
+        let (res, table, wall) = run_one_report(&preps[0], opts, shard);
+        emit(&table);
+        return vec![(res, wall)];
     }
-    // Chains of indices sharing a log directory name, each in input order.
-    let mut chains: BTreeMap<&str, Vec<usize>> = BTreeMap::new();
-    for (i, p) in preps.iter().enumerate() {
-        chains.entry(p.scenario.name.as_str()).or_default().push(i);
-    }
-    let mut chains: Vec<Vec<usize>> = chains.into_values().collect();
     // Longest work first keeps both cores busy to the end.
-    chains.sort_by_key(|c| std::cmp::Reverse(c.iter().map(|&i| cost(&preps[i])).sum::<u64>()));
+    let mut order: Vec<usize> = (0..preps.len()).collect();
+    order.sort_by_key(|&i| std::cmp::Reverse(cost(&preps[i])));
     let bar = overall_bar(preps.len(), opts.progress);
     let quiet = RunOptions {
         progress: false,
         ..opts.clone()
     };
-    let mut done: Vec<(usize, Result<RunOutcome, Error>, String)> = chains
+    let mut done: Vec<(usize, Ran, String)> = order
         .par_iter()
-        .flat_map_iter(|chain| {
-            chain
-                .iter()
-                .map(|&i| {
-                    let (res, table) = match run_one_report(&preps[i], &quiet, shard) {
-                        Ok((o, t)) => (Ok(o), t),
-                        Err(e) => (Err(e), String::new()),
-                    };
-                    bar.inc(1);
-                    (i, res, table)
-                })
-                .collect::<Vec<_>>()
+        .with_max_len(1)
+        .map(|&i| {
+            let (res, table, wall) = run_one_report(&preps[i], &quiet, shard);
+            bar.inc(1);
+            (i, (res, wall), table)
         })
         .collect();
     bar.finish_and_clear();
     done.sort_by_key(|(i, _, _)| *i);
     done.into_iter()
-        .map(|(_, res, table)| {
-            print!("{table}");
-            res
+        .map(|(_, ran, table)| {
+            emit(&table);
+            ran
         })
         .collect()
 }
 
-/// One scenario: its outcome and, for a sweep, its table.
+/// One scenario: its outcome, for a sweep its table, and its wall time.
 fn run_one_report(
     prep: &Prepared,
     opts: &RunOptions,
     shard: Option<Shard>,
-) -> Result<(RunOutcome, String), Error> {
-    if prep.scenario.sweep.is_some() {
-        run_sweep_report(prep, opts, shard)
+) -> (Result<RunOutcome, Error>, String, f64) {
+    let t0 = Instant::now();
+    let (res, table) = if prep.scenario.sweep.is_some() {
+        match run_sweep_report(prep, opts, shard) {
+            Ok((o, t)) => (Ok(o), t),
+            Err(e) => (Err(e), String::new()),
+        }
     } else {
-        run(prep, opts).map(|o| (o, String::new()))
-    }
+        (run(prep, opts), String::new())
+    };
+    (res, table, t0.elapsed().as_secs_f64())
+}
+
+/// Print text to stdout, ignoring a closed stdout (`| head`) like `say!`.
+pub(crate) fn emit(text: &str) {
+    use std::io::Write as _;
+    let _ = write!(std::io::stdout().lock(), "{text}");
 }
 
 /// A rough cost for scheduling: simulated steps (× variants for sweeps).

@@ -8,85 +8,16 @@
 //! `sweep-shard-I-of-N.json`, so a sweep can be spread over machines and merged by index.
 
 use crate::error::Error;
-use crate::runner::{run, write_atomic, Prepared, RunOptions, RunOutcome, Timings};
-use crate::scenario::ModelConfig;
-use crate::systems;
+use crate::log::unit::LogUnit;
+use crate::runner::{run, write_atomic, RunOptions, RunOutcome, Timings};
+pub use crate::scenario::{variant_seed, SweepConfig, Variant};
+use crate::validate::Prepared;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use rand::{Rng, SeedableRng};
-use rand_chacha::ChaCha8Rng;
 use rayon::prelude::*;
-use serde::{Deserialize, Serialize};
+use serde::Serialize;
 use serde_json::json;
+use std::path::Path;
 use std::time::Instant;
-
-/// `[sweep]`: Monte Carlo variants of the scenario.
-#[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct SweepConfig {
-    /// Number of variants.
-    pub count: usize,
-    /// Base seed; variant i uses [`variant_seed`]`(seed, i)`.
-    #[serde(default)]
-    pub seed: u64,
-    /// Friction coefficient range [lo, hi] (uniform); default: the scenario's `sim.friction`.
-    pub friction: Option<[f64; 2]>,
-    /// Range [lo, hi] of a factor applied to every link's mass and inertia (uniform).
-    pub mass_scale: Option<[f64; 2]>,
-    /// Rover only: the ideal run uses a telegraph σ with this rate (1/s) and the variant's seed.
-    pub sigma_rate: Option<f64>,
-    /// Metric that decides success (`value ≤ success_max`).
-    #[serde(default = "default_success_metric")]
-    pub success_metric: String,
-    /// Largest `success_metric` value that counts as success.
-    pub success_max: f64,
-    /// Metric reported as the time to goal (NaN or missing = not reached).
-    #[serde(default = "default_time_metric")]
-    pub time_metric: String,
-    /// `check` fails when the success rate is below this.
-    #[serde(default)]
-    pub min_success_rate: f64,
-}
-
-fn default_success_metric() -> String {
-    "sim_goal_position".into()
-}
-
-fn default_time_metric() -> String {
-    "sim_time_to_goal".into()
-}
-
-impl SweepConfig {
-    /// Checks ranges and counts (messages name the key).
-    pub fn validate(&self) -> Result<(), String> {
-        if self.count == 0 || self.count > 1_000_000 {
-            return Err("key `sweep.count`: must be in 1..=1000000".into());
-        }
-        let range = |key: &str, r: Option<[f64; 2]>, min: f64| -> Result<(), String> {
-            if let Some([lo, hi]) = r {
-                if !(lo.is_finite() && hi.is_finite() && lo >= min && lo <= hi) {
-                    return Err(format!(
-                        "key `sweep.{key}`: need finite lo ≤ hi with lo ≥ {min}"
-                    ));
-                }
-            }
-            Ok(())
-        };
-        range("friction", self.friction, 0.0)?;
-        range("mass_scale", self.mass_scale, 1e-3)?;
-        if let Some(r) = self.sigma_rate {
-            if !(r.is_finite() && r >= 0.0) {
-                return Err("key `sweep.sigma_rate`: must be finite and ≥ 0".into());
-            }
-        }
-        if !(self.success_max.is_finite() && self.success_max >= 0.0) {
-            return Err("key `sweep.success_max`: must be finite and ≥ 0".into());
-        }
-        if !(0.0..=1.0).contains(&self.min_success_rate) {
-            return Err("key `sweep.min_success_rate`: must be in [0, 1]".into());
-        }
-        Ok(())
-    }
-}
 
 /// A subset of variant indices: those with `index % count == shard`.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize)]
@@ -118,52 +49,6 @@ impl Shard {
     }
 }
 
-/// Seed of variant `index`: SplitMix64 of the base seed and the index (independent of sharding
-/// and of the order in which variants run).
-pub fn variant_seed(seed: u64, index: usize) -> u64 {
-    let mut z = seed
-        ^ (index as u64)
-            .wrapping_add(1)
-            .wrapping_mul(0x9E37_79B9_7F4A_7C15);
-    z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-    z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-    z ^ (z >> 31)
-}
-
-/// The randomised parameters of one variant.
-#[derive(Debug, Clone, Serialize)]
-pub struct Variant {
-    /// Index in 0..count.
-    pub index: usize,
-    /// Its seed.
-    pub seed: u64,
-    /// Friction coefficient.
-    pub friction: f64,
-    /// Mass and inertia factor.
-    pub mass_scale: f64,
-    /// Telegraph rate of the ideal run's σ, when swept.
-    pub sigma_rate: Option<f64>,
-}
-
-/// Draws variant `index` of `cfg` (base friction from the scenario).
-pub fn variant(cfg: &SweepConfig, base_friction: f64, index: usize) -> Variant {
-    let seed = variant_seed(cfg.seed, index);
-    let mut rng = ChaCha8Rng::seed_from_u64(seed);
-    let mut draw = |r: Option<[f64; 2]>, default: f64| match r {
-        Some([lo, hi]) => lo + (hi - lo) * rng.random::<f64>(),
-        None => default,
-    };
-    let friction = draw(cfg.friction, base_friction);
-    let mass_scale = draw(cfg.mass_scale, 1.0);
-    Variant {
-        index,
-        seed,
-        friction,
-        mass_scale,
-        sigma_rate: cfg.sigma_rate,
-    }
-}
-
 /// Outcome of one variant.
 #[derive(Debug, Clone, Serialize)]
 pub struct VariantResult {
@@ -178,45 +63,11 @@ pub struct VariantResult {
     pub time_to_goal: Option<f64>,
     /// Physics steps.
     pub steps: usize,
-    /// Wall time, s.
+    /// Wall time, s (in `sweep.json` under `wall_time_s.variants`, with the other timings).
+    #[serde(skip)]
     pub wall_s: f64,
     /// Why the variant could not run, if it could not.
     pub error: Option<String>,
-}
-
-fn prepare_variant(prep: &Prepared, v: &Variant) -> Result<Prepared, String> {
-    let mut sc = prep.scenario.clone();
-    sc.sweep = None;
-    sc.sim.friction = v.friction;
-    if let Some(rate) = v.sigma_rate {
-        match &mut sc.model {
-            ModelConfig::Rover(m) => {
-                m.switching = systems::rover::SwitchingConfig::Telegraph { seed: v.seed, rate }
-            }
-            other => {
-                return Err(format!(
-                    "key `sweep.sigma_rate`: model `{}` has no σ",
-                    other.kind()
-                ))
-            }
-        }
-    }
-    let mut robot = prep.robot.clone();
-    for l in &mut robot.links {
-        l.inertial.mass.value *= v.mass_scale;
-        let i = &mut l.inertial.inertia;
-        for x in [
-            &mut i.ixx, &mut i.ixy, &mut i.ixz, &mut i.iyy, &mut i.iyz, &mut i.izz,
-        ] {
-            *x *= v.mass_scale;
-        }
-    }
-    let system = systems::build(&sc.model, &sc.planner)?;
-    Ok(Prepared {
-        scenario: sc,
-        system,
-        robot,
-    })
 }
 
 fn run_variant(prep: &Prepared, cfg: &SweepConfig, v: Variant) -> VariantResult {
@@ -225,7 +76,10 @@ fn run_variant(prep: &Prepared, cfg: &SweepConfig, v: Variant) -> VariantResult 
         log_root: None,
         progress: false,
     };
-    let res = prepare_variant(prep, &v).and_then(|p| run(&p, &opts).map_err(|e| e.to_string()));
+    let res = prep
+        .variant(&v)
+        .and_then(|p| run(&p, &opts))
+        .map_err(|e| e.to_string());
     let finite = |x: Option<f64>| x.filter(|v| v.is_finite());
     match res {
         Ok(o) => {
@@ -252,6 +106,8 @@ fn run_variant(prep: &Prepared, cfg: &SweepConfig, v: Variant) -> VariantResult 
     }
 }
 
+pub use crate::scenario::sweep_metric_names as metric_names;
+
 /// Median, 95th percentile (nearest rank) and maximum; None when empty.
 pub fn distribution(values: &[f64]) -> Option<[f64; 3]> {
     let mut v: Vec<f64> = values.iter().copied().filter(|x| x.is_finite()).collect();
@@ -271,7 +127,7 @@ pub fn run_sweep(
     shard: Option<Shard>,
 ) -> Result<RunOutcome, Error> {
     let (outcome, table) = run_sweep_report(prep, opts, shard)?;
-    print!("{table}");
+    crate::suite::emit(&table);
     Ok(outcome)
 }
 
@@ -288,26 +144,10 @@ pub fn run_sweep_report(
         .sweep
         .as_ref()
         .ok_or_else(|| Error::input(&sc.path, "scenario has no [sweep] table"))?;
-    let mut known = crate::runner::metric_spec(prep.model()).names();
-    known.extend(prep.system.extra_metric_names());
-    for (key, m) in [
-        ("success_metric", &cfg.success_metric),
-        ("time_metric", &cfg.time_metric),
-    ] {
-        if !known.contains(m) {
-            return Err(Error::input(
-                &sc.path,
-                format!("key `sweep.{key}`: unknown metric `{m}`"),
-            ));
-        }
-    }
     let variants: Vec<Variant> = (0..cfg.count)
         .filter(|i| shard.is_none_or(|s| s.contains(*i)))
-        .map(|i| variant(cfg, sc.sim.friction, i))
+        .map(|i| cfg.variant(sc.sim.friction, i))
         .collect();
-    if let Some(v) = variants.first() {
-        prepare_variant(prep, v).map_err(|m| Error::input(&sc.path, m))?;
-    }
     let bar = ProgressBar::with_draw_target(
         Some(variants.len() as u64),
         if opts.progress {
@@ -425,15 +265,6 @@ pub fn run_sweep_report(
         log_dir: None,
     };
     if let Some(root) = &opts.log_root {
-        let dir = root.join(&sc.name);
-        std::fs::create_dir_all(&dir).map_err(|e| Error::Log {
-            path: sc.path.clone(),
-            message: format!("{}: {e}", dir.display()),
-        })?;
-        let file = match shard {
-            Some(s) => format!("sweep-shard-{}-of-{}.json", s.index, s.count),
-            None => "sweep.json".into(),
-        };
         let summary = |d: Option<[f64; 3]>| {
             d.map(|[m, p, x]| json!({"median": m, "p95": p, "max": x}))
                 .unwrap_or(serde_json::Value::Null)
@@ -450,17 +281,55 @@ pub fn run_sweep_report(
             "time_to_goal": summary(time_d),
             "passed": outcome.passed,
             "failures": outcome.failures,
-            "wall_time_s": wall,
             "results": results,
+            // Everything that depends on the clock, and only that.
+            "wall_time_s": {
+                "total": wall,
+                "variants": results.iter().map(|r| r.wall_s).collect::<Vec<_>>(),
+            },
         });
-        write_atomic(&dir.join(file), |w| {
-            serde_json::to_writer_pretty(w, &doc).map_err(std::io::Error::other)
-        })
-        .map_err(|message| Error::Log {
+        let dir = write_sweep_doc(root, &sc.name, shard, &doc).map_err(|message| Error::Log {
             path: sc.path.clone(),
             message,
         })?;
         outcome.log_dir = Some(dir);
     }
     Ok((outcome, table))
+}
+
+/// Files of a single run or an unsharded sweep: stale beside shard files.
+const UNIT_FILES: [&str; 4] = ["run.mcap", "run.rrd", "summary.json", "sweep.json"];
+
+/// Write the sweep document as a unit. Unsharded: `sweep.json` replaces the
+/// whole `<root>/<name>` directory, like a run's logs. Sharded: the shards of
+/// one sweep share the directory (they may run at once, on several
+/// machines), so `sweep-shard-I-of-N.json` is written atomically on its own
+/// and the files of a previous single run or unsharded sweep are removed.
+fn write_sweep_doc(
+    root: &Path,
+    name: &str,
+    shard: Option<Shard>,
+    doc: &serde_json::Value,
+) -> Result<std::path::PathBuf, String> {
+    let write = |path: &Path| {
+        write_atomic(path, |w| {
+            serde_json::to_writer_pretty(w, doc).map_err(std::io::Error::other)
+        })
+    };
+    match shard {
+        None => {
+            let unit = LogUnit::begin(root, name).map_err(|e| e.to_string())?;
+            write(&unit.dir().join("sweep.json"))?;
+            unit.commit().map_err(|e| e.to_string())
+        }
+        Some(s) => {
+            let dir = root.join(name);
+            std::fs::create_dir_all(&dir).map_err(|e| format!("{}: {e}", dir.display()))?;
+            write(&dir.join(format!("sweep-shard-{}-of-{}.json", s.index, s.count)))?;
+            for f in UNIT_FILES {
+                let _ = std::fs::remove_file(dir.join(f));
+            }
+            Ok(dir)
+        }
+    }
 }

@@ -193,3 +193,215 @@ fn urdf_the_loader_cannot_represent() {
         check_contract(&out, dir.path(), needle);
     }
 }
+
+// The cases of issue 14, one test each (the corpus in `bad_input_corpus.rs`
+// runs many more through every command).
+
+/// A directory with a good scenario first and a bad one after: exit 2 and
+/// nothing written, not even the good one's logs.
+#[test]
+fn good_scenario_then_bad_one_writes_nothing() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().join("set");
+    std::fs::create_dir(&d).unwrap();
+    let good = disk_scenario(&model("rolling_disk.urdf"), "name = \"a\"", "");
+    std::fs::write(d.join("a.toml"), &good).unwrap();
+    std::fs::write(
+        d.join("b.toml"),
+        good.replace("name = \"a\"", "name = \"b\"").replace(
+            "kind = \"stokes_disk\"",
+            "kind = \"stokes_disk\"\nslant = -1.0",
+        ),
+    )
+    .unwrap();
+    let out = cli(dir.path(), &["run", "set", "--logs", "logs"]);
+    let err = check_contract(&out, dir.path(), "set/b.toml:");
+    assert!(err.contains("key `planner.slant`"), "{err}");
+    assert!(!dir.path().join("logs").exists());
+}
+
+/// `list` validates like `run`: the valid scenarios on stdout, each error on
+/// stderr, exit 2.
+#[test]
+fn list_reports_bad_scenarios_on_stderr_and_exits_2() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = disk_scenario(&model("rolling_disk.urdf"), "name = \"fine\"", "");
+    std::fs::write(dir.path().join("a.toml"), &good).unwrap();
+    std::fs::write(
+        dir.path().join("b.toml"),
+        good.replace("name = \"fine\"", "name = \"\""),
+    )
+    .unwrap();
+    let out = cli(dir.path(), &["list", "."]);
+    assert_eq!(out.status.code(), Some(2));
+    let stdout = String::from_utf8_lossy(&out.stdout);
+    let stderr = String::from_utf8_lossy(&out.stderr);
+    assert!(
+        stdout.contains("fine") && !stdout.contains("error"),
+        "{stdout}"
+    );
+    assert_eq!(stderr.lines().count(), 1, "{stderr}");
+    assert!(
+        stderr.starts_with("error: ./b.toml:1: key `name`"),
+        "{stderr}"
+    );
+}
+
+/// `plan` runs the URDF, physics and sweep checks too.
+#[test]
+fn plan_checks_urdf_physics_and_sweep() {
+    let base = disk_scenario(&model("rolling_disk.urdf"), "", "");
+    for (text, needle) in [
+        (
+            base.replace("radius = 0.25", "radius = 0.3"),
+            "key `model.radius`",
+        ),
+        (
+            format!("{base}\n[sweep]\ncount = 0\nsuccess_max = 1.0\n"),
+            "key `sweep.count`",
+        ),
+        (
+            format!("{base}\n[sweep]\ncount = 2\nsuccess_max = 1.0\nsuccess_metric = \"x\"\n"),
+            "key `sweep.success_metric`",
+        ),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("bad.toml"), text).unwrap();
+        let out = cli(dir.path(), &["plan", "bad.toml"]);
+        check_contract(&out, dir.path(), needle);
+        assert!(out.stdout.is_empty());
+    }
+}
+
+/// NaN or negative wheel inertia and a NaN joint origin are bad input (exit
+/// 2, naming the URDF file, line and element), not a wheel that never turns
+/// or a diverged simulation (exit 3).
+#[test]
+fn urdf_numbers_are_checked() {
+    let urdf = std::fs::read_to_string(model("rolling_disk.urdf")).unwrap();
+    for (from, to, needle) in [
+        (
+            "ixx=\"0.031517\"",
+            "ixx=\"nan\"",
+            "URDF link `wheel` <inertia>",
+        ),
+        (
+            "ixx=\"0.031517\"",
+            "ixx=\"-0.031517\"",
+            "URDF link `wheel` <inertia>",
+        ),
+        (
+            "<origin xyz=\"0 0 0\" rpy=\"0 0 0\"/>\n    <axis",
+            "<origin xyz=\"nan 0 0\" rpy=\"0 0 0\"/>\n    <axis",
+            "URDF joint `wheel_joint` <origin>",
+        ),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let bad = urdf.replacen(from, to, 1);
+        let line = bad
+            .lines()
+            .position(|l| l.contains(to.lines().next().unwrap()))
+            .unwrap()
+            + 1;
+        std::fs::write(dir.path().join("m.urdf"), bad).unwrap();
+        let text = disk_scenario(Path::new("m.urdf"), "", "");
+        std::fs::write(dir.path().join("bad.toml"), text).unwrap();
+        let out = cli(dir.path(), &["run", "bad.toml", "--logs", "logs"]);
+        let err = check_contract(&out, dir.path(), needle);
+        assert!(err.starts_with(&format!("error: m.urdf:{line}: ")), "{err}");
+    }
+}
+
+/// Two scenarios with the same name in one call, a name with a NUL byte and
+/// one of 300 characters: exit 2 before anything runs.
+#[test]
+fn names_are_checked_up_front() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = |name: &str| {
+        disk_scenario(
+            &model("rolling_disk.urdf"),
+            &format!("name = \"{name}\""),
+            "",
+        )
+    };
+    std::fs::write(dir.path().join("a.toml"), text("twin")).unwrap();
+    std::fs::write(dir.path().join("b.toml"), text("twin")).unwrap();
+    let out = cli(dir.path(), &["run", "a.toml", "b.toml", "--logs", "logs"]);
+    let err = check_contract(
+        &out,
+        dir.path(),
+        "b.toml:1: key `name`: `twin` is also the name of a.toml",
+    );
+    assert!(err.starts_with("error: b.toml:1:"), "{err}");
+    for name in ["a\\u0000b", &"n".repeat(300)] {
+        std::fs::write(dir.path().join("c.toml"), text(name)).unwrap();
+        let out = cli(dir.path(), &["run", "c.toml", "--logs", "logs"]);
+        check_contract(&out, dir.path(), "c.toml:1: key `name`");
+    }
+}
+
+/// A FIFO or a symlink to /dev/zero is refused from its metadata: no hang,
+/// no memory exhaustion.
+#[cfg(unix)]
+#[test]
+fn fifo_and_device_are_not_read() {
+    let dir = tempfile::tempdir().unwrap();
+    assert!(std::process::Command::new("mkfifo")
+        .arg(dir.path().join("f.toml"))
+        .status()
+        .unwrap()
+        .success());
+    std::os::unix::fs::symlink("/dev/zero", dir.path().join("z.toml")).unwrap();
+    for (file, what) in [("f.toml", "a FIFO"), ("z.toml", "a character device")] {
+        let out = cli(dir.path(), &["plan", file]);
+        check_contract(
+            &out,
+            dir.path(),
+            &format!("{file}: scenario must be a regular file, this is {what}"),
+        );
+    }
+}
+
+/// Range checks, type errors and errors inside `[model]`/`[planner]` name the
+/// line of the key itself (not the table header) and the key.
+#[test]
+fn errors_name_the_line_of_the_key() {
+    let base = disk_scenario(&model("rolling_disk.urdf"), "", "");
+    for (from, to, key) in [
+        ("dt = 0.001", "dt = 0.5", "sim.dt"),
+        ("dt = 0.001", "dt = \"fast\"", "sim.dt"),
+        ("radius = 0.25", "radius = \"big\"", "model.radius"),
+        ("radius = 0.25", "radius = -1.0", "model.radius"),
+        (
+            "kind = \"stokes_disk\"",
+            "kind = \"stokes_disk\"\nslant = \"x\"",
+            "planner.slant",
+        ),
+    ] {
+        let text = base.replacen(from, to, 1);
+        let last = to.lines().last().unwrap();
+        let line = text.lines().position(|l| l == last).unwrap() + 1;
+        let err = expect_input_error(&text, &format!("bad.toml:{line}: key `{key}`"));
+        assert!(err.starts_with("error: bad.toml:"), "{err}");
+    }
+}
+
+/// `--shard` on a scenario without `[sweep]` is an error, not silently ignored.
+#[test]
+fn shard_without_sweep_is_an_error() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("d.toml"),
+        disk_scenario(&model("rolling_disk.urdf"), "", ""),
+    )
+    .unwrap();
+    let out = cli(
+        dir.path(),
+        &["run", "d.toml", "--shard", "0/2", "--logs", "logs"],
+    );
+    check_contract(
+        &out,
+        dir.path(),
+        "d.toml: --shard: this scenario has no [sweep] table",
+    );
+}

@@ -11,10 +11,19 @@ fn help_explains_each_command() {
     for word in ["run", "check", "plan", "list", "Exit status"] {
         assert!(text.contains(word), "{word} missing from --help:\n{text}");
     }
-    for cmd in ["run", "check", "plan", "list"] {
+    for (cmd, words) in [
+        ("run", &["--logs", "--shard", "summary.json"][..]),
+        ("check", &["Exit status", "threshold", "--shard"][..]),
+        ("plan", &["--json", "validated", "ideal final state"][..]),
+        ("list", &["stderr", "exit status", "scenarios/"][..]),
+    ] {
         let out = cli(&root(), &[cmd, "--help"]);
         assert!(out.status.success(), "{cmd} --help");
-        assert!(out.stdout.len() > 100, "{cmd} --help too short");
+        let text = String::from_utf8_lossy(&out.stdout);
+        assert!(text.len() > 400, "{cmd} --help too short:\n{text}");
+        for w in words {
+            assert!(text.contains(w), "{w} missing from {cmd} --help:\n{text}");
+        }
     }
 }
 
@@ -65,4 +74,28 @@ fn check_exits_1_on_a_broken_threshold_and_run_does_not() {
     let out = cli(dir.path(), &["run", "tight.toml", "--logs", "out"]);
     assert_eq!(out.status.code(), Some(0));
     assert!(dir.path().join("out/tight/run.mcap").is_file());
+}
+
+/// Hidden entries of a directory (editor locks such as `.#a.toml`, often
+/// dangling symlinks) are not scenarios.
+#[cfg(unix)]
+#[test]
+fn hidden_entries_of_a_directory_are_skipped() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path().join("set");
+    std::fs::create_dir(&d).unwrap();
+    std::fs::write(
+        d.join("a.toml"),
+        disk_scenario(&model("rolling_disk.urdf"), "", ""),
+    )
+    .unwrap();
+    std::os::unix::fs::symlink("nobody@host.1234", d.join(".#a.toml")).unwrap();
+    let out = cli(dir.path(), &["list", "set"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    assert!(String::from_utf8_lossy(&out.stdout).contains("rolling_disk"));
 }

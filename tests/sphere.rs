@@ -242,7 +242,10 @@ fn bad_sphere_input_is_reported() {
     ))
     .unwrap_err()
     .to_string();
-    assert!(e.contains("key `start`: expected 5 values, got 6"), "{e}");
+    assert!(
+        e.contains("x.toml:2: key `start`: expected 5 values (x, y, alpha, theta, phi), got 6"),
+        "{e}"
+    );
     let e = parse(
         &sphere_text(
             "",
@@ -266,10 +269,13 @@ fn bad_sphere_input_is_reported() {
         "",
     )
     .replace("radius = 1.0", "radius = 0.5");
-    let prep = Prepared::new(parse(&text).unwrap()).unwrap();
-    let e = prep.physics().err().expect("radius mismatch").to_string();
+    // Found by the validation pass, which builds the physics at the start pose.
+    let e = Prepared::new(parse(&text).unwrap())
+        .err()
+        .expect("radius mismatch")
+        .to_string();
     assert!(
-        e.contains("differs from the scenario's model.radius"),
+        e.contains("key `model.radius`: URDF radius of the ball (1 m) differs from the scenario's model.radius"),
         "{e}"
     );
     assert_eq!(e.lines().count(), 1);

@@ -17,6 +17,7 @@
 //! | `/tf` | protobuf `foxglove.FrameTransforms` | sim sample | `world` → each link frame |
 //! | `/scene` | protobuf `foxglove.SceneUpdate` | once, t = 0 | URDF visuals, one entity per link, frame-locked to the link frame, lifetime 0 (forever) |
 //! | `/scene/paths` | protobuf `foxglove.SceneUpdate` | once, t = 0 | ideal path (green) and simulated path (orange) line strips at z = 0, goal marker (red sphere, arrow for the goal heading); only when the model has a planar position |
+//! | `/analysis/<name>` | json / jsonschema `anholonomy.Series` | series sample | a system's own series (e.g. `V/ideal`, the planner's potential along the ideal run): `values.value` |
 //!
 //! JSON messages all have the form
 //! `{"t": <s>, "segment": "<label name>", "values": {"<name>": <number>, ...}}`:
@@ -237,6 +238,7 @@ fn json_channel(
 /// What to log next, in time order.
 #[derive(Clone, Copy)]
 enum Ev {
+    Series(usize, usize),
     Command(usize),
     Ideal(usize),
     Sim(usize),
@@ -307,6 +309,21 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
             tmp,
         )?)
     };
+    let value_name = [Cow::Borrowed("value")];
+    let ch_series = rec
+        .series
+        .iter()
+        .map(|s| {
+            json_channel(
+                ctx,
+                &format!("/analysis/{}", s.name),
+                "anholonomy.Series",
+                "A series the system computes from the runs (see the README of the system)",
+                &value_name,
+                tmp,
+            )
+        })
+        .collect::<Result<Vec<_>, _>>()?;
     let ch_tf = ctx.channel_builder("/tf").build::<FrameTransforms>();
     let ch_scene = ctx.channel_builder("/scene").build::<SceneUpdate>();
 
@@ -339,6 +356,11 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
     for (k, &t) in cmp.t.iter().enumerate() {
         evs.push((nanos(t), Ev::Error(k)));
     }
+    for (i, s) in rec.series.iter().enumerate() {
+        for (k, &t) in s.t.iter().enumerate() {
+            evs.push((nanos(t), Ev::Series(i, k)));
+        }
+    }
     evs.sort_by_key(|&(ns, _)| ns);
 
     let frames: Vec<String> = rec
@@ -360,6 +382,16 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
     };
     for (ns, ev) in evs {
         match ev {
+            Ev::Series(i, k) => {
+                let s = &rec.series[i];
+                let msg = JsonMsg {
+                    t: s.t[k],
+                    segment: "",
+                    names: &value_name,
+                    values: &s.values[k..k + 1],
+                };
+                emit(&ch_series[i], ns, &msg)?;
+            }
             Ev::Command(k) => {
                 let seg = segment_name(rec.labels, ideal.label[k]);
                 let msg = JsonMsg {

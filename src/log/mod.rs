@@ -15,6 +15,7 @@ mod atomic;
 pub mod mcap;
 pub mod rerun;
 mod scene;
+pub mod unit;
 
 use std::path::{Path, PathBuf};
 
@@ -181,6 +182,18 @@ fn check(rec: &RunRecord<'_>) -> Result<(), String> {
                 "position indices [{ix}, {iy}] out of range for {ns} coordinates"
             ));
         }
+    }
+    if let Some(s) = rec
+        .series
+        .iter()
+        .find(|s| s.t.len() != s.values.len() || s.name.split('/').all(str::is_empty))
+    {
+        return Err(format!(
+            "series {:?} has {} times and {} values (or an empty name)",
+            s.name,
+            s.t.len(),
+            s.values.len()
+        ));
     }
     if let Some(&a) = rec.angular.iter().find(|&&a| a >= ns) {
         return Err(format!(

@@ -9,6 +9,7 @@
 
 pub mod angles;
 pub mod disk;
+pub mod mobile_manipulator;
 pub mod real;
 pub mod rover;
 pub mod settings;

@@ -17,15 +17,28 @@ pub use super::world::{Drive, RobotHandles, SimWorld, WorldOptions};
 /// mass or with a non-finite or negative inertia, collision meshes, and
 /// moving joints without an axis.
 pub fn read(path: &Path) -> Result<Robot, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read URDF: {e}"))?;
-    let robot = urdf_rs::read_from_string(&text)
-        .map_err(|e| format!("URDF does not parse: {}", e.to_string().replace('\n', " ")))?;
+    let robot = parse(path)?;
     validate(&robot)?;
     Ok(robot)
 }
 
+/// Read and parse a URDF file without [`validate`] (the validation pass checks
+/// numbers first, to name the element and line).
+pub fn parse(path: &Path) -> Result<Robot, String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read URDF: {e}"))?;
+    urdf_rs::read_from_string(&text)
+        .map_err(|e| format!("URDF does not parse: {}", e.to_string().replace('\n', " ")))
+}
+
 /// The checks of [`read`] on an already parsed robot.
 pub fn validate(robot: &Robot) -> Result<(), String> {
+    validate_tree(robot)?;
+    validate_loadable(robot)
+}
+
+/// One tree of uniquely named links with positive masses (the validation pass
+/// runs this first, then its own number checks, then [`validate_loadable`]).
+pub fn validate_tree(robot: &Robot) -> Result<(), String> {
     if robot.links.is_empty() {
         return Err("URDF has no links".into());
     }
@@ -45,11 +58,6 @@ pub fn validate(robot: &Robot) -> Result<(), String> {
                 "URDF link `{}` has two parent joints",
                 j.child.link
             ));
-        }
-        let moving = !matches!(j.joint_type, JointType::Fixed | JointType::Floating);
-        let a = j.axis.xyz.0;
-        if moving && !(a.iter().all(|c| c.is_finite()) && a.iter().any(|c| *c != 0.0)) {
-            return Err(format!("URDF joint `{}` needs a non-zero <axis>", j.name));
         }
     }
     let roots: Vec<&str> = robot
@@ -90,6 +98,21 @@ pub fn validate(robot: &Robot) -> Result<(), String> {
                 l.name
             ));
         }
+    }
+    Ok(())
+}
+
+/// What the loader needs beyond a tree: finite inertias, axes on moving
+/// joints, no mesh collisions.
+pub fn validate_loadable(robot: &Robot) -> Result<(), String> {
+    for j in &robot.joints {
+        let moving = !matches!(j.joint_type, JointType::Fixed | JointType::Floating);
+        let a = j.axis.xyz.0;
+        if moving && !(a.iter().all(|c| c.is_finite()) && a.iter().any(|c| *c != 0.0)) {
+            return Err(format!("URDF joint `{}` needs a non-zero <axis>", j.name));
+        }
+    }
+    for l in &robot.links {
         let t = &l.inertial.inertia;
         let all = [t.ixx, t.ixy, t.ixz, t.iyy, t.iyz, t.izz];
         if all.iter().any(|v| !v.is_finite()) || t.ixx < 0.0 || t.iyy < 0.0 || t.izz < 0.0 {

@@ -1,6 +1,7 @@
 //! Planners: one module per planner. Each turns (start, goal, model
 //! parameters, planner parameters) into a [`crate::plan::Plan`].
 
+pub mod dilf;
 pub mod endogenous;
 pub mod rover_primitives;
 pub mod sphere_geometric;

@@ -889,9 +889,7 @@ mod tests {
         let q = (-d * phi.cos(), -d * phi.sin());
         assert_eq!((round_to(q.0, 1), round_to(q.1, 1)), (-1.0, -1.5));
         let p = SphereTriangleParams::default();
-        let t0 = std::time::Instant::now();
         let t = solve_fixed_psi(d, phi, yaw, 66.31f64.to_radians(), &p).expect("paper triangle");
-        let el = t0.elapsed();
         assert_eq!(t.handed, Handedness::Left);
         assert_eq!(round_to(t.a, 3), 1.862);
         assert_eq!(round_to(t.b, 3), 1.198);
@@ -903,7 +901,6 @@ mod tests {
         // The printed (rounded) a, b, C are not consistent with the printed B: Napier gives 70.76.
         let (_, bb, _) = napier(1.862, 1.198, 95.41f64.to_radians());
         assert_eq!(round_to(bb.to_degrees(), 2), 70.76);
-        eprintln!("fixed-psi solve: {el:?}");
         // Ideal run of the manoeuvre: from Q upright with R along +x to the origin, R along −y.
         let start = State::from_vec(vec![q.0, q.1, 0.0, 0.0, 0.0]);
         let goal = State::from_vec(vec![0.0, 0.0, 0.0, 0.0, yaw]);
@@ -911,22 +908,12 @@ mod tests {
         assert!(dp < 1e-9 && dr < 1e-9, "{dp:e} {dr:e}");
     }
 
-    /// The free-ψ default on the same (d, φ, α), timed, and the full planner from that start.
+    /// The free-ψ default on the same (d, φ, α) and the full planner from that start (its
+    /// solve time is a criterion benchmark: `cargo bench --bench sphere`).
     #[test]
     fn paper_triangle_free_psi_and_full_plan() {
         let (d, phi, yaw) = (1.8, 56.31f64.to_radians(), -FRAC_PI_2);
         let p = SphereTriangleParams::default();
-        let t0 = std::time::Instant::now();
-        let n = 20;
-        for _ in 0..n {
-            solve_triangles(d, phi, yaw, &p).unwrap();
-        }
-        let per = t0.elapsed() / n;
-        eprintln!("free-psi single-triangle solve: {per:?}");
-        assert!(
-            per.as_secs_f64() < 5e-3,
-            "debug build; well under 1 ms when optimised"
-        );
         let tris = solve_triangles(d, phi, yaw, &p).unwrap();
         assert_eq!(tris.len(), 1);
         let q = (-d * phi.cos(), -d * phi.sin());

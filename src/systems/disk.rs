@@ -1,15 +1,15 @@
 //! The rolling disk: seed 000 §4.2 Stokes planner, `models/rolling_disk.urdf`.
 
-use super::{mismatch, System};
+use super::System;
 use crate::model::disk::RollingDisk;
 use crate::model::{KinematicModel, State};
+use crate::paper::{rows_from, same, PaperRow};
 use crate::physics::disk::DiskPhysics;
 use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
-use crate::planner::stokes_disk::{self, StokesDiskParams};
+use crate::planner::stokes_disk::{self, Algorithm, StokesDiskParams};
 use crate::planner::PlanError;
-use crate::scenario::PlannerConfig;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -29,18 +29,15 @@ struct Disk {
 }
 
 /// Build the disk system.
-pub fn build(cfg: &DiskModelConfig, planner: &PlannerConfig) -> Result<Box<dyn System>, String> {
+pub fn build(cfg: &DiskModelConfig, params: &StokesDiskParams) -> Result<Box<dyn System>, String> {
     // Written to also reject NaN (the scenario parser already rejects it).
     if cfg.radius.is_nan() || cfg.radius <= 0.0 {
         return Err("key `model.radius`: must be > 0".into());
     }
-    match planner {
-        PlannerConfig::StokesDisk(p) => Ok(Box::new(Disk {
-            model: RollingDisk { r: cfg.radius },
-            params: p.clone(),
-        })),
-        other => Err(mismatch("rolling_disk", other, &["stokes_disk"])),
-    }
+    Ok(Box::new(Disk {
+        model: RollingDisk { r: cfg.radius },
+        params: params.clone(),
+    }))
 }
 
 impl System for Disk {
@@ -66,5 +63,141 @@ impl System for Disk {
     ) -> Result<Box<dyn PhysicsSystem>, String> {
         let p = DiskPhysics::new(robot, urdf_dir, self.model.r, start, sim)?;
         Ok(Box::new(p))
+    }
+    /// Seed 000 §4.2's example (r = 0.25 m, (0, 0, 0, 0) → (−0.4, 1, π, π/8)): the
+    /// singularity-avoiding plan (OPQROZ) or the singularity-free one with b = 60°.
+    fn paper(&self, start: &State, goal: &State, plan: &Plan) -> Vec<PaperRow> {
+        use std::f64::consts::PI;
+        let task = (self.model.r - 0.25).abs() < 1e-12
+            && same(start.as_slice(), &[0.0; 4], 1e-9)
+            && same(goal.as_slice(), &[-0.4, 1.0, PI, PI / 8.0], 1e-9);
+        if !task {
+            return Vec::new();
+        }
+        let d = &plan.details;
+        const DEG: f64 = 180.0 / PI;
+        const ROUNDED: &str = "printed value follows from the drift rounded to (0.1522, 0.7654); this close to the singularity the 4th digit matters";
+        let mut spec = vec![
+            (
+                "drift after OZ: x",
+                "0.1522",
+                "/drift_after_OP/0",
+                1.0,
+                "m",
+                "",
+            ),
+            (
+                "drift after OZ: y",
+                "0.7654",
+                "/drift_after_OP/1",
+                1.0,
+                "m",
+                "",
+            ),
+        ];
+        match (self.params.algorithm, self.params.b_first_deg) {
+            (Algorithm::SingularityAvoiding, _) => spec.extend([
+                (
+                    "rejected loop (Eq. 25-26): b",
+                    "0.01808",
+                    "/rejected_loop/b",
+                    1.0,
+                    "rad",
+                    ROUNDED,
+                ),
+                (
+                    "rejected loop (Eq. 25-26): a",
+                    "132.72",
+                    "/rejected_loop/a",
+                    1.0,
+                    "rad",
+                    ROUNDED,
+                ),
+                (
+                    "detour loop at O: b",
+                    "0.8034",
+                    "/loops/0/b_rad",
+                    1.0,
+                    "rad",
+                    "rounded drift, then truncated (0.80348)",
+                ),
+                (
+                    "detour loop at O: b",
+                    "46.03",
+                    "/loops/0/b_deg",
+                    1.0,
+                    "deg",
+                    "",
+                ),
+                (
+                    "detour loop at O: a",
+                    "3.068",
+                    "/loops/0/a_rad",
+                    1.0,
+                    "rad",
+                    "truncated",
+                ),
+                (
+                    "detour loop at O: a",
+                    "175.78",
+                    "/loops/0/a_deg",
+                    1.0,
+                    "deg",
+                    "175.78° is the truncated 3.068 rad converted",
+                ),
+            ]),
+            (Algorithm::SingularityFree, Some(b)) if (b - 60.0).abs() < 1e-9 => spec.extend([
+                (
+                    "loop x (Eq. 23): b",
+                    "1.047",
+                    "/loops/0/b_rad",
+                    1.0,
+                    "rad",
+                    "",
+                ),
+                (
+                    "loop x (Eq. 23): a",
+                    "3.628",
+                    "/loops/0/a_rad",
+                    1.0,
+                    "rad",
+                    "truncated",
+                ),
+                (
+                    "loop x (Eq. 23): a",
+                    "207.87",
+                    "/loops/0/a_rad",
+                    DEG,
+                    "deg",
+                    "truncation, then conversion",
+                ),
+                (
+                    "loop y (Eq. 28): b",
+                    "2.356",
+                    "/loops/1/b_rad",
+                    1.0,
+                    "rad",
+                    "",
+                ),
+                (
+                    "loop y (Eq. 28): a",
+                    "−1.05",
+                    "/loops/1/a_rad",
+                    1.0,
+                    "rad",
+                    "",
+                ),
+                (
+                    "loop y (Eq. 28): a",
+                    "60.15",
+                    "/loops/1/a_deg",
+                    1.0,
+                    "deg",
+                    "printed \"60.15 degrees\" lost its sign and uses the rounded y'_d = 1.485",
+                ),
+            ]),
+            _ => {}
+        }
+        rows_from(d, &spec)
     }
 }

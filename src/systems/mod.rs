@@ -1,23 +1,50 @@
 //! Systems: each pairs a kinematic model with its planners and its Rapier
-//! counterpart. One module per system; [`build`] picks it from the scenario.
+//! counterpart. One module per system, implementing [`System`].
 //!
-//! Adding a system: a `ModelConfig` variant (scenario.rs), planner variants
-//! in `PlannerConfig`, a module here implementing [`System`], one arm in
-//! [`build`].
+//! # Adding a system
+//!
+//! Configuration flows one way, from the scenario layer down: a system never
+//! imports `crate::scenario` (a test, `tests/layering.rs`, fails if it does).
+//!
+//! 1. In `src/systems/<name>.rs`, define the system's own plain `[model]`
+//!    parameter struct (`#[derive(Deserialize, Serialize)]`,
+//!    `#[serde(deny_unknown_fields)]`, without `kind`: the scenario layer
+//!    strips it), e.g. [`disk::DiskModelConfig`]. Planner parameters are
+//!    the planner's own structs (`crate::planner::*::*Params`); a system
+//!    with several planners defines an enum of them (e.g.
+//!    [`space_robot::SpacePlanner`]).
+//! 2. Write `pub fn build(cfg: &Config, planner: ...) -> Result<Box<dyn
+//!    System>, String>`: check the parameters that need no file (errors
+//!    start with `` key `model.<key>`: `` or `` key `planner.<key>`: ``, so
+//!    the scenario layer can add the line).
+//! 3. In `src/scenario/config.rs`: a variant of `ModelConfig` (and of
+//!    `PlannerConfig` for a new planner), its `kind` string in `KINDS` and
+//!    `parse`, its row in `PAIRS`, and the arm(s) of `build_system` that hand
+//!    the typed configs to `build`.
+//! 4. Everything else is checked by the validation pass before anything runs
+//!    (`crate::validate`): it builds the system, calls [`System::plan`] and
+//!    [`System::physics`] at the start pose, and reports their errors as bad
+//!    input (exit 2). So a task that cannot work (URDF that disagrees with
+//!    the model, unreachable goal, a start inside an obstacle) should be
+//!    refused by `plan` or `physics`, with a message that names the scenario
+//!    key (`model.radius`, `goal`, ...) or, for URDF problems, starts with
+//!    `URDF` and names the link or joint (`` link `wheel` ``).
 
+pub mod dilf;
 pub mod disk;
 pub mod rover;
 pub mod space_robot;
 pub mod sphere;
 
+use crate::baseline::Direction;
 use crate::integrate::Trajectory;
 use crate::model::{KinematicModel, State};
+use crate::paper::PaperRow;
 use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::PlanError;
-use crate::record::{Comparison, Overlay, SimTrajectory};
-use crate::scenario::{ModelConfig, PlannerConfig};
+use crate::record::{Comparison, Overlay, Series, SimTrajectory};
 use std::path::Path;
 
 /// A model, a configured planner and the physics counterpart.
@@ -68,23 +95,28 @@ pub trait System: Send + Sync {
     ) -> Vec<(String, f64)> {
         Vec::new()
     }
-}
-
-/// The system for a scenario's model and planner; mismatches are user errors.
-pub fn build(model: &ModelConfig, planner: &PlannerConfig) -> Result<Box<dyn System>, String> {
-    match model {
-        ModelConfig::RollingDisk(m) => disk::build(m, planner),
-        ModelConfig::SpaceRobot(m) => space_robot::build(m, planner),
-        ModelConfig::Rover(m) => rover::build(m, planner),
-        ModelConfig::RollingSphere(m) => sphere::build(m, planner),
+    /// System metrics together with time series computed from the two runs
+    /// (logged beside the state: MCAP `/analysis/<name>`, Rerun
+    /// `analysis/<name>`). Systems whose series share work with their metrics
+    /// override this; the default is [`System::extra_metrics`] and no series.
+    fn analysis(
+        &self,
+        goal: &State,
+        ideal: &Trajectory,
+        sim: &SimTrajectory,
+        cmp: &Comparison,
+    ) -> (Vec<(String, f64)>, Vec<Series>) {
+        (self.extra_metrics(goal, ideal, sim, cmp), Vec::new())
     }
-}
-
-/// The error for a planner that does not fit the model.
-pub fn mismatch(model: &str, planner: &PlannerConfig, expected: &[&str]) -> String {
-    format!(
-        "key `planner.kind`: `{}` does not plan for model `{model}` (use {})",
-        planner.kind(),
-        expected.join(" or ")
-    )
+    /// Which way one of this system's metrics regresses, when the harness convention
+    /// ([`Direction::conventional`]: `min`/`clearance`/`margin` tokens and success rates are
+    /// higher-is-better, the rest lower-is-better) does not fit. Default: no declaration.
+    fn metric_direction(&self, _name: &str) -> Option<Direction> {
+        None
+    }
+    /// The paper's printed numbers next to the values `plan` computes, when the scenario
+    /// poses the paper's worked example (see [`crate::paper`]). Default: none.
+    fn paper(&self, _start: &State, _goal: &State, _plan: &Plan) -> Vec<PaperRow> {
+        Vec::new()
+    }
 }

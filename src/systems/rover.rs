@@ -8,19 +8,20 @@
 //! closed-loop run, replayed without feedback (it still reaches the goal in the ideal run,
 //! which is deterministic, but not on Rapier).
 
-use super::{mismatch, System};
+use super::System;
+use crate::baseline::Direction;
 use crate::integrate::{simulate, Trajectory};
 use crate::model::rover::{RoverGeometry, SwitchingRover, SwitchingSignal};
 use crate::model::{Input, KinematicModel, State};
+use crate::paper::{rows_from, same, PaperRow};
 use crate::physics::rover::RoverPhysics;
 use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Command, ControlLaw, Controller, Limits, Plan, PolicyFactory};
-use crate::planner::rover_primitives::{self, se2_distance, RoverPrimitiveParams};
+use crate::planner::rover_primitives::{self, se2_distance, RoverPrimitiveParams, TurnDirection};
 use crate::planner::PlanError;
 use crate::record::Comparison;
 use crate::record::{Overlay, SimTrajectory};
-use crate::scenario::PlannerConfig;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -81,17 +82,14 @@ struct Rover {
 }
 
 /// Build the rover system.
-pub fn build(cfg: &RoverConfig, planner: &PlannerConfig) -> Result<Box<dyn System>, String> {
+pub fn build(cfg: &RoverConfig, params: &RoverPrimitiveParams) -> Result<Box<dyn System>, String> {
     cfg.geometry
         .validate()
         .map_err(|e| format!("key `model.geometry`: {e}"))?;
     if !(cfg.envelope_tolerance.is_finite() && cfg.envelope_tolerance >= 0.0) {
         return Err("key `model.envelope_tolerance`: must be finite and ≥ 0".into());
     }
-    let params = match planner {
-        PlannerConfig::RoverPrimitives(p) => p.clone(),
-        other => return Err(mismatch("rover", other, &["rover_primitives"])),
-    };
+    let params = params.clone();
     let horizon = if params.horizon.is_finite() {
         params.horizon.max(0.0)
     } else {
@@ -218,6 +216,31 @@ impl System for Rover {
             start,
             sim,
         )?))
+    }
+    /// `envelope_fraction` (samples inside the allowed velocity set) regresses when it falls.
+    fn metric_direction(&self, name: &str) -> Option<Direction> {
+        (name == "envelope_fraction").then_some(Direction::HigherIsBetter)
+    }
+    /// Seed 002 Fig. 2: from (0, 0, 90°) to (8, 2, 90°) the paper's run turns 330° left in P1.
+    fn paper(&self, start: &State, goal: &State, plan: &Plan) -> Vec<PaperRow> {
+        use std::f64::consts::FRAC_PI_2;
+        let task = same(start.as_slice(), &[0.0, 0.0, FRAC_PI_2, 0.0], 1e-9)
+            && same(goal.as_slice(), &[8.0, 2.0, FRAC_PI_2, 0.0], 1e-9)
+            && self.params.turn == TurnDirection::Left;
+        if !task {
+            return Vec::new();
+        }
+        rows_from(
+            &plan.details,
+            &[(
+                "P1 turn (left), Fig. 2",
+                "330",
+                "/p1_turn_rad",
+                180.0 / std::f64::consts::PI,
+                "deg",
+                "",
+            )],
+        )
     }
     fn extra_metric_names(&self) -> Vec<String> {
         [

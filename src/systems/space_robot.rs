@@ -18,22 +18,22 @@
 //! `sim_via_error_deg`: the largest coordinate error (deg, wrapped) at the
 //! via times T, 2T, ….
 
-use super::{mismatch, System};
+use super::System;
 use crate::compare::{coord_error, sample};
 use crate::integrate::Trajectory;
 use crate::model::space_manipulator::SpaceManipulator;
 use crate::model::space_robot::{SpaceRobot, SpaceRobotModel};
 use crate::model::{KinematicModel, State};
+use crate::paper::{rows_from, same, PaperRow};
 use crate::physics::space_robot::SpaceRobotPhysics;
 use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::endogenous::{self, EndogenousParams};
-use crate::planner::stokes_space::{self, StokesSpaceParams};
+use crate::planner::stokes_space::{self, FixedSide, StokesSpaceParams};
 use crate::planner::PlanError;
 use crate::record::Comparison;
 use crate::record::SimTrajectory;
-use crate::scenario::PlannerConfig;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -46,10 +46,16 @@ pub struct SpaceRobotConfig {
     pub urdf: PathBuf,
 }
 
-enum Planner {
+/// The space robot's planners, with their parameters.
+#[derive(Debug, Clone)]
+pub enum SpacePlanner {
+    /// Seed 000 §4.1 Stokes planner.
     Stokes(StokesSpaceParams),
+    /// Seed 001 endogenous-configuration-space planner.
     Endogenous(EndogenousParams),
 }
+
+use SpacePlanner as Planner;
 
 struct Space {
     model: SpaceRobotModel,
@@ -70,29 +76,18 @@ const CHANNEL_METRICS: [(&str, &str); 6] = [
 ];
 
 /// Build the space-robot system.
-pub fn build(_cfg: &SpaceRobotConfig, planner: &PlannerConfig) -> Result<Box<dyn System>, String> {
-    let planner = match planner {
-        PlannerConfig::StokesSpace(p) => Planner::Stokes(p.clone()),
-        PlannerConfig::Endogenous(p) => {
-            if p.via_deg
-                .iter()
-                .any(|v| v.len() != 3 || v.iter().any(|x| !x.is_finite()))
-            {
-                return Err("key `planner.via_deg`: each via point needs 3 finite angles (θ0, θ1, θ2) in degrees".into());
-            }
-            if !(p.segment_time.is_finite() && p.segment_time > 0.0) {
-                return Err("key `planner.segment_time`: must be > 0".into());
-            }
-            Planner::Endogenous(p.clone())
+pub fn build(_cfg: &SpaceRobotConfig, planner: SpacePlanner) -> Result<Box<dyn System>, String> {
+    if let Planner::Endogenous(p) = &planner {
+        if p.via_deg
+            .iter()
+            .any(|v| v.len() != 3 || v.iter().any(|x| !x.is_finite()))
+        {
+            return Err("key `planner.via_deg`: each via point needs 3 finite angles (θ0, θ1, θ2) in degrees".into());
         }
-        other => {
-            return Err(mismatch(
-                "space_robot",
-                other,
-                &["stokes_space", "endogenous"],
-            ))
+        if !(p.segment_time.is_finite() && p.segment_time > 0.0) {
+            return Err("key `planner.segment_time`: must be > 0".into());
         }
-    };
+    }
     Ok(Box::new(Space {
         model: SpaceRobotModel::default(),
         planner,
@@ -159,6 +154,71 @@ impl System for Space {
     ) -> Result<Box<dyn PhysicsSystem>, String> {
         let p = SpaceRobotPhysics::new(robot, urdf_dir, &self.model.robot, start, sim)?;
         Ok(Box::new(p))
+    }
+    /// Seed 000 §4.1's example ((0°, 15°, 15°) → (−20°, 45°, 0°)) with λ = 125° or
+    /// γ = 75°. Seed 001 prints no numbers for its tasks (only qualitative claims).
+    fn paper(&self, start: &State, goal: &State, plan: &Plan) -> Vec<PaperRow> {
+        let Planner::Stokes(p) = &self.planner else {
+            return Vec::new();
+        };
+        let deg = |v: &[f64]| v.iter().map(|x| x.to_radians()).collect::<Vec<_>>();
+        if !(same(start.as_slice(), &deg(&[0.0, 15.0, 15.0]), 1e-9)
+            && same(goal.as_slice(), &deg(&[-20.0, 45.0, 0.0]), 1e-9))
+        {
+            return Vec::new();
+        }
+        let mut spec = vec![
+            ("A (Eq. 19)", "−89.848", "/A", 1.0, "", ""),
+            ("B (Eq. 19)", "−13.92", "/B", 1.0, "", "truncated"),
+            (
+                "θ0 drift along OA, θ0d",
+                "−12.87",
+                "/theta0_d_deg",
+                1.0,
+                "deg",
+                "",
+            ),
+            (
+                "θ0 left for the cycles, θ̄0",
+                "−7.13",
+                "/theta0_bar_deg",
+                1.0,
+                "deg",
+                "",
+            ),
+            ("k (Eq. 20)", "−7.696e-4", "/k", 1.0, "", ""),
+        ];
+        let fixed = p.fixed_value_deg;
+        match p.fixed_side {
+            FixedSide::Lambda if (fixed - 125.0).abs() < 1e-9 => spec.extend([
+                (
+                    "γ for λ = 125° (3 cycles)",
+                    "53.36",
+                    "/gamma_deg",
+                    1.0,
+                    "deg",
+                    "truncated (53.3679°)",
+                ),
+                (
+                    "γ for λ = 125° (3 cycles)",
+                    "0.596",
+                    "/gamma_deg",
+                    1f64.to_radians(),
+                    "rad",
+                    "0.5967 is cos γ; γ = 0.931 rad",
+                ),
+            ]),
+            FixedSide::Gamma if (fixed - 75.0).abs() < 1e-9 => spec.push((
+                "λ for γ = 75° (4 cycles)",
+                "76.084",
+                "/lambda_deg",
+                1.0,
+                "deg",
+                "follows from the rounded θ̄0 = −7.13°",
+            )),
+            _ => {}
+        }
+        rows_from(&plan.details, &spec)
     }
     fn extra_metric_names(&self) -> Vec<String> {
         let mut out: Vec<String> = CHANNEL_METRICS.iter().map(|(_, m)| m.to_string()).collect();

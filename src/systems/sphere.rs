@@ -15,7 +15,7 @@
 //! `sim_goal_orientation_deg` and `tracking_orientation_deg_{rms,max,final}` (ideal vs
 //! simulated orientation on the common dt grid). Position metrics come from (x, y).
 
-use super::{mismatch, System};
+use super::System;
 use crate::compare::sample;
 use crate::integrate::Trajectory;
 use crate::model::rolling_sphere::{
@@ -23,15 +23,15 @@ use crate::model::rolling_sphere::{
     RollingSphere, RollingSphereQuat,
 };
 use crate::model::{KinematicModel, State};
+use crate::paper::{detail, rows_from, same, PaperRow};
 use crate::physics::sphere::SpherePhysics;
 use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
-use crate::planner::sphere_geometric::{self, SphereGeometricParams};
+use crate::planner::sphere_geometric::{self, ArcDirection, SphereGeometricParams};
 use crate::planner::sphere_triangle::{self, SphereTriangleParams};
 use crate::planner::PlanError;
 use crate::record::{Comparison, Overlay, SimTrajectory};
-use crate::scenario::PlannerConfig;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -45,10 +45,16 @@ pub struct SphereConfig {
     pub urdf: PathBuf,
 }
 
-enum Planner {
+/// The sphere's planners, with their parameters.
+#[derive(Debug, Clone)]
+pub enum SpherePlanner {
+    /// Seed 003 §3 geometric (A)-(B)-(A) planner.
     Geometric(SphereGeometricParams),
+    /// Seed 003 §4 spherical-triangle planner.
     Triangle(SphereTriangleParams),
 }
+
+use SpherePlanner as Planner;
 
 struct Sphere {
     euler: RollingSphere,
@@ -57,21 +63,10 @@ struct Sphere {
 }
 
 /// Build the sphere system.
-pub fn build(cfg: &SphereConfig, planner: &PlannerConfig) -> Result<Box<dyn System>, String> {
+pub fn build(cfg: &SphereConfig, planner: SpherePlanner) -> Result<Box<dyn System>, String> {
     if !(cfg.radius > 0.0 && cfg.radius.is_finite()) {
         return Err("key `model.radius`: must be > 0".into());
     }
-    let planner = match planner {
-        PlannerConfig::SphereGeometric(p) => Planner::Geometric(p.clone()),
-        PlannerConfig::SphereTriangle(p) => Planner::Triangle(p.clone()),
-        other => {
-            return Err(mismatch(
-                "rolling_sphere",
-                other,
-                &["sphere_geometric", "sphere_triangle"],
-            ))
-        }
-    };
     Ok(Box::new(Sphere {
         euler: RollingSphere { a: cfg.radius },
         quat: RollingSphereQuat::new(cfg.radius),
@@ -175,6 +170,100 @@ impl System for Sphere {
             start,
             sim,
         )?))
+    }
+    /// Seed 003 §5.1 (geometric, (5, 5, −60°, 45°, −30°) → origin upright, ccw) and §5.2
+    /// (one spherical triangle, d = 1.8, φ = 56.31°, α = −90°, ψ = φ + 10°).
+    fn paper(&self, start: &State, goal: &State, plan: &Plan) -> Vec<PaperRow> {
+        const DEG: f64 = 180.0 / std::f64::consts::PI;
+        let d = &plan.details;
+        if (self.euler.a - 1.0).abs() > 1e-12 {
+            return Vec::new();
+        }
+        match &self.planner {
+            Planner::Geometric(p) => {
+                let s = quat_state_to_euler_state(start);
+                let e: Vec<f64> = (2..5).map(|i| s[i] * DEG).collect();
+                let at_origin_upright = goal[0].abs() < 1e-9
+                    && goal[1].abs() < 1e-9
+                    && geodesic_angle(
+                        &quat_of_state(goal),
+                        &quat_of_state(&State::from_vec(vec![0.0, 0.0, 1.0, 0.0, 0.0, 0.0])),
+                    ) < 1e-9;
+                let task = same(&[s[0], s[1]], &[5.0, 5.0], 1e-9)
+                    && same(&e, &[-60.0, 45.0, -30.0], 1e-6)
+                    && at_origin_upright
+                    && p.direction == ArcDirection::Ccw;
+                if !task {
+                    return Vec::new();
+                }
+                const TRUNC: &str = "truncated";
+                rows_from(
+                    d,
+                    &[
+                        ("x_i (Eq. 24)", "4.61", "/x_i", 1.0, "m", ""),
+                        ("y_i (Eq. 24)", "5.68", "/y_i", 1.0, "m", ""),
+                        ("β_i (Eq. 25)", "−90", "/beta_i_deg", 1.0, "deg", ""),
+                        ("r (Eq. 26)", "7.07", "/r", 1.0, "m", "7.07 = √50 is the distance from (x0, y0); Eq. 13 gives 7.31, the only value that reproduces the printed Δα, θ', C"),
+                        ("Δβ", "−630", "/delta_beta_deg", 1.0, "deg", "−3.5π: the direct π/2 and π/2 − 2π have no ccw solution"),
+                        ("Δα (Eq. 27)", "2.56", "/delta_alpha_deg", 1.0 / DEG, "rad", ""),
+                        ("Δα (Eq. 27)", "146.7", "/delta_alpha_deg", 1.0, "deg", TRUNC),
+                        ("θ' (Eq. 27)", "1.38", "/theta_prime_deg", 1.0 / DEG, "rad", ""),
+                        ("θ' (Eq. 27)", "79.1", "/theta_prime_deg", 1.0, "deg", ""),
+                        ("C x (Eq. 28)", "3.15", "/center/0", 1.0, "m", ""),
+                        ("C y (Eq. 28)", "2.15", "/center/1", 1.0, "m", ""),
+                        ("α_i (Eq. 15)", "67.5", "/alpha_i_deg", 1.0, "deg", TRUNC),
+                    ],
+                )
+            }
+            Planner::Triangle(p) => {
+                let near = |ptr: &str, v: f64, tol: f64| {
+                    detail(d, ptr).is_some_and(|x| (x - v).abs() <= tol)
+                };
+                let one = d["triangles"].as_array().is_some_and(|t| t.len() == 1);
+                let task = p.psi_offset_deg.is_some_and(|o| (o - 10.0).abs() < 1e-9)
+                    && one
+                    && near("/d", 1.8, 1e-3)
+                    && near("/phi_deg", 56.31, 5e-3)
+                    && near("/alpha_deg", -90.0, 1e-6);
+                if !task {
+                    return Vec::new();
+                }
+                const INCONSISTENT: &str = "the printed triangle is not self-consistent (Napier on the printed a, b, C gives B = 70.76°, area 89.98° instead of 90°)";
+                rows_from(
+                    d,
+                    &[
+                        (
+                            "ψ = φ + 10° (Eq. 30)",
+                            "66.31",
+                            "/triangles/0/psi_deg",
+                            1.0,
+                            "deg",
+                            "",
+                        ),
+                        ("side a", "1.862", "/triangles/0/a", 1.0, "rad", ""),
+                        ("side b", "1.198", "/triangles/0/b", 1.0, "rad", ""),
+                        ("side c", "1.760", "/triangles/0/c", 1.0, "rad", ""),
+                        (
+                            "angle A",
+                            "103.81",
+                            "/triangles/0/A_deg",
+                            1.0,
+                            "deg",
+                            INCONSISTENT,
+                        ),
+                        ("angle B", "70.78", "/triangles/0/B_deg", 1.0, "deg", ""),
+                        (
+                            "angle C",
+                            "95.41",
+                            "/triangles/0/C_deg",
+                            1.0,
+                            "deg",
+                            INCONSISTENT,
+                        ),
+                    ],
+                )
+            }
+        }
     }
     fn extra_metric_names(&self) -> Vec<String> {
         EXTRA_METRICS.iter().map(|s| s.to_string()).collect()

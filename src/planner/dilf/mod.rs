@@ -1,0 +1,364 @@
+//! Seed 004 (Tanner, Loizou & Kyriakopoulos, "Nonholonomic navigation and
+//! control of cooperating mobile manipulators"): a dipolar inverse Lyapunov
+//! function on a point world, and the discontinuous feedback law of Eq. 18.
+//!
+//! * [`contact`]: the obstacle function a robot part sees after H1 (a convex
+//!   minimisation, with envelope-theorem derivatives);
+//! * [`point_world`]: H0, T, the switches, H1 and H2 as printed (Eqs. 6–9);
+//! * [`potential`]: V (Eq. 15) and f (Eq. 17), exact gradients by dual numbers;
+//! * [`control`]: Eq. 18.
+//!
+//! The planner's output is a feedback policy ([`crate::plan::ControlLaw::Feedback`]):
+//! the harness evaluates it on the ideal state and, in physics, on the
+//! simulated state.
+
+pub mod contact;
+pub mod control;
+pub mod point_world;
+pub mod potential;
+
+use crate::model::mobile_manipulator::{DOF, INPUTS};
+use crate::model::{Input, State};
+use crate::plan::{Command, ControlLaw, Controller, Plan, PolicyFactory};
+use crate::planner::{check_param, PlanError};
+use control::{Branch, Gains};
+use potential::{GoalFrame, Scene, SingularityEnclosure, Warm};
+use serde::{Deserialize, Serialize};
+use std::sync::Arc;
+
+/// When the task counts as done.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct Tolerance {
+    /// Platform position error, m.
+    pub position: f64,
+    /// Platform heading error, degrees.
+    pub heading_deg: f64,
+    /// Every joint's error, degrees.
+    pub joint_deg: f64,
+}
+
+impl Default for Tolerance {
+    fn default() -> Self {
+        Tolerance {
+            position: 0.02,
+            heading_deg: 2.0,
+            joint_deg: 2.0,
+        }
+    }
+}
+
+impl Tolerance {
+    /// Whether q is within tolerance of the goal (every robot, every coordinate).
+    pub fn reached(&self, q: &[f64], goal: &[f64]) -> bool {
+        let robots = q.len() / DOF;
+        (0..robots).all(|r| {
+            let i = DOF * r;
+            let pos = (q[i] - goal[i]).hypot(q[i + 1] - goal[i + 1]);
+            let head = crate::compare::wrap_angle(q[i + 2] - goal[i + 2]).abs();
+            let joints = (3..DOF)
+                .map(|a| crate::compare::wrap_angle(q[i + a] - goal[i + a]).abs())
+                .fold(0.0, f64::max);
+            pos <= self.position
+                && head <= self.heading_deg.to_radians()
+                && joints <= self.joint_deg.to_radians()
+        })
+    }
+}
+
+/// `[planner] kind = "dilf"`.
+#[derive(Debug, Clone, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct DilfParams {
+    /// λ of the analytic switches (Eqs. 6, 8).
+    #[serde(default = "default_lambda")]
+    pub lambda: f64,
+    /// The exponent k_v of Eq. 15 (larger: obstacles felt less far away).
+    #[serde(default = "default_kv_exponent")]
+    pub kv_exponent: f64,
+    /// The speed gain k_v of Eq. 18a.
+    #[serde(default = "default_kv_gain")]
+    pub kv_gain: f64,
+    /// k_o of Eq. 18b.
+    #[serde(default = "default_ko")]
+    pub ko: f64,
+    /// K_a of Eq. 18c: one gain per joint.
+    #[serde(default = "default_ka")]
+    pub ka: [f64; 6],
+    /// Largest platform speed, m/s.
+    #[serde(default = "default_max_speed")]
+    pub max_speed: f64,
+    /// Largest platform turn rate, rad/s.
+    #[serde(default = "default_max_turn_rate")]
+    pub max_turn_rate: f64,
+    /// Largest joint rate, rad/s.
+    #[serde(default = "default_max_joint_rate")]
+    pub max_joint_rate: f64,
+    /// Hold the heading while the platform's planar field is below this
+    /// fraction of ‖f‖ (θ_d is undefined there; 0 disables).
+    #[serde(default = "default_deadzone")]
+    pub heading_deadzone: f64,
+    /// The policy is evaluated every `period` seconds and held in between.
+    #[serde(default = "default_period")]
+    pub period: f64,
+    /// Run length if the goal is never reached, s.
+    #[serde(default = "default_horizon")]
+    pub horizon: f64,
+    /// Coordinates of the arm parts' goal points.
+    #[serde(default)]
+    pub goal_frame: GoalFrame,
+    /// p of the field f = (Σ‖h2‖²)^p ∂V/∂q; Eq. 17 prints p = 2 (see the README).
+    #[serde(default = "default_field_power")]
+    pub field_power: f64,
+    /// Singularity enclosures (Eq. 13).
+    #[serde(default)]
+    pub singularity: SingularityEnclosure,
+    /// Convergence test.
+    #[serde(default)]
+    pub tolerance: Tolerance,
+}
+
+fn default_lambda() -> f64 {
+    1.0
+}
+fn default_kv_exponent() -> f64 {
+    3.0
+}
+fn default_kv_gain() -> f64 {
+    5.0
+}
+fn default_ko() -> f64 {
+    1.0
+}
+/// K_a roughly ∝ 1/(lever arm)²: the wrist joints move the parts' points
+/// little, so their goal terms are weak.
+fn default_ka() -> [f64; 6] {
+    [50.0, 50.0, 50.0, 300.0, 300.0, 3000.0]
+}
+fn default_max_speed() -> f64 {
+    0.5
+}
+fn default_max_turn_rate() -> f64 {
+    0.8
+}
+fn default_max_joint_rate() -> f64 {
+    0.6
+}
+fn default_horizon() -> f64 {
+    60.0
+}
+fn default_period() -> f64 {
+    0.02
+}
+fn default_deadzone() -> f64 {
+    0.0
+}
+fn default_field_power() -> f64 {
+    2.0
+}
+
+impl DilfParams {
+    /// Range checks; messages name the parameter.
+    pub fn validate(&self) -> Result<(), PlanError> {
+        let pos = |v: f64| v.is_finite() && v > 0.0;
+        check_param("lambda", pos(self.lambda), "must be > 0")?;
+        check_param("kv_exponent", pos(self.kv_exponent), "must be > 0")?;
+        check_param("kv_gain", pos(self.kv_gain), "must be > 0")?;
+        check_param("ko", pos(self.ko), "must be > 0")?;
+        check_param(
+            "ka",
+            self.ka.iter().all(|k| pos(*k)),
+            "K_a must be positive definite: every gain > 0",
+        )?;
+        check_param("max_speed", pos(self.max_speed), "must be > 0")?;
+        check_param("max_turn_rate", pos(self.max_turn_rate), "must be > 0")?;
+        check_param("max_joint_rate", pos(self.max_joint_rate), "must be > 0")?;
+        check_param("period", pos(self.period), "must be > 0")?;
+        check_param(
+            "heading_deadzone",
+            (0.0..1.0).contains(&self.heading_deadzone),
+            "must be in [0, 1)",
+        )?;
+        check_param(
+            "field_power",
+            self.field_power.is_finite() && self.field_power > 1.5,
+            "must be > 1.5 (f must vanish at the goal, where V ~ 1/r)",
+        )?;
+        check_param(
+            "horizon",
+            pos(self.horizon) && self.horizon <= 1e5,
+            "must be in (0, 1e5] s",
+        )?;
+        let s = &self.singularity;
+        check_param(
+            "singularity",
+            [s.shoulder, s.elbow, s.wrist]
+                .iter()
+                .all(|d| d.is_finite() && *d >= 0.0),
+            "enclosure half-widths must be ≥ 0",
+        )?;
+        let t = &self.tolerance;
+        check_param(
+            "tolerance",
+            [t.position, t.heading_deg, t.joint_deg]
+                .iter()
+                .all(|v| pos(*v)),
+            "every tolerance must be > 0",
+        )?;
+        Ok(())
+    }
+
+    /// Gains of Eq. 18.
+    pub fn gains(&self) -> Gains {
+        Gains {
+            kv_gain: self.kv_gain,
+            ko: self.ko,
+            ka: self.ka,
+            max_speed: self.max_speed,
+            max_turn_rate: self.max_turn_rate,
+            max_joint_rate: self.max_joint_rate,
+            heading_deadzone: self.heading_deadzone,
+            goal_lock_radius: 0.5 * self.tolerance.position,
+        }
+    }
+}
+
+/// Label indices of the plan: one per combination of the robots' Eq. 18b
+/// branches, then these.
+fn labels(robots: usize) -> Vec<String> {
+    let mut out: Vec<String> = (0..3usize.pow(robots as u32))
+        .map(|code| {
+            (0..robots)
+                .map(|r| Branch::name(code / 3usize.pow(r as u32) % 3))
+                .collect::<Vec<_>>()
+                .join("/")
+        })
+        .collect();
+    out.extend(["converged", "collision", "singular", "solver failure"].map(String::from));
+    out
+}
+
+struct Policy {
+    scene: Arc<Scene>,
+    gains: Gains,
+    tolerance: Tolerance,
+}
+
+struct DilfController {
+    policy: Arc<Policy>,
+    warm: Warm,
+    labels: usize,
+}
+
+impl Controller for DilfController {
+    fn command(&mut self, _t: f64, q: &State) -> Command {
+        let p = &self.policy;
+        let robots = p.scene.robots;
+        let stop = |label: usize| Command {
+            u: Input::zeros(INPUTS * robots),
+            label,
+            done: true,
+        };
+        let q = q.as_slice();
+        if p.tolerance.reached(q, &p.scene.goal) {
+            return stop(self.labels);
+        }
+        let (e, f) = match p.scene.field(q, &mut self.warm) {
+            Ok(x) => x,
+            Err(_) => return stop(self.labels + 3),
+        };
+        if e.min_beta <= 0.0 {
+            return stop(self.labels + 1);
+        }
+        if e.min_singular <= 0.0 {
+            return stop(self.labels + 2);
+        }
+        let (u, branches) = control::control(q, &f, &p.scene.goal, &p.gains);
+        let label = branches
+            .iter()
+            .enumerate()
+            .map(|(r, b)| b.index() * 3usize.pow(r as u32))
+            .sum();
+        Command {
+            u: Input::from_vec(u),
+            label,
+            done: false,
+        }
+    }
+}
+
+struct Factory(Arc<Policy>);
+
+impl PolicyFactory for Factory {
+    fn start(&self) -> Box<dyn Controller> {
+        Box::new(DilfController {
+            policy: self.0.clone(),
+            warm: self.0.scene.warm(),
+            labels: 3usize.pow(self.0.scene.robots as u32),
+        })
+    }
+}
+
+/// Refuse a configuration (`what`: the scenario key, `start` or `goal`) that
+/// puts a robot part inside an obstacle or an arm inside a singularity
+/// enclosure: V is 0 there and Eq. 18 cannot start (or end).
+pub fn check_configuration(scene: &Scene, q: &[f64], what: &str) -> Result<(), PlanError> {
+    let bad = |reason: String| PlanError::InvalidParameter {
+        name: what.into(),
+        reason,
+    };
+    let closest = scene
+        .closest(q)
+        .map_err(|e| PlanError::NoConvergence(e.to_string()))?;
+    if let Some(c) = closest.filter(|c| c.beta <= 0.0) {
+        return Err(bad(format!(
+            "puts {} inside {} (their ellipsoids overlap: β = {:.3e} ≤ 0)",
+            c.part, c.obstacle, c.beta
+        )));
+    }
+    let e = scene
+        .evaluate::<f64>(q, &mut scene.warm())
+        .map_err(|e| PlanError::NoConvergence(e.to_string()))?;
+    if e.min_singular <= 0.0 {
+        return Err(bad(
+            "puts an arm inside a singularity enclosure (see planner.singularity)".into(),
+        ));
+    }
+    Ok(())
+}
+
+/// The feedback plan for `scene` (whose goal is the task's goal) from `start`.
+pub fn plan(scene: Arc<Scene>, start: &State, params: &DilfParams) -> Result<Plan, PlanError> {
+    params.validate()?;
+    let q = start.as_slice();
+    check_configuration(&scene, q, "start")?;
+    check_configuration(&scene, &scene.goal, "goal")?;
+    let e = scene
+        .evaluate::<f64>(q, &mut scene.warm())
+        .map_err(|e| PlanError::NoConvergence(e.to_string()))?;
+    let details = serde_json::json!({
+        "robots": scene.robots,
+        "parts_per_robot": scene.parts.iter().map(|p| p.name).collect::<Vec<_>>(),
+        "obstacles": scene.obstacles.iter().map(|o| o.name.clone()).collect::<Vec<_>>(),
+        "pairs": scene.pair_count(),
+        "start_v": e.v,
+        "start_min_beta": e.min_beta,
+        "start_sum_h2": e.d,
+    });
+    let labels = labels(scene.robots);
+    let policy = Policy {
+        scene,
+        gains: params.gains(),
+        tolerance: params.tolerance,
+    };
+    Ok(Plan {
+        labels,
+        segments: Vec::new(),
+        duration: params.horizon,
+        law: ControlLaw::Feedback {
+            factory: Arc::new(Factory(Arc::new(policy))),
+            period: params.period,
+        },
+        details,
+    })
+}

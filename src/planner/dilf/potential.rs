@@ -1,0 +1,644 @@
+//! The dipolar inverse Lyapunov function of seed 004 (Eq. 15) and its field
+//! (Eq. 17), with exact gradients.
+//!
+//! For every robot part p (one ellipsoid of a robot's cover, in its own
+//! workspace copy W^p):
+//!
+//! * h_p: the part's point in coordinates where its goal is the origin
+//!   (the platform part: the platform position in the goal frame, whose x axis
+//!   is the goal heading; arm parts: see [`GoalFrame`]);
+//! * β_pi ([`super::contact`]): the obstacle function of obstacle i seen from
+//!   h_p after H1; b̃_pi = β/(β + 1) ∈ (0, 1), which is also the square of T's
+//!   contraction factor;
+//! * σ_pi: the analytic switches of Eq. 8 on ‖h_p‖ and the b̃ (in logarithms,
+//!   [`super::point_world::switches_log`]);
+//! * H2 (Eq. 9) moves the part's point to h2^p = h_p + Σ_i σ_i (√b̃_i − 1)(h_p − h_Oi);
+//!   on contact with obstacle i it lands exactly on h_Oi;
+//! * the proximity d_p (after Eq. 9) as the product of the normalised distances
+//!   ρ_pi = ‖h2^p − h_Oi‖ / ‖h_p − h_Oi‖ ∈ [0, 1] (1 far away, 0 on contact).
+//!
+//! V = [Π_p Π_i ρ_pi · b_s]^{1/k_v} · Π_r γ_r / Σ_p ‖h2^p‖²
+//!
+//! with γ_r = |⟨e1, h2^{c_r}⟩| the dipole of robot r's platform and b_s the
+//! singularity term ([`SingularityEnclosure`], Eq. 13). The field is
+//! f = (Σ_p ‖h2^p‖²)² ∂V/∂q (Eq. 17).
+//!
+//! Choices the paper leaves open, and one change, all in the README:
+//! the printed d_p = Π‖h2^p − h_Oi‖ grows with the distance to every
+//! obstacle's *centre*, so far obstacles would repel as strongly as near ones
+//! and the raw superellipsoid functions (∝ distance^{2n}) overflow the
+//! switches' products; dividing each factor by the undeformed distance
+//! ‖h_p − h_Oi‖ keeps its zero set (contact) and the point-world construction
+//! and bounds it by 1, and the switches use the bounded b̃.
+//!
+//! Derivatives: the whole evaluation is generic over the scalar; with forward
+//! dual numbers (`num_dual::DualSVec64<N>`, N = 9k) one pass gives V and ∂V/∂q.
+//! The inner minimisations contribute exactly through the envelope theorem
+//! ([`super::contact::Contact::beta`]).
+
+use super::contact::{self, Contact, ContactError};
+use super::point_world::switches_log;
+use crate::model::ellipsoid::{PlacedEllipsoid, Superellipsoid};
+use crate::model::mobile_manipulator::{self as mm, Link, Part, DOF};
+use crate::model::puma560;
+use crate::model::spatial::{self, k, Pose, Scalar, V3};
+use num_dual::DualSVec64;
+use serde::{Deserialize, Serialize};
+
+/// Where the arm parts' goal points live (the paper: "in an appropriate
+/// coordinate system the desired configuration of every h_p is the origin").
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum GoalFrame {
+    /// Arm parts are measured in their own platform's frame: their goal term
+    /// depends on the arm joints only, so a far goal does not stretch the arm
+    /// towards it (default).
+    #[default]
+    Platform,
+    /// Every part is measured in the world (goal frame): a literal reading.
+    World,
+}
+
+/// Singular sets of each arm (zeros of the three factors of det J, see
+/// [`puma560`]) enclosed in slabs |f_k| ≤ δ_k: generalized ellipsoids in the
+/// factor coordinates. δ = 0 disables a factor.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SingularityEnclosure {
+    /// Shoulder: wrist centre's reach in the arm plane, m.
+    pub shoulder: f64,
+    /// Elbow: d4 c3 + a3 s3, m.
+    pub elbow: f64,
+    /// Wrist: |sin q5|.
+    pub wrist: f64,
+}
+
+impl Default for SingularityEnclosure {
+    fn default() -> Self {
+        SingularityEnclosure {
+            shoulder: 0.05,
+            elbow: 0.05,
+            wrist: 0.1,
+        }
+    }
+}
+
+impl SingularityEnclosure {
+    fn deltas(&self) -> [f64; 3] {
+        [self.shoulder, self.elbow, self.wrist]
+    }
+
+    /// Obstacle functions s_k = (f_k/δ_k)² − 1 of the enabled factors (< 0 inside).
+    pub fn values<T: Scalar>(&self, arm: &[T]) -> Vec<(usize, T)> {
+        let f = puma560::singularity_factors(arm);
+        self.deltas()
+            .iter()
+            .enumerate()
+            .filter(|(_, d)| **d > 0.0)
+            .map(|(i, d)| {
+                let u = f[i] * (1.0 / d);
+                (i, u * u - 1.0)
+            })
+            .collect()
+    }
+}
+
+/// Parameters of V.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct PotentialParams {
+    /// λ of the switches (Eqs. 6, 8).
+    pub lambda: f64,
+    /// The exponent k_v of Eqs. 10, 14, 15.
+    pub kv: f64,
+    /// Coordinates of the arm parts' goal points.
+    pub goal_frame: GoalFrame,
+    /// Singularity enclosures (Eq. 13).
+    pub singularity: SingularityEnclosure,
+    /// p in f = (Σ‖h2‖²)^p ∂V/∂q; Eq. 17 prints p = 2.
+    pub field_power: f64,
+}
+
+/// A named static obstacle.
+#[derive(Debug, Clone)]
+pub struct Obstacle {
+    /// Name (for messages).
+    pub name: String,
+    /// Shape in the world.
+    pub shape: PlacedEllipsoid<f64>,
+}
+
+/// Everything V depends on besides q.
+#[derive(Debug, Clone)]
+pub struct Scene {
+    /// Number of robots k.
+    pub robots: usize,
+    /// Each robot's cover; part 0 is the platform part, centred above the axle.
+    pub parts: Vec<Part>,
+    /// Static obstacles.
+    pub obstacles: Vec<Obstacle>,
+    /// Goal configuration, 9k coordinates.
+    pub goal: Vec<f64>,
+    /// Parameters.
+    pub params: PotentialParams,
+    /// Per (robot, part): the goal point in the part's goal coordinates.
+    goal_points: Vec<[f64; 3]>,
+}
+
+/// Warm starts of the inner solves, one slot per (part, obstacle) pair.
+#[derive(Debug, Clone, Default)]
+pub struct Warm(Vec<Option<[f64; 3]>>);
+
+/// V at one configuration.
+#[derive(Debug, Clone, Copy)]
+pub struct Evaluation<T: Scalar> {
+    /// V (Eq. 15); 0 in collision.
+    pub v: T,
+    /// Σ_p ‖h2^p‖².
+    pub d: f64,
+    /// Least β over all part–obstacle pairs (< 0: overlap).
+    pub min_beta: f64,
+    /// Least singularity function s_k over arms and factors (< 0: inside an enclosure).
+    pub min_singular: f64,
+}
+
+/// Which pair is closest (for messages).
+#[derive(Debug, Clone, PartialEq)]
+pub struct Closest {
+    /// "robot r part" description.
+    pub part: String,
+    /// Obstacle description.
+    pub obstacle: String,
+    /// β of the pair.
+    pub beta: f64,
+}
+
+impl Scene {
+    /// Build a scene; errors are user-facing.
+    pub fn new(
+        robots: usize,
+        parts: Vec<Part>,
+        obstacles: Vec<Obstacle>,
+        goal: Vec<f64>,
+        params: PotentialParams,
+    ) -> Result<Scene, String> {
+        if !(params.lambda.is_finite() && params.lambda > 0.0) {
+            return Err("`lambda` must be > 0".into());
+        }
+        if !(params.kv.is_finite() && params.kv > 0.0) {
+            return Err("`kv_exponent` must be > 0".into());
+        }
+        match parts.first() {
+            Some(p) if p.link == Link::Base && p.shape.center[..2] == [0.0, 0.0] => {}
+            _ => return Err("part 0 must be the platform, centred above the axle".into()),
+        }
+        let mut s = Scene {
+            robots,
+            parts,
+            obstacles,
+            goal,
+            params,
+            goal_points: Vec::new(),
+        };
+        let goal = s.goal.clone();
+        s.goal_points = (0..robots)
+            .flat_map(|r| {
+                let q = &goal[DOF * r..DOF * (r + 1)];
+                let f = mm::frames::<f64>(q);
+                let heading = Pose::<f64>::rotation(spatial::rot_z(q[2]));
+                s.parts
+                    .iter()
+                    .enumerate()
+                    .map(|(i, p)| {
+                        let c = p.shape.placed(f.link(p.link)).center;
+                        match (i, s.params.goal_frame) {
+                            (0, _) | (_, GoalFrame::World) => heading.apply_inv(c),
+                            (_, GoalFrame::Platform) => f.base.apply_inv(c),
+                        }
+                    })
+                    .collect::<Vec<_>>()
+            })
+            .collect();
+        Ok(s)
+    }
+
+    /// Number of (part, obstacle) pairs, robot-robot pairs included.
+    pub fn pair_count(&self) -> usize {
+        let n = self.parts.len();
+        self.robots * n * (self.obstacles.len() + (self.robots - 1) * n)
+    }
+
+    /// A fresh warm-start cache.
+    pub fn warm(&self) -> Warm {
+        Warm(vec![None; self.pair_count()])
+    }
+
+    /// Placed parts of every robot at q, robot-major.
+    pub fn placed_parts<T: Scalar>(&self, q: &[T]) -> Vec<PlacedEllipsoid<T>> {
+        (0..self.robots)
+            .flat_map(|r| {
+                let f = mm::frames(&q[DOF * r..DOF * (r + 1)]);
+                self.parts
+                    .iter()
+                    .map(move |p| placed_generic(&p.shape, f.link(p.link)))
+                    .collect::<Vec<_>>()
+            })
+            .collect()
+    }
+
+    /// V at q (value and, with dual numbers, derivatives).
+    pub fn evaluate<T: Scalar>(
+        &self,
+        q: &[T],
+        warm: &mut Warm,
+    ) -> Result<Evaluation<T>, ContactError> {
+        let n = self.parts.len();
+        let placed = self.placed_parts(q);
+        let ln_lambda = self.params.lambda.ln();
+        let mut ln_num = k::<T>(0.0);
+        let mut d = k::<T>(0.0);
+        let mut gamma = k::<T>(1.0);
+        let mut min_beta = f64::INFINITY;
+        let mut slot = 0;
+        let mut collided = false;
+        for r in 0..self.robots {
+            let qr = &q[DOF * r..DOF * (r + 1)];
+            let base_rot_t = spatial::rot_z(qr[2]);
+            let goal_heading = self.goal[DOF * r + 2];
+            let heading = spatial::rot_z(k::<T>(goal_heading));
+            for (i, _) in self.parts.iter().enumerate() {
+                let part = &placed[r * n + i];
+                let part_re = part.re();
+                let c = part.center;
+                // The part's point and the rotation from world to its goal coordinates.
+                let (h_now, rot) = match (i, self.params.goal_frame) {
+                    (0, _) | (_, GoalFrame::World) => (spatial::mul_mtv(&heading, c), heading),
+                    (_, GoalFrame::Platform) => {
+                        let base_p = [qr[0], qr[1], k(0.0)];
+                        (
+                            spatial::mul_mtv(&base_rot_t, spatial::sub(c, base_p)),
+                            base_rot_t,
+                        )
+                    }
+                };
+                let h = spatial::sub(h_now, spatial::lift(self.goal_points[r * n + i]));
+                // Every obstacle this part sees: static ones (constant: only
+                // the part carries derivatives), then the other robots' parts.
+                let mut seen: Vec<(T, V3<T>)> = Vec::with_capacity(self.obstacles.len() + n);
+                for o in &self.obstacles {
+                    let sol = self.solve(&part_re, &o.shape, &mut warm.0[slot])?;
+                    slot += 1;
+                    min_beta = min_beta.min(sol.value);
+                    collided |= sol.value <= 0.0;
+                    let beta = part.value(spatial::lift(sol.x)) * sol.mu + sol.value;
+                    seen.push((beta, spatial::sub(c, spatial::lift(o.shape.center))));
+                }
+                for j in (0..self.robots)
+                    .filter(|&o| o != r)
+                    .flat_map(|o| (0..n).map(move |j| o * n + j))
+                {
+                    let o = &placed[j];
+                    let sol = self.solve(&part_re, &o.re(), &mut warm.0[slot])?;
+                    slot += 1;
+                    min_beta = min_beta.min(sol.value);
+                    collided |= sol.value <= 0.0;
+                    seen.push((sol.beta(part, o), spatial::sub(c, o.center)));
+                }
+                if collided {
+                    continue;
+                }
+                // Eq. 9 on the part's point, then the normalised proximities.
+                let ln_b: Vec<T> = seen.iter().map(|(b, _)| (*b / (*b + 1.0)).ln()).collect();
+                let hh = spatial::dot(h, h);
+                let mut shift = spatial::lift::<T>([0.0; 3]);
+                if hh.re() > 1e-24 && !seen.is_empty() {
+                    let sigma = switches_log(hh.ln() * 0.5, &ln_b, ln_lambda);
+                    for ((s, lb), (_, delta)) in sigma.iter().zip(&ln_b).zip(&seen) {
+                        let sqrt_b = (*lb * 0.5).exp();
+                        shift = spatial::add(shift, spatial::scale(*delta, *s * (sqrt_b - 1.0)));
+                    }
+                }
+                for (_, delta) in &seen {
+                    let moved = spatial::add(*delta, shift);
+                    ln_num +=
+                        (spatial::dot(moved, moved) / spatial::dot(*delta, *delta)).ln() * 0.5;
+                }
+                let h2 = spatial::add(h, spatial::mul_mtv(&rot, shift));
+                d += spatial::dot(h2, h2);
+                if i == 0 {
+                    // The dipole: |x| in the goal frame, with sign(0) = +1 (App. G).
+                    gamma *= if h2[0].re() >= 0.0 { h2[0] } else { -h2[0] };
+                }
+            }
+        }
+        let mut min_singular = f64::INFINITY;
+        for r in 0..self.robots {
+            for (_, s) in self
+                .params
+                .singularity
+                .values(&q[DOF * r + 3..DOF * (r + 1)])
+            {
+                min_singular = min_singular.min(s.re());
+                if s.re() > 0.0 {
+                    ln_num += (s / (s + 1.0)).ln();
+                }
+            }
+        }
+        let v = if collided || min_singular <= 0.0 {
+            k(0.0)
+        } else {
+            gamma * (ln_num * (1.0 / self.params.kv)).exp() / d
+        };
+        Ok(Evaluation {
+            v,
+            d: d.re(),
+            min_beta,
+            min_singular,
+        })
+    }
+
+    fn solve(
+        &self,
+        part: &PlacedEllipsoid<f64>,
+        obstacle: &PlacedEllipsoid<f64>,
+        warm: &mut Option<[f64; 3]>,
+    ) -> Result<Contact, ContactError> {
+        let c = contact::solve(part, obstacle, *warm)?;
+        *warm = Some(c.y);
+        Ok(c)
+    }
+
+    /// V, D and the field f = D² ∂V/∂q (Eq. 17) at q.
+    pub fn field(
+        &self,
+        q: &[f64],
+        warm: &mut Warm,
+    ) -> Result<(Evaluation<f64>, Vec<f64>), ContactError> {
+        match self.robots {
+            1 => self.field_n::<9>(q, warm),
+            _ => self.field_n::<18>(q, warm),
+        }
+    }
+
+    fn field_n<const N: usize>(
+        &self,
+        q: &[f64],
+        warm: &mut Warm,
+    ) -> Result<(Evaluation<f64>, Vec<f64>), ContactError> {
+        let qd: Vec<DualSVec64<N>> = q
+            .iter()
+            .enumerate()
+            .map(|(i, &x)| DualSVec64::<N>::from_re(x).derivative(i))
+            .collect();
+        let e = self.evaluate(&qd, warm)?;
+        let grad: Vec<f64> = match e.v.eps.0 {
+            Some(g) => g.iter().copied().collect(),
+            None => vec![0.0; N],
+        };
+        let d2 = e.d.powf(self.params.field_power);
+        Ok((
+            Evaluation {
+                v: e.v.re,
+                d: e.d,
+                min_beta: e.min_beta,
+                min_singular: e.min_singular,
+            },
+            grad.iter().map(|g| d2 * g).collect(),
+        ))
+    }
+
+    /// The closest part–obstacle pair at q (for messages and checks).
+    pub fn closest(&self, q: &[f64]) -> Result<Option<Closest>, ContactError> {
+        let n = self.parts.len();
+        let placed = self.placed_parts(q);
+        let mut best: Option<Closest> = None;
+        for r in 0..self.robots {
+            for (i, part) in self.parts.iter().enumerate() {
+                let p = &placed[r * n + i];
+                let mut consider =
+                    |name: String, o: &PlacedEllipsoid<f64>| -> Result<(), ContactError> {
+                        let c = contact::solve(p, o, None)?;
+                        if best.as_ref().is_none_or(|b| c.value < b.beta) {
+                            best = Some(Closest {
+                                part: format!("robot {} part `{}`", r + 1, part.name),
+                                obstacle: name,
+                                beta: c.value,
+                            });
+                        }
+                        Ok(())
+                    };
+                for o in &self.obstacles {
+                    consider(format!("obstacle `{}`", o.name), &o.shape)?;
+                }
+                for o in (0..self.robots).filter(|&o| o != r) {
+                    for (j, other) in self.parts.iter().enumerate() {
+                        consider(
+                            format!("robot {} part `{}`", o + 1, other.name),
+                            &placed[o * n + j],
+                        )?;
+                    }
+                }
+            }
+        }
+        Ok(best)
+    }
+}
+
+/// A link-frame shape placed by a `T` pose.
+pub fn placed_generic<T: Scalar>(s: &Superellipsoid, pose: &Pose<T>) -> PlacedEllipsoid<T> {
+    // The local pose is constant: multiply by it in f64 terms.
+    let rot = if s.rpy == [0.0; 3] {
+        pose.r
+    } else {
+        spatial::mul_mm_const(&pose.r, &s.rotation())
+    };
+    PlacedEllipsoid {
+        center: spatial::add(spatial::mul_mv_const(&pose.r, s.center), pose.p),
+        rot,
+        semi: s.semi_axes,
+        n: s.exponent,
+    }
+}
+
+#[cfg(test)]
+pub(crate) mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+    use rand_chacha::ChaCha8Rng;
+
+    /// A room corner: a wall with a door gap and a table, box-like (n = 4).
+    pub(crate) fn scene(robots: usize, goal_frame: GoalFrame) -> Scene {
+        let wall = |name: &str, c: [f64; 3], s: [f64; 3]| Obstacle {
+            name: name.into(),
+            shape: Superellipsoid {
+                center: c,
+                semi_axes: s,
+                exponent: 4.0,
+                rpy: [0.0; 3],
+            }
+            .at_rest(),
+        };
+        let obstacles = vec![
+            wall("wall_left", [0.0, 3.0, 1.25], [0.1, 2.2, 1.25]),
+            wall("wall_right", [0.0, -3.0, 1.25], [0.1, 2.2, 1.25]),
+            wall("table", [3.0, 0.0, 0.35], [0.6, 0.4, 0.35]),
+        ];
+        let mut goal = vec![3.2, 2.0, 0.3, 0.4, -1.2, 2.2, 0.1, -0.6, 0.3];
+        if robots == 2 {
+            goal.extend([3.0, -2.0, -0.2, -0.5, -1.4, 2.0, 0.0, -0.5, 0.1]);
+        }
+        Scene::new(
+            robots,
+            mm::default_parts(),
+            obstacles,
+            goal,
+            PotentialParams {
+                lambda: 1.0,
+                kv: 3.0,
+                goal_frame,
+                singularity: SingularityEnclosure::default(),
+                field_power: 2.0,
+            },
+        )
+        .unwrap()
+    }
+
+    /// A random collision-free configuration in front of the wall.
+    pub(crate) fn random_q(s: &Scene, rng: &mut ChaCha8Rng) -> Vec<f64> {
+        loop {
+            let mut q = Vec::new();
+            for r in 0..s.robots {
+                let y0 = if r == 0 { 1.0 } else { -1.0 };
+                q.extend([
+                    rng.random_range(-4.0..-1.2),
+                    y0 + rng.random_range(-1.0..1.0),
+                    rng.random_range(-3.1..3.1),
+                    rng.random_range(-2.5..2.5),
+                    rng.random_range(-2.0..-0.6),
+                    rng.random_range(1.6..2.8),
+                    rng.random_range(-1.5..1.5),
+                    rng.random_range(-1.2..-0.3),
+                    rng.random_range(-1.5..1.5),
+                ]);
+            }
+            let e = s.evaluate::<f64>(&q, &mut s.warm()).unwrap();
+            if e.min_beta > 0.05 && e.min_singular > 0.0 && e.v > 0.0 {
+                return q;
+            }
+        }
+    }
+
+    #[test]
+    fn gradient_matches_central_differences() {
+        for (robots, frame) in [
+            (1, GoalFrame::Platform),
+            (1, GoalFrame::World),
+            (2, GoalFrame::Platform),
+        ] {
+            let s = scene(robots, frame);
+            let mut rng = ChaCha8Rng::seed_from_u64(40 + robots as u64);
+            for trial in 0..12 {
+                let q = random_q(&s, &mut rng);
+                let (e, f) = s.field(&q, &mut s.warm()).unwrap();
+                let d2 = e.d * e.d;
+                let v = |q: &[f64]| s.evaluate::<f64>(q, &mut s.warm()).unwrap().v;
+                let scale = f.iter().map(|x| x.abs()).fold(0.0, f64::max) / d2;
+                for i in 0..q.len() {
+                    let h = 1e-6;
+                    let (mut qp, mut qm) = (q.clone(), q.clone());
+                    qp[i] += h;
+                    qm[i] -= h;
+                    let fd = (v(&qp) - v(&qm)) / (2.0 * h);
+                    let exact = f[i] / d2;
+                    assert!(
+                        (fd - exact).abs() <= 1e-6 * scale.max(exact.abs()),
+                        "k={robots} {frame:?} trial {trial} coord {i}: exact {exact:e}, fd {fd:e}"
+                    );
+                }
+            }
+        }
+    }
+    /// Definition 1 (ii): V grows without bound as the goal is approached
+    /// along the dipole axis (every other coordinate at its goal): V ~ c/t.
+    #[test]
+    fn v_tends_to_infinity_at_the_goal() {
+        let s = scene(1, GoalFrame::Platform);
+        let g = s.goal.clone();
+        let mut last = 0.0;
+        let mut vt = Vec::new();
+        for t in [0.5, 0.1, 0.01, 1e-3, 1e-4] {
+            let mut q = g.clone();
+            q[0] -= t * g[2].cos();
+            q[1] -= t * g[2].sin();
+            let v = s.evaluate::<f64>(&q, &mut s.warm()).unwrap().v;
+            assert!(v > last, "V = {v} at {t} m not above {last}");
+            last = v;
+            vt.push(v * t);
+        }
+        // V·t tends to a positive constant: V grows like 1/t.
+        let (a, b) = (vt[3], vt[4]);
+        assert!((a - b).abs() < 0.01 * b && b > 0.0, "V·t = {vt:?}");
+        assert!(last > 1e3, "V = {last} at 0.1 mm from the goal");
+    }
+
+    /// Definition 1 (i) on the obstacle boundaries: V → 0 as a part closes in
+    /// on an obstacle (β → 0⁺), like β^{1/(2 k_v)} (the point-world distance
+    /// is ∝ √β), and is 0 once they touch.
+    #[test]
+    fn v_vanishes_on_obstacle_boundaries() {
+        let s = scene(1, GoalFrame::Platform);
+        // Drive the platform along +x towards the wall at x = 0 (y = 3 is
+        // behind `wall_left`): bisect for the first contact.
+        let q_at = |x: f64| {
+            let mut q = s.goal.clone();
+            q[0] = x;
+            q[1] = 3.0;
+            q
+        };
+        let beta = |x: f64| s.evaluate::<f64>(&q_at(x), &mut s.warm()).unwrap().min_beta;
+        let (mut free, mut hit) = (-3.0, 0.0);
+        assert!(beta(free) > 0.0 && beta(hit) <= 0.0);
+        for _ in 0..80 {
+            let mid = 0.5 * (free + hit);
+            if beta(mid) > 0.0 {
+                free = mid;
+            } else {
+                hit = mid;
+            }
+        }
+        let v = |x: f64| s.evaluate::<f64>(&q_at(x), &mut s.warm()).unwrap().v;
+        assert_eq!(v(hit), 0.0, "V on contact");
+        let far = v(-3.0);
+        let mut ratios = Vec::new();
+        for d in [1e-3, 1e-6, 1e-9] {
+            let x = free - d;
+            let (b, vv) = (beta(x), v(x));
+            assert!(b > 0.0 && vv > 0.0 && vv < far);
+            ratios.push(vv / b.powf(1.0 / (2.0 * s.params.kv)));
+        }
+        // V / β^{1/(2k_v)} settles: V → 0 at the rate the construction predicts.
+        let spread = ratios
+            .iter()
+            .fold(0.0f64, |m, r| m.max((r / ratios[2] - 1.0).abs()));
+        assert!(spread < 0.2, "ratios {ratios:?}");
+    }
+
+    /// Σ‖h2‖² (the denominator of V) vanishes only at the goal: the parts'
+    /// points fix every coordinate, the heading through the dipole.
+    #[test]
+    fn goal_distance_vanishes_only_at_the_goal() {
+        let s = scene(1, GoalFrame::Platform);
+        let mut rng = ChaCha8Rng::seed_from_u64(3);
+        for _ in 0..200 {
+            let mut q = s.goal.clone();
+            let i = rng.random_range(0..9);
+            if i == 2 {
+                continue; // the heading enters through γ, not Σ‖h2‖²
+            }
+            q[i] += rng.random_range(0.01..0.5) * if rng.random::<bool>() { 1.0 } else { -1.0 };
+            let e = s.evaluate::<f64>(&q, &mut s.warm()).unwrap();
+            assert!(e.d > 1e-8, "coordinate {i}: Σ‖h2‖² = {}", e.d);
+        }
+        let e = s.evaluate::<f64>(&s.goal, &mut s.warm()).unwrap();
+        assert!(e.d < 1e-24);
+    }
+}

@@ -1,0 +1,516 @@
+//! Figures of the HTML report, drawn with `plotters` into inline SVG strings.
+
+use plotters::coord::Shift;
+use plotters::prelude::*;
+
+/// Ideal run (green, as in the Rerun and Foxglove views).
+pub const IDEAL: RGBColor = RGBColor(46, 160, 64);
+/// Simulated run (orange).
+pub const SIM: RGBColor = RGBColor(240, 130, 0);
+/// Goal, thresholds, failures (red).
+pub const RED: RGBColor = RGBColor(210, 30, 40);
+/// Neutral series (blue).
+pub const BLUE: RGBColor = RGBColor(31, 100, 200);
+/// Start marker (grey).
+pub const GREY: RGBColor = RGBColor(90, 90, 90);
+
+const PALETTE: [RGBColor; 8] = [
+    RGBColor(31, 119, 180),
+    RGBColor(255, 127, 14),
+    RGBColor(44, 160, 44),
+    RGBColor(214, 39, 40),
+    RGBColor(148, 103, 189),
+    RGBColor(140, 86, 75),
+    RGBColor(227, 119, 194),
+    RGBColor(23, 190, 207),
+];
+
+/// Colour of plan label `k` (segment shading, legend).
+pub fn label_color(k: usize) -> RGBColor {
+    PALETTE[k % PALETTE.len()]
+}
+
+/// Series colour `k` for charts with several neutral lines.
+pub fn series_color(k: usize) -> RGBColor {
+    PALETTE[k % PALETTE.len()]
+}
+
+/// One line of a time chart; `None` values break the line.
+pub struct Line<'a> {
+    /// Legend name.
+    pub name: String,
+    /// Times, s.
+    pub t: &'a [f32],
+    /// Values (already in display units).
+    pub v: Vec<Option<f64>>,
+    /// Colour.
+    pub color: RGBColor,
+    /// Zero-order hold between samples (commands).
+    pub step: bool,
+}
+
+/// A horizontal reference line (threshold).
+pub struct HLine {
+    /// Height.
+    pub y: f64,
+    /// Legend name (empty: none).
+    pub name: String,
+    /// Colour.
+    pub color: RGBColor,
+}
+
+/// A shaded time span (plan segment) with its label index.
+pub type Shade = (f64, f64, usize);
+
+type Res<T> = Result<T, String>;
+
+fn err<E: std::fmt::Debug>(e: E) -> String {
+    format!("plot failed: {e:?}")
+}
+
+/// Finite [min, max] of values, padded; never empty.
+fn range(vals: impl Iterator<Item = f64>) -> (f64, f64) {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in vals.filter(|v| v.is_finite()) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if !lo.is_finite() {
+        return (-1.0, 1.0);
+    }
+    let span = hi - lo;
+    if span <= 1e-12 * lo.abs().max(hi.abs()).max(1e-300) {
+        let pad = (0.1 * lo.abs()).max(1e-9);
+        return (lo - pad, hi + pad);
+    }
+    (lo - 0.06 * span, hi + 0.06 * span)
+}
+
+/// Contiguous runs of finite points.
+fn runs(t: &[f32], v: &[Option<f64>], step: bool) -> Vec<Vec<(f64, f64)>> {
+    let mut out: Vec<Vec<(f64, f64)>> = Vec::new();
+    let mut cur: Vec<(f64, f64)> = Vec::new();
+    for (k, (&tk, vk)) in t.iter().zip(v).enumerate() {
+        match vk {
+            Some(y) if y.is_finite() => {
+                if step {
+                    if let Some(&(_, prev)) = cur.last() {
+                        cur.push((tk as f64, prev));
+                    }
+                }
+                cur.push((tk as f64, *y));
+                let _ = k;
+            }
+            _ => {
+                if !cur.is_empty() {
+                    out.push(std::mem::take(&mut cur));
+                }
+            }
+        }
+    }
+    if !cur.is_empty() {
+        out.push(cur);
+    }
+    out
+}
+
+fn svg(
+    w: u32,
+    h: u32,
+    draw: impl FnOnce(DrawingArea<SVGBackend<'_>, Shift>) -> Res<()>,
+) -> Res<String> {
+    let mut buf = String::new();
+    {
+        let root = SVGBackend::with_string(&mut buf, (w, h)).into_drawing_area();
+        root.fill(&WHITE).map_err(err)?;
+        draw(root.clone())?;
+        root.present().map_err(err)?;
+    }
+    Ok(buf)
+}
+
+/// A chart over time: lines, threshold lines, shaded plan segments.
+pub fn time_chart(
+    title: &str,
+    y_desc: &str,
+    lines: &[Line<'_>],
+    hlines: &[HLine],
+    shades: &[Shade],
+    t_end: f64,
+) -> Res<String> {
+    let (y0, y1) = range(
+        lines
+            .iter()
+            .flat_map(|l| l.v.iter().flatten().copied())
+            .chain(hlines.iter().map(|h| h.y)),
+    );
+    let t_end = if t_end > 0.0 { t_end } else { 1.0 };
+    svg(560, 240, |root| {
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 15))
+            .margin(6)
+            .x_label_area_size(30)
+            .y_label_area_size(62)
+            .build_cartesian_2d(0.0..t_end, y0..y1)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc("t (s)")
+            .y_desc(y_desc)
+            .label_style(("sans-serif", 11))
+            .axis_desc_style(("sans-serif", 12))
+            .light_line_style(RGBColor(238, 238, 238))
+            .bold_line_style(RGBColor(215, 215, 215))
+            .y_label_formatter(&|v| tick(*v))
+            .draw()
+            .map_err(err)?;
+        chart
+            .draw_series(shades.iter().map(|&(a, b, k)| {
+                Rectangle::new([(a, y0), (b, y1)], label_color(k).mix(0.10).filled())
+            }))
+            .map_err(err)?;
+        for h in hlines {
+            let s = chart
+                .draw_series(DashedLineSeries::new(
+                    [(0.0, h.y), (t_end, h.y)],
+                    6,
+                    4,
+                    h.color.stroke_width(1),
+                ))
+                .map_err(err)?;
+            if !h.name.is_empty() {
+                let c = h.color;
+                s.label(h.name.clone())
+                    .legend(move |(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], c));
+            }
+        }
+        for l in lines {
+            let c = l.color;
+            let mut first = true;
+            for run in runs(l.t, &l.v, l.step) {
+                let s = chart
+                    .draw_series(LineSeries::new(run, c.stroke_width(1)))
+                    .map_err(err)?;
+                if first {
+                    s.label(l.name.clone()).legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 14, y)], c.stroke_width(2))
+                    });
+                    first = false;
+                }
+            }
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(RGBColor(200, 200, 200))
+            .label_font(("sans-serif", 11))
+            .draw()
+            .map_err(err)?;
+        Ok(())
+    })
+}
+
+/// Tick label: short, without float noise.
+fn tick(v: f64) -> String {
+    let a = v.abs();
+    // Float noise around zero (e.g. -1.1e-16 on a metre axis) reads as 0.
+    if a < 1e-12 {
+        "0".into()
+    } else if !(1e-3..1e5).contains(&a) {
+        format!("{v:.1e}")
+    } else {
+        let s = format!("{v:.4}");
+        let s = s.trim_end_matches('0').trim_end_matches('.');
+        s.to_string()
+    }
+}
+
+/// A polyline in the plane.
+pub struct Path2<'a> {
+    /// Legend name.
+    pub name: &'a str,
+    /// Points.
+    pub points: Vec<(f64, f64)>,
+    /// Colour.
+    pub color: RGBColor,
+    /// Width in px.
+    pub width: u32,
+}
+
+/// A marker in the plane.
+pub struct Marker<'a> {
+    /// Legend name.
+    pub name: &'a str,
+    /// Where.
+    pub at: (f64, f64),
+    /// Heading arrow (world yaw, rad), if any.
+    pub heading: Option<f64>,
+    /// Colour.
+    pub color: RGBColor,
+}
+
+/// The planar path, equal axis scales: paths, overlays, start/goal markers.
+pub fn path_chart(paths: &[Path2<'_>], markers: &[Marker<'_>]) -> Res<String> {
+    let pts = || {
+        paths
+            .iter()
+            .flat_map(|p| p.points.iter().copied())
+            .chain(markers.iter().map(|m| m.at))
+            .filter(|(x, y)| x.is_finite() && y.is_finite())
+    };
+    let (mut x0, mut x1) = range(pts().map(|p| p.0));
+    let (mut y0, mut y1) = range(pts().map(|p| p.1));
+    // Equal scales: widen the narrower axis (plot area is square).
+    let (w, h) = (x1 - x0, y1 - y0);
+    if w > h {
+        let c = 0.5 * (y0 + y1);
+        (y0, y1) = (c - 0.5 * w, c + 0.5 * w);
+    } else {
+        let c = 0.5 * (x0 + x1);
+        (x0, x1) = (c - 0.5 * h, c + 0.5 * h);
+    }
+    let arrow = 0.06 * (x1 - x0);
+    svg(600, 580, |root| {
+        let mut chart = ChartBuilder::on(&root)
+            .caption("planar path: ideal vs simulated", ("sans-serif", 15))
+            .margin(8)
+            .x_label_area_size(32)
+            .y_label_area_size(56)
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc("x (m)")
+            .y_desc("y (m)")
+            .label_style(("sans-serif", 11))
+            .axis_desc_style(("sans-serif", 12))
+            .light_line_style(RGBColor(238, 238, 238))
+            .bold_line_style(RGBColor(215, 215, 215))
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
+            .draw()
+            .map_err(err)?;
+        for p in paths {
+            let c = p.color;
+            let wdt = p.width;
+            chart
+                .draw_series(LineSeries::new(
+                    p.points.iter().copied(),
+                    c.stroke_width(wdt),
+                ))
+                .map_err(err)?
+                .label(p.name)
+                .legend(move |(x, y)| {
+                    PathElement::new(vec![(x, y), (x + 14, y)], c.stroke_width(2))
+                });
+        }
+        for m in markers {
+            let c = m.color;
+            chart
+                .draw_series([Circle::new(m.at, 5, c.filled())])
+                .map_err(err)?
+                .label(m.name)
+                .legend(move |(x, y)| Circle::new((x + 7, y), 4, c.filled()));
+            if let Some(hd) = m.heading {
+                let tip = (m.at.0 + arrow * hd.cos(), m.at.1 + arrow * hd.sin());
+                chart
+                    .draw_series([PathElement::new(vec![m.at, tip], c.stroke_width(2))])
+                    .map_err(err)?;
+            }
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(RGBColor(200, 200, 200))
+            .label_font(("sans-serif", 11))
+            .draw()
+            .map_err(err)?;
+        Ok(())
+    })
+}
+
+/// Histogram of `values` with `bins` equal bins; optional vertical line (e.g. success limit).
+pub fn histogram(
+    title: &str,
+    x_desc: &str,
+    values: &[f64],
+    bins: usize,
+    vline: Option<(f64, &str)>,
+) -> Res<String> {
+    let finite: Vec<f64> = values.iter().copied().filter(|v| v.is_finite()).collect();
+    let (mut lo, mut hi) = range(finite.iter().copied().chain(vline.map(|v| v.0)));
+    if finite.is_empty() {
+        (lo, hi) = (0.0, 1.0);
+    }
+    let bins = bins.max(1);
+    let width = (hi - lo) / bins as f64;
+    let mut counts = vec![0u32; bins];
+    for v in &finite {
+        let k = (((v - lo) / width) as usize).min(bins - 1);
+        counts[k] += 1;
+    }
+    let top = counts.iter().copied().max().unwrap_or(0).max(1) as f64 * 1.15;
+    svg(560, 260, |root| {
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 15))
+            .margin(6)
+            .x_label_area_size(30)
+            .y_label_area_size(44)
+            .build_cartesian_2d(lo..hi, 0.0..top)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc("variants")
+            .label_style(("sans-serif", 11))
+            .axis_desc_style(("sans-serif", 12))
+            .light_line_style(RGBColor(238, 238, 238))
+            .x_label_formatter(&|v| tick(*v))
+            .draw()
+            .map_err(err)?;
+        chart
+            .draw_series(counts.iter().enumerate().map(|(k, &c)| {
+                let a = lo + k as f64 * width;
+                Rectangle::new([(a, 0.0), (a + width, c as f64)], BLUE.mix(0.6).filled())
+            }))
+            .map_err(err)?;
+        if let Some((x, name)) = vline {
+            chart
+                .draw_series(DashedLineSeries::new(
+                    [(x, 0.0), (x, top)],
+                    6,
+                    4,
+                    RED.stroke_width(2),
+                ))
+                .map_err(err)?
+                .label(name)
+                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], RED));
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperRight)
+                .background_style(WHITE.mix(0.85))
+                .border_style(RGBColor(200, 200, 200))
+                .label_font(("sans-serif", 11))
+                .draw()
+                .map_err(err)?;
+        }
+        Ok(())
+    })
+}
+
+/// Scatter of `(x, y, success)`, successes green, failures red; optional horizontal limit.
+pub fn scatter(
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    pts: &[(f64, f64, bool)],
+    hline: Option<(f64, &str)>,
+) -> Res<String> {
+    let (x0, x1) = range(pts.iter().map(|p| p.0));
+    let (y0, y1) = range(pts.iter().map(|p| p.1).chain(hline.map(|h| h.0)));
+    // Headroom for the legend, so it never hides points.
+    let y1 = y1 + 0.3 * (y1 - y0);
+    svg(560, 260, |root| {
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 15))
+            .margin(6)
+            .x_label_area_size(30)
+            .y_label_area_size(56)
+            .build_cartesian_2d(x0..x1, y0..y1)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .label_style(("sans-serif", 11))
+            .axis_desc_style(("sans-serif", 12))
+            .light_line_style(RGBColor(238, 238, 238))
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
+            .draw()
+            .map_err(err)?;
+        for (ok, color, name) in [(true, IDEAL, "success"), (false, RED, "failure")] {
+            let sel: Vec<(f64, f64)> = pts
+                .iter()
+                .filter(|p| p.2 == ok && p.0.is_finite() && p.1.is_finite())
+                .map(|p| (p.0, p.1))
+                .collect();
+            if sel.is_empty() {
+                continue;
+            }
+            chart
+                .draw_series(sel.into_iter().map(|p| Circle::new(p, 3, color.filled())))
+                .map_err(err)?
+                .label(name)
+                .legend(move |(x, y)| Circle::new((x + 7, y), 3, color.filled()));
+        }
+        if let Some((y, name)) = hline {
+            chart
+                .draw_series(DashedLineSeries::new(
+                    [(x0, y), (x1, y)],
+                    6,
+                    4,
+                    RED.stroke_width(1),
+                ))
+                .map_err(err)?
+                .label(name)
+                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], RED));
+        }
+        chart
+            .configure_series_labels()
+            .position(SeriesLabelPosition::UpperRight)
+            .background_style(WHITE.mix(0.85))
+            .border_style(RGBColor(200, 200, 200))
+            .label_font(("sans-serif", 11))
+            .draw()
+            .map_err(err)?;
+        Ok(())
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn runs_break_at_missing_values() {
+        let t = [0.0f32, 1.0, 2.0, 3.0, 4.0];
+        let v = [Some(1.0), Some(2.0), None, Some(3.0), Some(f64::NAN)];
+        assert_eq!(
+            runs(&t, &v, false),
+            vec![vec![(0.0, 1.0), (1.0, 2.0)], vec![(3.0, 3.0)]]
+        );
+        // Steps hold the previous value until the next sample.
+        assert_eq!(
+            runs(&t[..2], &v[..2], true),
+            vec![vec![(0.0, 1.0), (1.0, 1.0), (1.0, 2.0)]]
+        );
+    }
+
+    #[test]
+    fn charts_are_svg_with_the_series() {
+        let t = [0.0f32, 1.0, 2.0];
+        let line = Line {
+            name: "x ideal".into(),
+            t: &t,
+            v: vec![Some(0.0), Some(1.0), Some(0.5)],
+            color: IDEAL,
+            step: false,
+        };
+        let h = HLine {
+            y: 0.8,
+            name: "limit".into(),
+            color: RED,
+        };
+        let s = time_chart("x", "x (m)", &[line], &[h], &[(0.0, 1.0, 0)], 2.0).unwrap();
+        assert!(s.starts_with("<svg") && s.contains("x ideal") && s.contains("limit"));
+        assert!(s.contains("<polyline"));
+        // Degenerate ranges still draw.
+        assert!(histogram("h", "e", &[], 10, None)
+            .unwrap()
+            .starts_with("<svg"));
+        assert!(scatter("s", "a", "b", &[(1.0, 1.0, true)], Some((0.5, "max"))).is_ok());
+    }
+}

@@ -1,0 +1,339 @@
+//! Where things are in a scenario file: every key path with its line and
+//! spans, so any error (TOML syntax, serde type or range errors, range checks
+//! made later, planner and physics refusals) can name file, line and key.
+//!
+//! Key paths are written as in messages: `sim.dt`, `planner.via_deg[1]`,
+//! `goal[0]`.
+
+use crate::error::Error;
+use std::ops::Range;
+use std::path::Path;
+use toml::de::{DeTable, DeValue};
+use toml::Spanned;
+
+/// One key (or array element) of the document.
+#[derive(Debug, Clone)]
+struct Entry {
+    path: String,
+    key: Range<usize>,
+    value: Range<usize>,
+}
+
+/// Key paths, spans and line starts of one parsed scenario file.
+#[derive(Debug, Clone, Default)]
+pub struct KeyIndex {
+    entries: Vec<Entry>,
+    line_starts: Vec<usize>,
+    /// Floats that are NaN or infinite: (path, span, as written).
+    nonfinite: Vec<(String, Range<usize>, String)>,
+}
+
+impl KeyIndex {
+    /// Index a parsed document.
+    pub fn new(text: &str, root: &DeTable<'_>) -> KeyIndex {
+        let mut line_starts = vec![0];
+        line_starts.extend(text.match_indices('\n').map(|(i, _)| i + 1));
+        let mut ix = KeyIndex {
+            entries: Vec::new(),
+            line_starts,
+            nonfinite: Vec::new(),
+        };
+        ix.walk_table(root, "");
+        ix
+    }
+
+    fn walk_table(&mut self, t: &DeTable<'_>, prefix: &str) {
+        for (k, v) in t.iter() {
+            let path = if prefix.is_empty() {
+                k.get_ref().to_string()
+            } else {
+                format!("{prefix}.{}", k.get_ref())
+            };
+            self.entries.push(Entry {
+                path: path.clone(),
+                key: k.span(),
+                value: v.span(),
+            });
+            self.walk_value(v, &path);
+        }
+    }
+
+    fn walk_value(&mut self, v: &Spanned<DeValue<'_>>, path: &str) {
+        match v.get_ref() {
+            DeValue::Float(f) => {
+                let s = f.as_str().trim_start_matches(['+', '-']).replace('_', "");
+                if !s.parse::<f64>().is_ok_and(f64::is_finite) {
+                    self.nonfinite
+                        .push((path.to_string(), v.span(), f.as_str().to_string()));
+                }
+            }
+            DeValue::Array(items) => {
+                for (i, item) in items.iter().enumerate() {
+                    let p = format!("{path}[{i}]");
+                    self.entries.push(Entry {
+                        path: p.clone(),
+                        key: item.span(),
+                        value: item.span(),
+                    });
+                    self.walk_value(item, &p);
+                }
+            }
+            DeValue::Table(t) => self.walk_table(t, path),
+            _ => {}
+        }
+    }
+
+    /// 1-based line of a byte offset.
+    pub fn line_at(&self, offset: usize) -> usize {
+        self.line_starts.partition_point(|&s| s <= offset).max(1)
+    }
+
+    /// Line of `key`, or of its nearest written ancestor (a defaulted key
+    /// points at its table).
+    pub fn line_of(&self, key: &str) -> Option<usize> {
+        let mut k = key;
+        loop {
+            if let Some(e) = self.entries.iter().find(|e| e.path == k) {
+                return Some(self.line_at(e.key.start));
+            }
+            k = match k.rfind(['.', '[']) {
+                Some(i) => &k[..i],
+                None => return None,
+            };
+        }
+    }
+
+    /// Whether `key` is written in the file.
+    pub fn has(&self, key: &str) -> bool {
+        self.entries.iter().any(|e| e.path == key)
+    }
+
+    /// The innermost key whose key or value span contains `span`'s start.
+    pub fn key_at(&self, span: &Range<usize>) -> Option<&str> {
+        let inside =
+            |r: &Range<usize>| r.start <= span.start && span.start < r.end.max(r.start + 1);
+        self.entries
+            .iter()
+            .filter(|e| inside(&e.key) || inside(&e.value))
+            .min_by_key(|e| {
+                let v = e.value.end.saturating_sub(e.value.start);
+                let k = e.key.end.saturating_sub(e.key.start);
+                v.max(k)
+            })
+            .map(|e| e.path.as_str())
+    }
+
+    /// The innermost key whose value span holds all of `span` (a table).
+    fn table_at(&self, span: &Range<usize>) -> Option<&str> {
+        self.entries
+            .iter()
+            .filter(|e| e.value.start <= span.start && span.end <= e.value.end)
+            .min_by_key(|e| e.value.end - e.value.start)
+            .map(|e| e.path.as_str())
+    }
+
+    /// The first NaN or infinite number, as an error naming its key.
+    pub fn check_finite(&self, path: &Path) -> Result<(), Error> {
+        match self.nonfinite.first() {
+            Some((key, span, raw)) => Err(Error::Input {
+                path: path.into(),
+                line: Some(self.line_at(span.start)),
+                message: format!("key `{key}`: {raw} is not a finite number"),
+            }),
+            None => Ok(()),
+        }
+    }
+
+    /// The key a message is about: the first `` key `k` `` it names, else a
+    /// dotted key path of a scenario table it mentions (`model.radius`, written
+    /// or defaulted), else the longest key path of this file it mentions as a
+    /// word.
+    pub fn key_of_message(&self, message: &str) -> Option<String> {
+        if let Some(k) = named_key(message).or_else(|| dotted_key(message)) {
+            return Some(k.to_string());
+        }
+        self.entries
+            .iter()
+            .filter(|e| mentions(message, &e.path))
+            .max_by_key(|e| e.path.len())
+            .map(|e| e.path.clone())
+    }
+
+    /// An input error about this file; the line comes from the key the
+    /// message names (see [`KeyIndex::key_of_message`]).
+    pub fn error(&self, path: &Path, message: impl Into<String>) -> Error {
+        let message = message.into();
+        let line = self.key_of_message(&message).and_then(|k| self.line_of(&k));
+        Error::Input {
+            path: path.into(),
+            line,
+            message,
+        }
+    }
+
+    /// Like [`KeyIndex::error`], but prefixes `` key `k`: `` when the message
+    /// does not start with a key already (messages from planners and physics).
+    pub fn error_about(&self, path: &Path, message: &str) -> Error {
+        match self.key_of_message(message) {
+            Some(k) if !message.starts_with("key") => Error::Input {
+                path: path.into(),
+                line: self.line_of(&k),
+                message: format!("key `{k}`: {message}"),
+            },
+            _ => self.error(path, message),
+        }
+    }
+
+    /// A serde error from deserializing (part of) this document: names the
+    /// key at the error's span and its line.
+    pub fn serde_error(&self, path: &Path, e: &toml::de::Error) -> Error {
+        let raw = e.message().trim().replace('\n', " ");
+        let span = e.span();
+        let at = span
+            .as_ref()
+            .and_then(|s| self.key_at(s))
+            .map(str::to_string);
+        let line = span.as_ref().map(|s| self.line_at(s.start));
+        let field = raw.split('`').nth(1).unwrap_or("");
+        let join = |table: Option<&str>| match table {
+            Some(t) if !t.is_empty() => format!("{t}.{field}"),
+            _ => field.to_string(),
+        };
+        let (key, message) = if raw.starts_with("missing field ") {
+            // The span is the table missing the key (the whole document for a
+            // top-level key: no entry holds it).
+            let table = span.as_ref().and_then(|s| self.table_at(s));
+            (join(table), "required key is missing".to_string())
+        } else if raw.starts_with("unknown field ") {
+            // The span is the unknown key itself.
+            let expected = raw.split_once(", ").map(|(_, e)| e).unwrap_or("");
+            let key = at.clone().unwrap_or_else(|| field.to_string());
+            (key, format!("unknown key ({expected})"))
+        } else {
+            (at.unwrap_or_default(), raw.clone())
+        };
+        let message = if key.is_empty() {
+            message
+        } else {
+            format!("key `{key}`: {message}")
+        };
+        Error::Input {
+            path: path.into(),
+            line,
+            message,
+        }
+    }
+
+    /// A TOML syntax error (from [`DeTable::parse`]).
+    pub fn syntax_error(path: &Path, text: &str, e: &toml::de::Error) -> Error {
+        let ix = KeyIndex::new(text, &DeTable::default());
+        Error::Input {
+            path: path.into(),
+            line: e.span().map(|s| ix.line_at(s.start)),
+            message: format!("TOML syntax: {}", e.message().trim().replace('\n', " ")),
+        }
+    }
+}
+
+/// `k` from the first `` key `k` `` (or `` keys `k` ``) in a message.
+pub fn named_key(message: &str) -> Option<&str> {
+    let i = message
+        .find("key `")
+        .map(|i| i + 5)
+        .or_else(|| message.find("keys `").map(|i| i + 6))?;
+    let rest = &message[i..];
+    rest.find('`').map(|j| &rest[..j]).filter(|k| !k.is_empty())
+}
+
+/// Tables of a scenario file, for [`dotted_key`].
+const TABLES: [&str; 8] = [
+    "model",
+    "planner",
+    "limits",
+    "sim",
+    "thresholds",
+    "minimums",
+    "sweep",
+    "regression",
+];
+
+/// The first `table.key` path (a scenario table, then a dot) in a message,
+/// e.g. `model.geometry.wheel_radius`.
+pub fn dotted_key(message: &str) -> Option<&str> {
+    let is_key = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '.';
+    for (i, c) in message.char_indices() {
+        if i > 0 && message[..i].chars().next_back().is_some_and(is_key) || !c.is_ascii_lowercase()
+        {
+            continue;
+        }
+        let word = &message[i..];
+        let end = word.find(|c: char| !is_key(c)).unwrap_or(word.len());
+        let word = word[..end].trim_end_matches('.');
+        if let Some((table, rest)) = word.split_once('.') {
+            if TABLES.contains(&table) && !rest.is_empty() {
+                return Some(word);
+            }
+        }
+    }
+    None
+}
+
+/// Whether `message` contains `key` as a whole word (not inside a longer
+/// identifier or key path).
+fn mentions(message: &str, key: &str) -> bool {
+    let ident = |c: char| c.is_alphanumeric() || c == '_' || c == '.' || c == '[';
+    message.match_indices(key).any(|(i, _)| {
+        let before = message[..i].chars().next_back();
+        let after = message[i + key.len()..].chars().next();
+        !before.is_some_and(ident) && !after.is_some_and(|c| ident(c) && c != '.')
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn index(text: &str) -> KeyIndex {
+        let t = DeTable::parse(text).unwrap();
+        KeyIndex::new(text, t.get_ref())
+    }
+
+    #[test]
+    fn lines_of_keys_array_elements_and_defaults() {
+        let text = "name = \"a\"\ngoal = [1.0,\n  2.0]\n\n[sim]\ndt = 0.1\n\n[planner]\nkind = \"x\"\nvia = { a = 1 }\n";
+        let ix = index(text);
+        assert_eq!(ix.line_of("name"), Some(1));
+        assert_eq!(ix.line_of("goal[1]"), Some(3));
+        assert_eq!(ix.line_of("sim.dt"), Some(6));
+        // Not written: its table's header.
+        assert_eq!(ix.line_of("sim.friction"), Some(5));
+        assert_eq!(ix.line_of("planner.via.a"), Some(10));
+        assert_eq!(ix.line_of("limits.ramp"), None);
+    }
+
+    #[test]
+    fn keys_in_messages() {
+        let ix = index("[model]\nradius = 1.0\n[sim]\ngravity = [0.0, 0.0, 1.0]\n");
+        assert_eq!(
+            ix.key_of_message("key `sim.dt`: must be > 0").as_deref(),
+            Some("sim.dt")
+        );
+        assert_eq!(
+            ix.key_of_message("URDF radius differs from the scenario's model.radius (0.3 m)")
+                .as_deref(),
+            Some("model.radius")
+        );
+        assert_eq!(
+            ix.key_of_message("URDF wheel radius differs from model.geometry.wheel_radius 0.1 m.")
+                .as_deref(),
+            Some("model.geometry.wheel_radius")
+        );
+        // A word inside a longer identifier is not a mention.
+        assert_eq!(ix.key_of_message("simulation diverged"), None);
+        assert_eq!(
+            ix.key_of_message("scenario key `sim.gravity` must be [0, 0, 0]")
+                .as_deref(),
+            Some("sim.gravity")
+        );
+    }
+}

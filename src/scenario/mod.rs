@@ -1,0 +1,487 @@
+//! Scenario files (`scenarios/*.toml`): what to plan, how to simulate it and
+//! which thresholds a run must meet.
+//!
+//! Parsing is strict: unknown keys, wrong types, NaN or infinite numbers,
+//! out-of-range values and missing files are errors that name the file, the
+//! line and the key ([`doc::KeyIndex`] maps keys to lines). Angular
+//! coordinates of `start` and `goal` are written in degrees.
+//!
+//! This is the top of the configuration flow: it owns the `[model]`,
+//! `[planner]` and `[sweep]` tables, matches model and planner
+//! ([`build_system`]) and hands each system its own typed configuration.
+//! Nothing below (systems, planners, models) imports this module.
+
+mod config;
+pub mod doc;
+mod sweep_config;
+
+pub use config::{build_system, ModelConfig, PlannerConfig, PAIRS};
+pub use sweep_config::{sweep_metric_names, variant_seed, SweepConfig, Variant};
+
+use crate::error::Error;
+use crate::input::{read_text, SCENARIO_MAX_BYTES};
+use doc::KeyIndex;
+use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use toml::de::{DeTable, DeValue, ValueDeserializer};
+use toml::Spanned;
+
+/// `[limits]`: time parameterisation of open-loop plans.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct LimitsConfig {
+    /// Per-input rate limit (rad/s or model units); default per model.
+    pub max_rate: Option<Vec<f64>>,
+    /// Cycloidal ramp time at both ends of each leg, s.
+    pub ramp: f64,
+}
+
+impl Default for LimitsConfig {
+    fn default() -> Self {
+        Self {
+            max_rate: None,
+            ramp: 0.25,
+        }
+    }
+}
+
+/// `[sim]`: physics settings.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, default)]
+pub struct SimConfig {
+    /// Physics (and ideal integration) step, s.
+    pub dt: f64,
+    /// Rapier solver iterations (substeps) per step.
+    pub solver_iterations: usize,
+    /// Projected Gauss–Seidel sweeps per substep.
+    pub solver_pgs_iterations: usize,
+    /// Velocity relax pass after each substep; default: only with a ground plane.
+    pub solver_relax_pass: Option<bool>,
+    /// Coulomb friction coefficient between robot and ground (both sides set to it).
+    pub friction: f64,
+    /// Gravity, m/s².
+    pub gravity: [f64; 3],
+    /// Maximum torque of each velocity motor, N·m.
+    pub motor_max_torque: f64,
+    /// Velocity motor gain (Rapier's motor factor), 1/s-like; higher tracks tighter.
+    pub motor_gain: f64,
+    /// Rate (1/s) at which joint drives remove the error between joint angle and commanded
+    /// angle ∫u dt (servo integral action); 0 = pure velocity motors.
+    pub motor_angle_gain: f64,
+    /// Extra simulated time after the plan ends, s (lets the body come to rest).
+    pub settle: f64,
+}
+
+impl SimConfig {
+    /// The physics layer's settings (everything but `settle`, which the replay takes).
+    pub fn physics(&self) -> crate::physics::PhysicsSettings {
+        crate::physics::PhysicsSettings {
+            dt: self.dt,
+            solver_iterations: self.solver_iterations,
+            pgs_iterations: self.solver_pgs_iterations,
+            relax_pass: self.solver_relax_pass,
+            friction: self.friction,
+            gravity: self.gravity,
+            motor_max_torque: self.motor_max_torque,
+            motor_gain: self.motor_gain,
+            motor_angle_gain: self.motor_angle_gain,
+        }
+    }
+}
+
+impl Default for SimConfig {
+    fn default() -> Self {
+        Self {
+            dt: 1e-3,
+            solver_iterations: 1,
+            solver_pgs_iterations: 4,
+            solver_relax_pass: None,
+            friction: 1.0,
+            gravity: [0.0, 0.0, -9.81],
+            motor_max_torque: 50.0,
+            motor_gain: 1.0e6,
+            motor_angle_gain: 1000.0,
+            settle: 0.0,
+        }
+    }
+}
+
+/// The file as written, without the tagged `[model]` and `[planner]` tables
+/// (those are parsed by kind, see [`config`]).
+#[derive(Debug, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ScenarioFile {
+    name: Option<String>,
+    description: Option<String>,
+    start: Vec<f64>,
+    goal: Vec<f64>,
+    #[serde(default)]
+    limits: LimitsConfig,
+    #[serde(default)]
+    sim: SimConfig,
+    #[serde(default)]
+    thresholds: BTreeMap<String, f64>,
+    #[serde(default)]
+    minimums: BTreeMap<String, f64>,
+    sweep: Option<SweepConfig>,
+    #[serde(default)]
+    regression: crate::baseline::RegressionConfig,
+}
+
+/// A validated scenario with resolved paths and SI units.
+#[derive(Debug, Clone, Serialize)]
+pub struct Scenario {
+    /// Source file.
+    pub path: PathBuf,
+    /// Name (defaults to the file stem); also the log directory name.
+    pub name: String,
+    /// Free text.
+    pub description: String,
+    /// Model.
+    pub model: ModelConfig,
+    /// Resolved URDF path.
+    pub urdf: PathBuf,
+    /// Start state, SI (angles in rad).
+    pub start: Vec<f64>,
+    /// Goal state, SI.
+    pub goal: Vec<f64>,
+    /// Planner.
+    pub planner: PlannerConfig,
+    /// Rate limits (resolved defaults).
+    pub max_rate: Vec<f64>,
+    /// Ramp time, s.
+    pub ramp: f64,
+    /// Physics settings.
+    pub sim: SimConfig,
+    /// Metric name → maximum allowed value.
+    pub thresholds: BTreeMap<String, f64>,
+    /// Metric name → minimum allowed value (`[minimums]`, e.g. a clearance).
+    pub minimums: BTreeMap<String, f64>,
+    /// Monte Carlo variants (`[sweep]`): `run`/`check` run the sweep instead of one run.
+    pub sweep: Option<SweepConfig>,
+    /// Baseline tolerance overrides (`[regression]`).
+    pub regression: crate::baseline::RegressionConfig,
+    /// Where each key is written, for errors found after parsing.
+    #[serde(skip)]
+    keys: Arc<KeyIndex>,
+}
+
+/// Longest scenario name, bytes (it becomes a directory name, with room for
+/// the staging suffix).
+pub const MAX_NAME_BYTES: usize = 100;
+
+/// Why `name` cannot be a log directory name, if it cannot.
+pub fn name_problem(name: &str) -> Option<String> {
+    if name.is_empty() {
+        return Some("is empty".into());
+    }
+    if name.len() > MAX_NAME_BYTES {
+        return Some(format!(
+            "is {} bytes long (at most {MAX_NAME_BYTES})",
+            name.len()
+        ));
+    }
+    if let Some(c) = name.chars().find(|c| {
+        c.is_control() || matches!(c, '/' | '\\' | ':' | '*' | '?' | '"' | '<' | '>' | '|')
+    }) {
+        return Some(format!("contains {c:?}"));
+    }
+    if name.starts_with('.') || name.starts_with(char::is_whitespace) {
+        return Some("starts with a dot or a space".into());
+    }
+    if name.ends_with('.') || name.ends_with(char::is_whitespace) {
+        return Some("ends with a dot or a space".into());
+    }
+    None
+}
+
+/// Remove the tagged table `name` (`[model]`, `[planner]`) from the document:
+/// its `kind` and the rest of the table.
+fn take_tagged<'i>(
+    keys: &KeyIndex,
+    path: &Path,
+    root: &mut DeTable<'i>,
+    name: &str,
+    kinds: &[&str],
+) -> Result<(String, Spanned<DeValue<'i>>), Error> {
+    let known = kinds.join(", ");
+    let Some((_, mut v)) = root.remove_entry(name) else {
+        return Err(Error::Input {
+            path: path.into(),
+            line: Some(1),
+            message: format!(
+                "key `{name}`: required table is missing (`[{name}]` with `kind` = {known})"
+            ),
+        });
+    };
+    let DeValue::Table(t) = v.get_mut() else {
+        return Err(keys.error(path, format!("key `{name}`: expected a table with `kind`")));
+    };
+    let kind = match t.remove("kind").map(|k| k.into_inner()) {
+        Some(DeValue::String(s)) => s.to_string(),
+        Some(_) => {
+            return Err(keys.error(
+                path,
+                format!("key `{name}.kind`: expected a string, one of {known}"),
+            ))
+        }
+        None => {
+            return Err(keys.error(
+                path,
+                format!("key `{name}.kind`: required key is missing (one of {known})"),
+            ))
+        }
+    };
+    if !kinds.contains(&kind.as_str()) {
+        return Err(keys.error(
+            path,
+            format!("key `{name}.kind`: unknown {name} `{kind}` (known: {known})"),
+        ));
+    }
+    Ok((kind, v))
+}
+
+impl Scenario {
+    /// Read and validate a scenario file (a regular file of at most
+    /// [`SCENARIO_MAX_BYTES`]).
+    pub fn load(path: &Path) -> Result<Scenario, Error> {
+        let text = read_text(path, "scenario", SCENARIO_MAX_BYTES)?;
+        Self::parse(path, &text)
+    }
+
+    /// An input error about this scenario, with the line of the key the
+    /// message names (`` key `sim.dt`: ... ``, or a key path it mentions).
+    pub fn error(&self, message: impl Into<String>) -> Error {
+        self.keys.error(&self.path, message)
+    }
+
+    /// Like [`Scenario::error`] for messages from planners and physics: when
+    /// they mention a key of this file, the message is prefixed with it.
+    pub fn error_about(&self, message: &str) -> Error {
+        self.keys.error_about(&self.path, message)
+    }
+
+    /// Whether `key` is written in the file.
+    pub fn has_key(&self, key: &str) -> bool {
+        self.keys.has(key)
+    }
+
+    /// Line of a key in the file (or of its table, when the key is defaulted).
+    pub fn line_of(&self, key: &str) -> Option<usize> {
+        self.keys.line_of(key)
+    }
+
+    /// Validate scenario text (`path` is used for messages and relative paths).
+    pub fn parse(path: &Path, text: &str) -> Result<Scenario, Error> {
+        let root = DeTable::parse(text).map_err(|e| KeyIndex::syntax_error(path, text, &e))?;
+        let keys = KeyIndex::new(text, root.get_ref());
+        keys.check_finite(path)?;
+        let bad = |message: String| keys.error(path, message);
+        let serde = |e: toml::de::Error| keys.serde_error(path, &e);
+        let mut root = root.into_inner();
+        let (model_kind, model) =
+            take_tagged(&keys, path, &mut root, "model", &ModelConfig::KINDS)?;
+        let (planner_kind, planner) =
+            take_tagged(&keys, path, &mut root, "planner", &PlannerConfig::KINDS)?;
+        // Match model and planner before reading the planner's parameters: a
+        // wrong `kind` explains the parameters the other planner lacks.
+        if !config::plans_for(&model_kind, &planner_kind) {
+            return Err(bad(config::mismatch(&model_kind, &planner_kind)));
+        }
+        let rest = Spanned::new(0..text.len(), DeValue::Table(root));
+        let file = ScenarioFile::deserialize(ValueDeserializer::from(rest)).map_err(serde)?;
+        let model = ModelConfig::parse(&model_kind, model)
+            .map_err(serde)?
+            .ok_or_else(|| bad(format!("key `model.kind`: unknown model `{model_kind}`")))?;
+        let planner = PlannerConfig::parse(&planner_kind, planner)
+            .map_err(serde)?
+            .ok_or_else(|| {
+                bad(format!(
+                    "key `planner.kind`: unknown planner `{planner_kind}`"
+                ))
+            })?;
+        let name = match &file.name {
+            Some(n) => {
+                if let Some(p) = name_problem(n) {
+                    return Err(bad(format!(
+                        "key `name`: {n:?} {p}: it is the log directory name"
+                    )));
+                }
+                n.clone()
+            }
+            None => {
+                let stem = path
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_default();
+                if let Some(p) = name_problem(&stem) {
+                    return Err(bad(format!(
+                        "file name {stem:?} {p}: it would be the log directory name; set key `name`"
+                    )));
+                }
+                stem
+            }
+        };
+        let base = path.parent().unwrap_or(Path::new("."));
+        let system = build_system(&model, &planner).map_err(&bad)?;
+        // start/goal are written in the system's file chart (usually the model state).
+        let chart = system.file_model();
+        let (n_state, n_input) = (
+            chart.state_names().len(),
+            system.model().input_names().len(),
+        );
+        let angular = chart.angular_states();
+        let default_rate = system.default_max_rate();
+        let urdf = base.join(model.urdf());
+        if !urdf.exists() {
+            return Err(bad(format!(
+                "key `model.urdf`: file not found: {}",
+                urdf.display()
+            )));
+        }
+        let to_si = |key: &str, v: &[f64]| -> Result<Vec<f64>, Error> {
+            if v.len() != n_state {
+                return Err(bad(format!(
+                    "key `{key}`: expected {n_state} values ({}), got {}",
+                    chart.state_names().join(", "),
+                    v.len()
+                )));
+            }
+            Ok(v.iter()
+                .enumerate()
+                .map(|(i, x)| {
+                    if angular.contains(&i) {
+                        x.to_radians()
+                    } else {
+                        *x
+                    }
+                })
+                .collect())
+        };
+        let start = system.state_from_file(to_si("start", &file.start)?);
+        let goal = system.state_from_file(to_si("goal", &file.goal)?);
+        let max_rate = file.limits.max_rate.clone().unwrap_or(default_rate);
+        if max_rate.len() != n_input {
+            return Err(bad(format!(
+                "key `limits.max_rate`: expected {n_input} values, got {}",
+                max_rate.len()
+            )));
+        }
+        if let Some(i) = max_rate.iter().position(|r| *r <= 0.0) {
+            return Err(bad(format!(
+                "key `limits.max_rate[{i}]`: rates must be > 0"
+            )));
+        }
+        if file.limits.ramp < 0.0 {
+            return Err(bad("key `limits.ramp`: must be ≥ 0".into()));
+        }
+        let s = &file.sim;
+        if !(s.dt > 0.0 && s.dt <= 0.1) {
+            return Err(bad("key `sim.dt`: must be in (0, 0.1] s".into()));
+        }
+        if s.solver_iterations == 0 || s.solver_iterations > 1000 {
+            return Err(bad(
+                "key `sim.solver_iterations`: must be in 1..=1000".into()
+            ));
+        }
+        if s.solver_pgs_iterations == 0 || s.solver_pgs_iterations > 1000 {
+            return Err(bad(
+                "key `sim.solver_pgs_iterations`: must be in 1..=1000".into()
+            ));
+        }
+        if s.friction < 0.0 {
+            return Err(bad("key `sim.friction`: must be ≥ 0".into()));
+        }
+        for (key, v) in [
+            ("sim.motor_max_torque", s.motor_max_torque),
+            ("sim.motor_gain", s.motor_gain),
+        ] {
+            if v <= 0.0 {
+                return Err(bad(format!("key `{key}`: must be > 0")));
+            }
+        }
+        if s.motor_angle_gain < 0.0 {
+            return Err(bad("key `sim.motor_angle_gain`: must be ≥ 0".into()));
+        }
+        if s.settle < 0.0 {
+            return Err(bad("key `sim.settle`: must be ≥ 0".into()));
+        }
+        if let Some(sw) = &file.sweep {
+            sw.validate().map_err(&bad)?;
+            if sw.sigma_rate.is_some() && !matches!(model, ModelConfig::Rover(_)) {
+                return Err(bad(format!(
+                    "key `sweep.sigma_rate`: model `{}` has no switching signal σ (rover only)",
+                    model.kind()
+                )));
+            }
+        }
+        file.regression.validate().map_err(&bad)?;
+        for (k, v) in &file.thresholds {
+            if *v < 0.0 {
+                return Err(bad(format!("key `thresholds.{k}`: must be ≥ 0")));
+            }
+        }
+        Ok(Scenario {
+            path: path.to_path_buf(),
+            name,
+            description: file.description.unwrap_or_default(),
+            model,
+            urdf,
+            start,
+            goal,
+            planner,
+            max_rate,
+            ramp: file.limits.ramp,
+            sim: file.sim,
+            thresholds: file.thresholds,
+            minimums: file.minimums,
+            sweep: file.sweep,
+            regression: file.regression,
+            keys: Arc::new(keys),
+        })
+    }
+}
+
+/// Expand files and directories (non-recursive, `*.toml` except hidden
+/// files, sorted) into scenario paths. Each entry is read later, so one that
+/// is not a regular file is an error, not silently skipped.
+pub fn collect(paths: &[PathBuf]) -> Result<Vec<PathBuf>, Vec<Error>> {
+    let mut out = Vec::new();
+    let mut errors = Vec::new();
+    for p in paths {
+        if p.is_dir() {
+            let rd = match std::fs::read_dir(p) {
+                Ok(rd) => rd,
+                Err(e) => {
+                    errors.push(Error::input(p, format!("cannot list directory: {e}")));
+                    continue;
+                }
+            };
+            let mut files: Vec<PathBuf> = rd
+                .filter_map(|e| e.ok().map(|e| e.path()))
+                .filter(|f| f.extension().is_some_and(|x| x == "toml"))
+                // Hidden entries are editor locks and backups (`.#a.toml`).
+                .filter(|f| {
+                    !f.file_name()
+                        .is_some_and(|n| n.to_string_lossy().starts_with('.'))
+                })
+                .collect();
+            files.sort();
+            if files.is_empty() {
+                errors.push(Error::input(p, "no *.toml scenario files in directory"));
+            }
+            out.extend(files);
+        } else if p.exists() {
+            out.push(p.clone());
+        } else {
+            errors.push(Error::input(p, "no such file or directory"));
+        }
+    }
+    if errors.is_empty() {
+        Ok(out)
+    } else {
+        Err(errors)
+    }
+}

@@ -1,0 +1,515 @@
+//! Seed 004: mobile manipulators navigated by a dipolar inverse Lyapunov
+//! function (`dilf` planner), `models/mobile_manipulator.urdf`.
+//!
+//! The plan is the feedback law of Eq. 18, evaluated every `period` on the
+//! ideal state and, in physics, on the simulated state. Obstacles are
+//! generalized ellipsoids written in the scenario (`[[model.obstacles]]`);
+//! the planner avoids them as ellipsoids, the physics meets them as convex
+//! colliders (their inscribed hulls).
+//!
+//! Extra metrics: `ideal_time_to_goal`, `sim_time_to_goal` (first time within
+//! the planner's tolerance; NaN if never), `ideal_min_clearance` (least
+//! distance between the URDF collision shapes placed by forward kinematics
+//! and the obstacle colliders along the ideal run; the same parry queries as
+//! the physics channel), `sim_min_clearance`, `sim_obstacle_contacts` (most
+//! robot–obstacle contact pairs at any step; must be 0),
+//! `ideal_min_obstacle_function` / `sim_min_obstacle_function` (least β of the
+//! ellipsoid model, > 0 free), `ideal_vdot_violations` / `sim_vdot_violations`
+//! (policy samples with V̇ < 0 under the applied input: the paper's V̇ ≥ 0
+//! claim, Appendix G), `slip_lateral_max`, `joint_rate_error_max`.
+
+use super::System;
+use crate::integrate::Trajectory;
+use crate::model::ellipsoid::Superellipsoid;
+use crate::model::mobile_manipulator::{self as mm, CollisionShape, Link, MobileManipulator};
+use crate::model::{KinematicModel, State};
+use crate::physics::mobile_manipulator::{MobileManipulatorPhysics, ObstacleShape};
+use crate::physics::rapier::parry::bounding_volume::Aabb;
+use crate::physics::rapier::parry::shape::{Ball, ConvexPolyhedron, Cuboid, Cylinder, Shape};
+use crate::physics::rapier::prelude::Vector;
+use crate::physics::real as rl;
+use crate::physics::PhysicsSettings;
+use crate::physics::PhysicsSystem;
+use crate::plan::{Limits, Plan};
+use crate::planner::dilf::control::{self, vdot_scaled, Gains};
+use crate::planner::dilf::potential::{Obstacle, PotentialParams, Scene};
+use crate::planner::dilf::{self, DilfParams};
+use crate::planner::PlanError;
+use crate::record::{Comparison, Overlay, Series, SimTrajectory};
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// One obstacle as written in the scenario.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ObstacleConfig {
+    /// Name (unique; used in messages and logs).
+    pub name: String,
+    /// Centre, m.
+    pub center: [f64; 3],
+    /// Semi-axes a, b, c, m (> 0).
+    pub semi_axes: [f64; 3],
+    /// Exponent n ≥ ½ (1: ellipsoid; large: box-like).
+    #[serde(default = "one")]
+    pub exponent: f64,
+    /// Orientation, URDF roll-pitch-yaw in degrees.
+    #[serde(default)]
+    pub rpy_deg: [f64; 3],
+}
+
+fn one() -> f64 {
+    1.0
+}
+
+impl ObstacleConfig {
+    /// The shape (angles in radians).
+    pub fn shape(&self) -> Superellipsoid {
+        Superellipsoid {
+            center: self.center,
+            semi_axes: self.semi_axes,
+            exponent: self.exponent,
+            rpy: self.rpy_deg.map(f64::to_radians),
+        }
+    }
+}
+
+/// `[model] kind = "mobile_manipulator"`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct MobileManipulatorConfig {
+    /// URDF file (one robot), relative to the scenario file.
+    pub urdf: PathBuf,
+    /// Number of robots (1).
+    #[serde(default = "one_robot")]
+    pub robots: usize,
+    /// Obstacles.
+    #[serde(default)]
+    pub obstacles: Vec<ObstacleConfig>,
+}
+
+fn one_robot() -> usize {
+    1
+}
+
+struct Dilf {
+    model: MobileManipulator,
+    params: DilfParams,
+    obstacles: Vec<(String, Superellipsoid)>,
+    probe: ClearanceProbe,
+}
+
+/// Build the mobile-manipulator system.
+pub fn build(
+    cfg: &MobileManipulatorConfig,
+    params: &DilfParams,
+) -> Result<Box<dyn System>, String> {
+    if cfg.robots != 1 {
+        return Err(format!(
+            "key `model.robots`: {} robots are not supported yet (1)",
+            cfg.robots
+        ));
+    }
+    let mut obstacles = Vec::new();
+    for (i, o) in cfg.obstacles.iter().enumerate() {
+        let shape = o.shape();
+        shape.validate().map_err(|e| {
+            let field = ["semi_axes", "exponent", "center"]
+                .into_iter()
+                .find(|f| e.contains(f))
+                .unwrap_or("center");
+            let field = if field == "center" && e.contains("rpy") {
+                "rpy_deg"
+            } else {
+                field
+            };
+            format!("key `model.obstacles[{i}].{field}`: {e}")
+        })?;
+        if o.name.is_empty() || cfg.obstacles[..i].iter().any(|p| p.name == o.name) {
+            return Err(format!(
+                "key `model.obstacles[{i}].name`: `{}` is empty or not unique",
+                o.name
+            ));
+        }
+        obstacles.push((o.name.clone(), shape));
+    }
+    if let Err(crate::planner::PlanError::InvalidParameter { name, reason }) = params.validate() {
+        return Err(format!("key `planner.{name}`: {reason}"));
+    }
+    let params = params.clone();
+    Ok(Box::new(Dilf {
+        model: MobileManipulator { robots: cfg.robots },
+        params,
+        probe: ClearanceProbe::new(&obstacles),
+        obstacles,
+    }))
+}
+
+impl Dilf {
+    fn scene(&self, goal: &State) -> Result<Scene, String> {
+        let p = &self.params;
+        Scene::new(
+            self.model.robots,
+            mm::default_parts(),
+            self.obstacles
+                .iter()
+                .map(|(name, s)| Obstacle {
+                    name: name.clone(),
+                    shape: s.at_rest(),
+                })
+                .collect(),
+            goal.iter().copied().collect(),
+            PotentialParams {
+                lambda: p.lambda,
+                kv: p.kv_exponent,
+                goal_frame: p.goal_frame,
+                singularity: p.singularity,
+                field_power: p.field_power,
+            },
+        )
+    }
+
+    /// The first time a trajectory is within the planner's tolerance (NaN if never).
+    fn time_to_goal(&self, tr: &Trajectory, goal: &State) -> f64 {
+        let g = goal.as_slice();
+        tr.q.iter()
+            .zip(&tr.t)
+            .find(|(q, _)| self.params.tolerance.reached(q.as_slice(), g))
+            .map(|(_, t)| *t)
+            .unwrap_or(f64::NAN)
+    }
+
+    /// Indices of a trajectory's policy samples (every `period`).
+    fn policy_samples(&self, tr: &Trajectory) -> Vec<usize> {
+        let dt = if tr.t.len() > 1 {
+            tr.t[1] - tr.t[0]
+        } else {
+            1.0
+        };
+        let every = ((self.params.period / dt).round() as usize).max(1);
+        (0..tr.t.len()).step_by(every).collect()
+    }
+}
+
+/// Metrics of the V̇ ≥ 0 claim and the ellipsoid model along one run.
+struct Along {
+    min_beta: f64,
+    vdot_violations: usize,
+    v: Series,
+    beta: Series,
+}
+
+fn along(scene: &Scene, gains: &Gains, tr: &Trajectory, samples: &[usize], name: &str) -> Along {
+    let mut warm = scene.warm();
+    let mut out = Along {
+        min_beta: f64::INFINITY,
+        vdot_violations: 0,
+        v: Series::new(format!("V/{name}")),
+        beta: Series::new(format!("min_obstacle_function/{name}")),
+    };
+    for &k in samples {
+        let q = tr.q[k].as_slice();
+        match scene.field(q, &mut warm) {
+            Ok((e, f)) => {
+                out.min_beta = out.min_beta.min(e.min_beta);
+                // The law's input at this very state (the recorded one may have
+                // been computed a step earlier when sample times round).
+                let (u, branches) = control::control(q, &f, &scene.goal, gains);
+                if branches.contains(&control::Branch::Align) {
+                    // The final alignment is ours, not Eq. 18: not counted.
+                    out.v.push(tr.t[k], e.v);
+                    out.beta.push(tr.t[k], e.min_beta);
+                    continue;
+                }
+                let u = u.as_slice();
+                let vd = vdot_scaled(q, &f, u);
+                let size = f.iter().map(|x| x * x).sum::<f64>().sqrt()
+                    * u.iter().map(|x| x * x).sum::<f64>().sqrt();
+                if vd < -1e-9 * size {
+                    out.vdot_violations += 1;
+                }
+                out.v.push(tr.t[k], e.v);
+                out.beta.push(tr.t[k], e.min_beta);
+            }
+            Err(_) => out.vdot_violations += 1,
+        }
+    }
+    out
+}
+
+impl System for Dilf {
+    fn model(&self) -> &dyn KinematicModel {
+        &self.model
+    }
+    fn default_max_rate(&self) -> Vec<f64> {
+        vec![1.0; 8 * self.model.robots]
+    }
+    fn plan(&self, start: &State, goal: &State, _limits: &Limits) -> Result<Plan, PlanError> {
+        let scene = self
+            .scene(goal)
+            .map_err(|reason| PlanError::InvalidParameter {
+                name: "planner".into(),
+                reason,
+            })?;
+        dilf::plan(Arc::new(scene), start, &self.params)
+    }
+    fn physics(
+        &self,
+        robot: &urdf_rs::Robot,
+        urdf_dir: &Path,
+        start: &[f64],
+        sim: &PhysicsSettings,
+    ) -> Result<Box<dyn PhysicsSystem>, String> {
+        // The model's own check first, naming the key: a start inside an
+        // obstacle is bad input, not a physics failure.
+        let scene = self.scene(&State::from_vec(start.to_vec()))?;
+        if let Err(crate::planner::PlanError::InvalidParameter { name, reason }) =
+            dilf::check_configuration(&scene, start, "start")
+        {
+            return Err(format!("key `{name}`: {reason}"));
+        }
+        let obstacles: Vec<ObstacleShape> = self
+            .obstacles
+            .iter()
+            .map(|(name, shape)| ObstacleShape {
+                name: name.clone(),
+                shape: *shape,
+            })
+            .collect();
+        Ok(Box::new(MobileManipulatorPhysics::new(
+            robot, urdf_dir, start, sim, &obstacles,
+        )?))
+    }
+    fn goal_heading(&self, goal: &State) -> Option<f64> {
+        Some(goal[2])
+    }
+    /// Wireframes of the obstacles (world) and of the robot's ellipsoid cover
+    /// (attached to the links, so they move with the simulated robot).
+    fn overlays(&self, _start: &State, _goal: &State) -> Vec<Overlay> {
+        let mut out = Vec::new();
+        for (name, s) in &self.obstacles {
+            out.extend(wireframe(
+                &format!("obstacle_{name}"),
+                s,
+                None,
+                [0.85, 0.2, 0.2, 1.0],
+            ));
+        }
+        for p in mm::default_parts() {
+            out.extend(wireframe(
+                &format!("ellipsoid_{}", p.name),
+                &p.shape,
+                Some(p.link.urdf_name()),
+                [0.2, 0.75, 0.9, 1.0],
+            ));
+        }
+        out
+    }
+    fn extra_metric_names(&self) -> Vec<String> {
+        [
+            "ideal_time_to_goal",
+            "sim_time_to_goal",
+            "ideal_min_clearance",
+            "sim_min_clearance",
+            "sim_obstacle_contacts",
+            "ideal_min_obstacle_function",
+            "sim_min_obstacle_function",
+            "ideal_vdot_violations",
+            "sim_vdot_violations",
+            "slip_lateral_max",
+            "joint_rate_error_max",
+        ]
+        .map(String::from)
+        .to_vec()
+    }
+    fn analysis(
+        &self,
+        goal: &State,
+        ideal: &Trajectory,
+        sim: &SimTrajectory,
+        _cmp: &Comparison,
+    ) -> (Vec<(String, f64)>, Vec<Series>) {
+        let Ok(scene) = self.scene(goal) else {
+            return (Vec::new(), Vec::new());
+        };
+        let gains = self.params.gains();
+        let a_ideal = along(&scene, &gains, ideal, &self.policy_samples(ideal), "ideal");
+        let a_sim = along(
+            &scene,
+            &gains,
+            &sim.traj,
+            &self.policy_samples(&sim.traj),
+            "sim",
+        );
+        let mut clear = Series::new("clearance/ideal".into());
+        for k in self.policy_samples(ideal) {
+            clear.push(ideal.t[k], self.probe.clearance(ideal.q[k].as_slice()));
+        }
+        let ideal_clear = clear.values.iter().copied().fold(f64::INFINITY, f64::min);
+        let chan = |n: &str| sim.channel(n).unwrap_or(&[]);
+        let min_of = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
+        let max_abs = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
+        let metrics = vec![
+            ("ideal_time_to_goal".into(), self.time_to_goal(ideal, goal)),
+            (
+                "sim_time_to_goal".into(),
+                self.time_to_goal(&sim.traj, goal),
+            ),
+            ("ideal_min_clearance".into(), ideal_clear),
+            ("sim_min_clearance".into(), min_of(chan("min_clearance"))),
+            (
+                "sim_obstacle_contacts".into(),
+                max_abs(chan("obstacle_contacts")),
+            ),
+            ("ideal_min_obstacle_function".into(), a_ideal.min_beta),
+            ("sim_min_obstacle_function".into(), a_sim.min_beta),
+            (
+                "ideal_vdot_violations".into(),
+                a_ideal.vdot_violations as f64,
+            ),
+            ("sim_vdot_violations".into(), a_sim.vdot_violations as f64),
+            ("slip_lateral_max".into(), max_abs(chan("slip_lateral"))),
+            (
+                "joint_rate_error_max".into(),
+                max_abs(chan("joint_rate_error")),
+            ),
+        ];
+        (
+            metrics,
+            vec![a_ideal.v, a_sim.v, a_ideal.beta, a_sim.beta, clear],
+        )
+    }
+}
+
+/// Three principal rings and two latitude rings of a shape, as overlays.
+fn wireframe(name: &str, s: &Superellipsoid, link: Option<&str>, rgba: [f32; 4]) -> Vec<Overlay> {
+    let placed = s.at_rest();
+    let e = 1.0 / s.exponent;
+    let sp = |c: f64| c.signum() * c.abs().powf(e);
+    let ring = |f: &dyn Fn(f64) -> [f64; 3]| -> Vec<[f64; 3]> {
+        (0..=48)
+            .map(|i| placed.to_world(f(std::f64::consts::TAU * i as f64 / 48.0)))
+            .collect()
+    };
+    let [a, b, c] = s.semi_axes;
+    let mut rings: Vec<Vec<[f64; 3]>> = vec![
+        ring(&|t| [a * sp(t.cos()), b * sp(t.sin()), 0.0]),
+        ring(&|t| [a * sp(t.cos()), 0.0, c * sp(t.sin())]),
+        ring(&|t| [0.0, b * sp(t.cos()), c * sp(t.sin())]),
+    ];
+    for lat in [-0.6f64, 0.6] {
+        let (cl, sl) = (sp(lat.cos()), sp(lat.sin()));
+        rings.push(ring(&|t| {
+            [a * cl * sp(t.cos()), b * cl * sp(t.sin()), c * sl]
+        }));
+    }
+    rings
+        .into_iter()
+        .enumerate()
+        .map(|(k, points)| Overlay {
+            name: format!("{name}_{k}"),
+            points,
+            link: link.map(String::from),
+            rgba,
+        })
+        .collect()
+}
+
+/// Distances between the robot's URDF collision shapes (placed by forward
+/// kinematics) and the obstacle colliders (the same convex hulls the physics
+/// uses), for the ideal run.
+struct ClearanceProbe {
+    obstacles: Vec<(ConvexPolyhedron, Aabb)>,
+    links: Vec<(Link, Box<dyn Shape>, crate::model::spatial::Pose<f64>)>,
+}
+
+fn rapier_pose(p: &crate::model::spatial::Pose<f64>) -> crate::physics::rapier::math::Pose {
+    let q = p.quaternion();
+    crate::physics::rapier::math::Pose::from_parts(
+        rl::vector(p.p[0], p.p[1], p.p[2]),
+        rl::rotation(q[0], q[1], q[2], q[3]),
+    )
+}
+
+impl ClearanceProbe {
+    fn new(obstacles: &[(String, Superellipsoid)]) -> Self {
+        use crate::model::spatial::{rot_x, rot_y, Pose};
+        let obstacles = obstacles
+            .iter()
+            .filter_map(|(_, s)| {
+                let (v, _) = s.mesh(16, 32);
+                let pts: Vec<Vector> = v.iter().map(|p| rl::vector(p[0], p[1], p[2])).collect();
+                let hull = ConvexPolyhedron::from_convex_hull(&pts)?;
+                let aabb = hull.local_aabb();
+                Some((hull, aabb))
+            })
+            .collect();
+        let links = mm::collision_shapes()
+            .into_iter()
+            .map(|(link, shape)| -> (Link, Box<dyn Shape>, Pose<f64>) {
+                match shape {
+                    CollisionShape::Cuboid { center, half } => (
+                        link,
+                        Box::new(Cuboid::new(rl::vector(half[0], half[1], half[2]))),
+                        Pose::translation(center),
+                    ),
+                    CollisionShape::Sphere { center, radius } => (
+                        link,
+                        Box::new(Ball::new(rl::r(radius))),
+                        Pose::translation(center),
+                    ),
+                    CollisionShape::Cylinder {
+                        center,
+                        axis,
+                        radius,
+                        half_length,
+                    } => {
+                        // parry cylinders run along their local y axis.
+                        let r = if axis[0].abs() > 0.5 {
+                            rot_z_f(-std::f64::consts::FRAC_PI_2)
+                        } else if axis[2].abs() > 0.5 {
+                            rot_x(std::f64::consts::FRAC_PI_2)
+                        } else {
+                            rot_y(0.0)
+                        };
+                        (
+                            link,
+                            Box::new(Cylinder::new(rl::r(half_length), rl::r(radius))),
+                            Pose { r, p: center },
+                        )
+                    }
+                }
+            })
+            .collect();
+        ClearanceProbe { obstacles, links }
+    }
+
+    /// Least distance at configuration q (one robot), m.
+    fn clearance(&self, q: &[f64]) -> f64 {
+        let f = mm::frames::<f64>(q);
+        let mut best = f64::INFINITY;
+        for (link, shape, local) in &self.links {
+            let pose = rapier_pose(&f.link(*link).then(local));
+            let aabb = shape.compute_aabb(&pose);
+            for (hull, ob) in &self.obstacles {
+                let d = (aabb.mins - ob.maxs)
+                    .max(ob.mins - aabb.maxs)
+                    .max(Vector::ZERO);
+                if rl::f(d.length()) >= best {
+                    continue;
+                }
+                let id = crate::physics::rapier::math::Pose::IDENTITY;
+                if let Ok(d) =
+                    crate::physics::rapier::parry::query::distance(&pose, shape.as_ref(), &id, hull)
+                {
+                    best = best.min(rl::f(d.distance));
+                }
+            }
+        }
+        best
+    }
+}
+
+fn rot_z_f(a: f64) -> crate::model::spatial::M3<f64> {
+    crate::model::spatial::rot_z(a)
+}

@@ -1,0 +1,313 @@
+//! The validation pass: every scenario of a call (`run`, `check`, `plan`,
+//! `list`) is read and checked before the first run starts or the first log
+//! is written; any failure is bad input (exit 2) and nothing is written.
+//!
+//! For each file: kind and size ([`crate::input`]), TOML, model/planner
+//! match and ranges ([`Scenario::parse`]), the URDF ([`urdf`]), thresholds
+//! and sweep metric names, names usable as directories and not shared by two
+//! scenarios of the call. Then what can only be checked by building the
+//! system: the **plan** is made (unreachable goals, bad planner parameters)
+//! and the **physics is built at the start pose** (URDF against the model,
+//! and whatever a system refuses there, e.g. a start inside an obstacle).
+//!
+//! Planning up front costs little: at most tens of milliseconds per shipped
+//! scenario (the endogenous planner), measured in the README. The plan is
+//! kept in [`Prepared::planned`] and the run replays it, so nothing is
+//! planned twice. The physics probe is dropped (a Rapier world is cheap to
+//! build and not `Sync`); the run builds its own.
+
+pub mod urdf;
+
+use crate::compare::metric_spec;
+use crate::error::Error;
+use crate::model::{KinematicModel, State};
+use crate::physics::PhysicsSystem;
+use crate::plan::{Limits, Plan};
+use crate::planner::PlanError;
+use crate::scenario::{build_system, collect, Scenario, Variant};
+use crate::systems::System;
+use std::collections::HashMap;
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+/// A scenario that passed validation: system built, URDF loaded, planned.
+pub struct Prepared {
+    /// The scenario.
+    pub scenario: Scenario,
+    /// Model, planner and physics counterpart.
+    pub system: Box<dyn System>,
+    /// Parsed, validated URDF.
+    pub robot: urdf_rs::Robot,
+    /// The plan made during validation; runs replay it (planners are deterministic).
+    pub planned: Plan,
+    /// Wall time of that planning, s.
+    pub plan_wall_s: f64,
+}
+
+impl Prepared {
+    /// Validate a loaded scenario: URDF, system, thresholds, sweep metrics,
+    /// plan, physics at the start pose. Every failure is a user input error.
+    pub fn new(scenario: Scenario) -> Result<Prepared, Error> {
+        let robot = urdf::load(&scenario.urdf)?;
+        Prepared::with_robot(scenario, robot)
+    }
+
+    /// Like [`Prepared::new`] with the URDF already loaded (sweep variants
+    /// scale its masses).
+    pub fn with_robot(scenario: Scenario, robot: urdf_rs::Robot) -> Result<Prepared, Error> {
+        let system =
+            build_system(&scenario.model, &scenario.planner).map_err(|m| scenario.error(m))?;
+        let known = metric_names(system.as_ref());
+        let gates = scenario.thresholds.keys().map(|k| ("thresholds", k));
+        for (table, k) in gates.chain(scenario.minimums.keys().map(|k| ("minimums", k))) {
+            if !known.contains(k) {
+                return Err(scenario.error(format!(
+                    "key `{table}.{k}`: unknown metric; known: {}",
+                    known.join(", ")
+                )));
+            }
+        }
+        if let Some(sw) = &scenario.sweep {
+            for (key, m) in [
+                ("success_metric", &sw.success_metric),
+                ("time_metric", &sw.time_metric),
+            ] {
+                if !known.contains(m) {
+                    return Err(scenario.error(format!(
+                        "key `sweep.{key}`: unknown metric `{m}`; known: {}",
+                        known.join(", ")
+                    )));
+                }
+            }
+        }
+        let mut regressable = known.clone();
+        if scenario.sweep.is_some() {
+            regressable.extend(crate::scenario::sweep_metric_names());
+        }
+        if let Some(k) = scenario.regression.unknown_metrics(&regressable).next() {
+            return Err(scenario.error(format!(
+                "key `regression.metrics.{k}`: unknown metric; known: {}",
+                regressable.join(", ")
+            )));
+        }
+        // The physics first: a URDF that disagrees with the model explains a
+        // planner refusal better than the refusal does.
+        build_physics(&scenario, system.as_ref(), &robot)?;
+        let t0 = Instant::now();
+        let planned = make_plan(&scenario, system.as_ref())?;
+        let plan_wall_s = t0.elapsed().as_secs_f64();
+        // A step budget (issue 13) belongs here: plan.duration, sim.dt and
+        // sim.settle are known, nothing has run.
+        let prep = Prepared {
+            scenario,
+            system,
+            robot,
+            planned,
+            plan_wall_s,
+        };
+        if let Some(sw) = &prep.scenario.sweep {
+            // Variants differ only in friction, masses and σ: when variant 0
+            // cannot even be set up (e.g. a mass scale the model refuses),
+            // none can, and that is bad input.
+            let v = sw.variant(prep.scenario.sim.friction, 0);
+            if let Err(e) = prep.variant(&v) {
+                return Err(prep.scenario.error(format!(
+                    "key `sweep`: variant 0 (friction {:.4}, mass scale {:.4}) cannot run: {e}",
+                    v.friction, v.mass_scale
+                )));
+            }
+        }
+        Ok(prep)
+    }
+
+    /// A sweep variant of this scenario, validated and planned like the scenario.
+    pub fn variant(&self, v: &Variant) -> Result<Prepared, Error> {
+        let mut sc = self.scenario.clone();
+        let mut robot = self.robot.clone();
+        v.apply(&mut sc, &mut robot);
+        Prepared::with_robot(sc, robot)
+    }
+
+    /// The kinematic model.
+    pub fn model(&self) -> &dyn KinematicModel {
+        self.system.model()
+    }
+
+    /// Start and goal as model states.
+    pub fn start_goal(&self) -> (State, State) {
+        (
+            State::from_vec(self.scenario.start.clone()),
+            State::from_vec(self.scenario.goal.clone()),
+        )
+    }
+
+    /// Every metric a run of this scenario reports.
+    pub fn metric_names(&self) -> Vec<String> {
+        metric_names(self.system.as_ref())
+    }
+
+    /// Run the planner again (validation already planned: see
+    /// [`Prepared::planned`]; this is for benchmarks and tests).
+    pub fn plan(&self) -> Result<Plan, Error> {
+        make_plan(&self.scenario, self.system.as_ref())
+    }
+
+    /// Build the physics counterpart at the start state.
+    pub fn physics(&self) -> Result<Box<dyn PhysicsSystem>, Error> {
+        build_physics(&self.scenario, self.system.as_ref(), &self.robot)
+    }
+}
+
+fn metric_names(system: &dyn System) -> Vec<String> {
+    let mut known = metric_spec(system.model()).names();
+    known.extend(system.extra_metric_names());
+    known
+}
+
+/// The key of the scenario a planner refusal is about.
+fn plan_error_key(sc: &Scenario, e: &PlanError) -> String {
+    match e {
+        PlanError::InvalidParameter { name, .. } => {
+            let nested = format!("planner.{name}");
+            // Some planners check `start` or `goal` (top-level keys).
+            if !sc.has_key(&nested) && sc.has_key(name) {
+                name.clone()
+            } else {
+                nested
+            }
+        }
+        PlanError::Unreachable(_) => "goal".into(),
+        PlanError::NoConvergence(_) => "planner".into(),
+    }
+}
+
+fn make_plan(sc: &Scenario, system: &dyn System) -> Result<Plan, Error> {
+    let (start, goal) = (
+        State::from_vec(sc.start.clone()),
+        State::from_vec(sc.goal.clone()),
+    );
+    let limits = Limits {
+        max_rate: sc.max_rate.clone(),
+        ramp: sc.ramp,
+        step: sc.sim.dt,
+    };
+    let plan_error = |source: PlanError| {
+        let key = plan_error_key(sc, &source);
+        Error::Plan {
+            path: sc.path.clone(),
+            line: sc.line_of(&key),
+            key,
+            source,
+        }
+    };
+    let plan = system.plan(&start, &goal, &limits).map_err(plan_error)?;
+    if !plan.duration.is_finite() || plan.duration > 1e6 {
+        return Err(plan_error(PlanError::Unreachable(format!(
+            "plan duration {} s is not usable",
+            plan.duration
+        ))));
+    }
+    Ok(plan)
+}
+
+fn build_physics(
+    sc: &Scenario,
+    system: &dyn System,
+    robot: &urdf_rs::Robot,
+) -> Result<Box<dyn PhysicsSystem>, Error> {
+    let dir = sc.urdf.parent().unwrap_or(Path::new("."));
+    system
+        .physics(robot, dir, &sc.start, &sc.sim.physics())
+        .map_err(|m| physics_error(sc, &m))
+}
+
+/// Physics setup refusals name a scenario key (`model.radius`, `sim.gravity`)
+/// or a URDF element (messages starting with `URDF`): attribute them to
+/// that file and line.
+fn physics_error(sc: &Scenario, message: &str) -> Error {
+    let names_key = crate::scenario::doc::named_key(message).is_some()
+        || crate::scenario::doc::dotted_key(message).is_some();
+    if !names_key && message.starts_with("URDF") {
+        urdf::error_in(&sc.urdf, message)
+    } else {
+        sc.error_about(message)
+    }
+}
+
+/// What a call will do with its scenarios, as far as validation must know.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Call<'a> {
+    /// Log root (`--logs`), when logs will be written.
+    pub log_root: Option<&'a Path>,
+    /// `--shard` was given: only sweep scenarios can be sharded.
+    pub sharded: bool,
+}
+
+/// The validation pass over every scenario of a call: all errors, or every
+/// scenario prepared (planned, physics probed), in the order given
+/// (directories sorted).
+pub fn prepare_all(paths: &[PathBuf], call: &Call<'_>) -> Result<Vec<Prepared>, Vec<Error>> {
+    let (preps, errors) = prepare_each(paths, call);
+    if errors.is_empty() {
+        Ok(preps)
+    } else {
+        Err(errors)
+    }
+}
+
+/// The validation pass, keeping what passed beside the errors (`list` shows
+/// the scenarios that load and reports the others).
+pub fn prepare_each(paths: &[PathBuf], call: &Call<'_>) -> (Vec<Prepared>, Vec<Error>) {
+    let files = match collect(paths) {
+        Ok(f) => f,
+        Err(errors) => return (Vec::new(), errors),
+    };
+    let mut errors = Vec::new();
+    if let Some(root) = call.log_root {
+        if root.exists() && !root.is_dir() {
+            errors.push(Error::input(root, "--logs: exists and is not a directory"));
+        }
+    }
+    // Log directory names are compared case-insensitively (macOS, Windows).
+    let mut names: HashMap<String, PathBuf> = HashMap::new();
+    let mut preps = Vec::new();
+    for f in files {
+        let sc = match Scenario::load(&f) {
+            Ok(sc) => sc,
+            Err(e) => {
+                errors.push(e);
+                continue;
+            }
+        };
+        if let Some(other) = names.insert(sc.name.to_lowercase(), f.clone()) {
+            errors.push(sc.error(format!(
+                "key `name`: `{}` is also the name of {}: both would write the same log directory",
+                sc.name,
+                other.display()
+            )));
+            continue;
+        }
+        if call.sharded && sc.sweep.is_none() {
+            errors.push(Error::input(
+                &f,
+                "--shard: this scenario has no [sweep] table (only sweeps can be sharded; run it without --shard)",
+            ));
+            continue;
+        }
+        if let Some(root) = call.log_root {
+            let dir = root.join(&sc.name);
+            if dir.exists() && !dir.is_dir() {
+                errors.push(Error::input(
+                    &dir,
+                    "log directory exists and is not a directory",
+                ));
+                continue;
+            }
+        }
+        match Prepared::new(sc) {
+            Ok(p) => preps.push(p),
+            Err(e) => errors.push(e),
+        }
+    }
+    (preps, errors)
+}
