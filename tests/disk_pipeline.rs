@@ -90,7 +90,10 @@ fn logs_are_complete_and_readable() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     names.sort();
-    assert_eq!(names, ["run.mcap", "run.rrd", "summary.json"]);
+    assert_eq!(
+        names,
+        ["run.mcap", "run.rrd", "series.json", "summary.json"]
+    );
 
     // MCAP: the four JSON topics with schemas, one message per sample.
     let bytes = std::fs::read(dir.join("run.mcap")).unwrap();
