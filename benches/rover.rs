@@ -31,9 +31,10 @@ fn physics_steps(c: &mut Criterion) {
     g.bench_function("1000_steps_same_urdf_no_ground", |b| {
         b.iter_batched(
             || {
+                let settings = prep.scenario.sim.physics();
                 let opts = WorldOptions {
-                    sim: &prep.scenario.sim,
-                    root_pose: rapier3d::math::Pose::IDENTITY,
+                    settings: &settings,
+                    root_pose: anholonomy::physics::rapier::math::Pose::IDENTITY,
                     ground: false,
                 };
                 SimWorld::new(&prep.robot, &dir, &opts)

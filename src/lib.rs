@@ -26,6 +26,7 @@ pub mod record;
 pub mod report;
 pub mod runner;
 pub mod scenario;
+pub mod suite;
 pub mod sweep;
 pub mod systems;
 pub mod validate;

@@ -4,7 +4,7 @@ use anholonomy::baseline::{self, Baseline, Delta};
 use anholonomy::error::Error;
 use anholonomy::integrate::simulate;
 use anholonomy::junit::{self, CaseResult};
-use anholonomy::runner::{run, RunOptions, RunOutcome};
+use anholonomy::runner::{RunOptions, RunOutcome};
 use anholonomy::say;
 use anholonomy::validate::{prepare_all, prepare_each, Call};
 use clap::{Args, Parser, Subcommand};
@@ -248,6 +248,9 @@ fn record_regression(o: &RunOutcome, deltas: Option<&[Delta]>) -> Result<(), Err
     }
 }
 
+/// A scenario's outcome, or its error and wall time (s) for JUnit.
+type Outcome = Result<RunOutcome, (Error, f64)>;
+
 fn run_cmd(args: &RunArgs, mode: Mode) -> Result<u8, Vec<Error>> {
     let t_all = Instant::now();
     let shard = match &args.shard {
@@ -288,20 +291,16 @@ fn run_cmd(args: &RunArgs, mode: Mode) -> Result<u8, Vec<Error>> {
         progress: !args.quiet,
     };
     let mut rows = Vec::new();
-    let mut results: Vec<(usize, Result<RunOutcome, (Error, f64)>)> = Vec::new();
-    for (i, p) in preps.iter().enumerate() {
-        let t0 = Instant::now();
-        let res = if p.scenario.sweep.is_some() {
-            anholonomy::sweep::run_sweep(p, &opts, shard)
-        } else {
-            run(p, &opts)
-        };
+    let mut results: Vec<(usize, Outcome)> = Vec::new();
+    // Independent scenarios run in parallel; results come back in input order.
+    let ran = anholonomy::suite::run_all(&preps, &opts, shard);
+    for (i, (res, wall)) in ran.into_iter().enumerate() {
         match res {
             Ok(o) => {
                 rows.push(o.clone());
                 results.push((i, Ok(o)));
             }
-            Err(e) => results.push((i, Err((e, t0.elapsed().as_secs_f64())))),
+            Err(e) => results.push((i, Err((e, wall)))),
         }
     }
     print_table(&rows);

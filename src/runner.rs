@@ -7,7 +7,7 @@ use crate::error::Error;
 use crate::integrate::{simulate, Trajectory};
 use crate::log::unit::LogUnit;
 use crate::model::{KinematicModel, State};
-use crate::physics::{replay, urdf};
+use crate::physics::{replay_with, urdf, ReplayOptions};
 use crate::plan::Plan;
 use crate::record::{RunRecord, SimTrajectory};
 use serde::Serialize;
@@ -106,13 +106,19 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
     let t0 = Instant::now();
     let mut sys = prep.physics()?;
     let bar = crate::progress::Delayed::new(&sc.name, opts.progress);
-    let sim = replay(sys.as_mut(), plan, sc.sim.dt, sc.sim.settle, &mut |f| {
-        bar.set(f)
-    })
-    .map_err(|message| Error::Physics {
-        path: sc.path.clone(),
-        message,
-    })?;
+    let replay_opts = ReplayOptions {
+        dt: sc.sim.dt,
+        settle: sc.sim.settle,
+        // Only the 3D logs read link poses.
+        link_poses: opts.log_root.is_some(),
+    };
+    let sim =
+        replay_with(sys.as_mut(), plan, &replay_opts, &mut |f| bar.set(f)).map_err(|message| {
+            Error::Physics {
+                path: sc.path.clone(),
+                message,
+            }
+        })?;
     bar.finish();
     timings.physics = t0.elapsed().as_secs_f64();
 
@@ -224,7 +230,7 @@ fn write_logs(
         goal: &goal_v,
         goal_heading: prep.system.goal_heading(goal),
         overlays: &overlays,
-        series: &series,
+        series,
         labels: &plan.labels,
         ideal,
         sim,

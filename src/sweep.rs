@@ -10,7 +10,6 @@
 use crate::error::Error;
 use crate::log::unit::LogUnit;
 use crate::runner::{run, write_atomic, RunOptions, RunOutcome, Timings};
-use crate::say;
 pub use crate::scenario::{variant_seed, SweepConfig, Variant};
 use crate::validate::Prepared;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -107,20 +106,7 @@ fn run_variant(prep: &Prepared, cfg: &SweepConfig, v: Variant) -> VariantResult 
     }
 }
 
-/// Names of the metrics a sweep reports (the sweep's outcome carries these instead of the
-/// single-run metrics).
-pub fn metric_names() -> Vec<String> {
-    let mut out = vec![
-        "sweep_success_rate".to_string(),
-        "sweep_variants".to_string(),
-    ];
-    for name in ["sweep_final_error", "sweep_time_to_goal"] {
-        for s in ["median", "p95", "max"] {
-            out.push(format!("{name}_{s}"));
-        }
-    }
-    out
-}
+pub use crate::scenario::sweep_metric_names as metric_names;
 
 /// Median, 95th percentile (nearest rank) and maximum; None when empty.
 pub fn distribution(values: &[f64]) -> Option<[f64; 3]> {
@@ -140,6 +126,18 @@ pub fn run_sweep(
     opts: &RunOptions,
     shard: Option<Shard>,
 ) -> Result<RunOutcome, Error> {
+    let (outcome, table) = run_sweep_report(prep, opts, shard)?;
+    crate::suite::emit(&table);
+    Ok(outcome)
+}
+
+/// [`run_sweep`] without printing: the outcome and the table text (so parallel callers can
+/// print tables in a fixed order).
+pub fn run_sweep_report(
+    prep: &Prepared,
+    opts: &RunOptions,
+    shard: Option<Shard>,
+) -> Result<(RunOutcome, String), Error> {
     let t_all = Instant::now();
     let sc = &prep.scenario;
     let cfg = sc
@@ -219,7 +217,10 @@ pub fn run_sweep(
         Some([a, b, c]) => format!("{a:>9.4} {b:>9.4} {c:>9.4}"),
         None => format!("{:>9} {:>9} {:>9}", "-", "-", "-"),
     };
-    say!(
+    use std::fmt::Write as _;
+    let mut table = String::new();
+    let _ = writeln!(
+        table,
         "sweep {} ({} variants{}, {:.1} s): success {}/{} = {:.1} %",
         sc.name,
         n,
@@ -231,13 +232,23 @@ pub fn run_sweep(
         n,
         100.0 * rate
     );
-    say!("  {:<28} {:>9} {:>9} {:>9}", "", "median", "p95", "max");
-    say!(
+    let _ = writeln!(
+        table,
+        "  {:<28} {:>9} {:>9} {:>9}",
+        "", "median", "p95", "max"
+    );
+    let _ = writeln!(
+        table,
         "  {:<28} {}",
         format!("final error ({})", cfg.success_metric),
         fmt(err_d)
     );
-    say!("  {:<28} {}", "time to goal, s (successes)", fmt(time_d));
+    let _ = writeln!(
+        table,
+        "  {:<28} {}",
+        "time to goal, s (successes)",
+        fmt(time_d)
+    );
 
     let mut outcome = RunOutcome {
         name: sc.name.clone(),
@@ -283,7 +294,7 @@ pub fn run_sweep(
         })?;
         outcome.log_dir = Some(dir);
     }
-    Ok(outcome)
+    Ok((outcome, table))
 }
 
 /// Files of a single run or an unsharded sweep: stale beside shard files.

@@ -153,6 +153,47 @@ fn unknown_planner_key_names_its_line() {
     assert!(err.contains(&format!(":{line}:")), "{err}");
 }
 
+#[test]
+fn solver_and_drive_settings_out_of_range() {
+    for (sim, needle) in [
+        ("solver_pgs_iterations = 0", "sim.solver_pgs_iterations"),
+        ("motor_angle_gain = -1.0", "sim.motor_angle_gain"),
+        ("solver_relax_pass = 1", "expected a boolean"),
+    ] {
+        let text = disk_scenario(&model("rolling_disk.urdf"), "", sim);
+        expect_input_error(&text, needle);
+    }
+}
+
+#[test]
+fn urdf_the_loader_cannot_represent() {
+    // A mesh collision, and a second root link: both named, nothing simulated.
+    let base = std::fs::read_to_string(model("rolling_disk.urdf")).unwrap();
+    for (edit, needle) in [
+        (
+            base.replace(
+                "<collision>",
+                "<collision><geometry><mesh filename=\"w.stl\"/></geometry></collision><collision>",
+            ),
+            "mesh <collision>",
+        ),
+        (
+            base.replace(
+                "</robot>",
+                "<link name=\"stray\"><inertial><mass value=\"1\"/><inertia ixx=\"1\" ixy=\"0\" ixz=\"0\" iyy=\"1\" iyz=\"0\" izz=\"1\"/></inertial></link></robot>",
+            ),
+            "2 root links",
+        ),
+    ] {
+        let dir = tempfile::tempdir().unwrap();
+        let urdf = dir.path().join("edited.urdf");
+        std::fs::write(&urdf, edit).unwrap();
+        std::fs::write(dir.path().join("bad.toml"), disk_scenario(&urdf, "", "")).unwrap();
+        let out = cli(dir.path(), &["run", "bad.toml", "--logs", "logs"]);
+        check_contract(&out, dir.path(), needle);
+    }
+}
+
 // The cases of issue 14, one test each (the corpus in `bad_input_corpus.rs`
 // runs many more through every command).
 

@@ -85,8 +85,8 @@ fn worsened_run_fails_unchanged_passes_update_resets() {
     assert_eq!(o.status.code(), Some(0), "{out}\n{err}");
     assert!(out.contains("every metric within tolerance"), "{out}");
 
-    // Worsened: one solver iteration instead of four (a deliberate regression).
-    fixture(dir, "solver_iterations = 1", "");
+    // Worsened: pure velocity motors instead of servo drives (a deliberate regression).
+    fixture(dir, "motor_angle_gain = 0.0", "");
     let o = cli(
         dir,
         &[
@@ -131,7 +131,7 @@ fn worsened_run_fails_unchanged_passes_update_resets() {
     );
 
     // A generous per-scenario tolerance accepts the worsened run.
-    fixture(dir, "solver_iterations = 1", "[regression]\nrel = 1e6\n");
+    fixture(dir, "motor_angle_gain = 0.0", "[regression]\nrel = 1e6\n");
     let o = cli(
         dir,
         &[
@@ -146,7 +146,7 @@ fn worsened_run_fails_unchanged_passes_update_resets() {
     assert_eq!(o.status.code(), Some(0), "{:?}", text(&o));
 
     // --update-baseline accepts the new numbers; then check passes.
-    fixture(dir, "solver_iterations = 1", "");
+    fixture(dir, "motor_angle_gain = 0.0", "");
     let o = cli(
         dir,
         &[

@@ -33,6 +33,29 @@ fn disk_paper_survives_physics_within_its_thresholds() {
     assert!(o.metric("ideal_goal_position").unwrap() < 1e-9);
 }
 
+/// Motor fidelity (issue 10). A pure velocity motor (motor_angle_gain = 0)
+/// lags like a first-order filter: Rapier's Gauss-Seidel sweeps hand the wheel
+/// only part of each velocity correction, because the motor reacts on the
+/// light yoke, which the balance joint holds, so the wheel angle trails by
+/// ~τ·θ' (measured 2.35° at 4 rad/s, one substep with 4 sweeps; 1.62° with the
+/// earlier 4 substeps) and catches up when θ' returns to zero. The servo drive
+/// (target = commanded angle) leaves 0.036° during the ramps and the heading
+/// 6e-5°; the simulated disk ends 1.2 mm from the goal instead of 16 mm.
+#[test]
+fn servo_drives_remove_the_velocity_motor_lag() {
+    let text = disk_scenario(&model("rolling_disk.urdf"), "", "");
+    let servo = run_text(&text, None);
+    let velocity = run_text(
+        &disk_scenario(&model("rolling_disk.urdf"), "", "motor_angle_gain = 0.0"),
+        None,
+    );
+    let m = |o: &RunOutcome, k: &str| o.metric(k).unwrap();
+    assert!(m(&servo, "tracking_theta_deg_max") < 0.1);
+    assert!(m(&servo, "tracking_alpha_deg_max") < 1e-3);
+    assert!(m(&velocity, "tracking_theta_deg_max") > 1.0);
+    assert!(m(&servo, "sim_goal_position") < 0.3 * m(&velocity, "sim_goal_position"));
+}
+
 #[test]
 fn too_little_friction_is_reported_as_a_failure() {
     let text = format!(
@@ -67,7 +90,10 @@ fn logs_are_complete_and_readable() {
         .map(|e| e.unwrap().file_name().to_string_lossy().into_owned())
         .collect();
     names.sort();
-    assert_eq!(names, ["run.mcap", "run.rrd", "summary.json"]);
+    assert_eq!(
+        names,
+        ["run.mcap", "run.rrd", "series.json", "summary.json"]
+    );
 
     // MCAP: the four JSON topics with schemas, one message per sample.
     let bytes = std::fs::read(dir.join("run.mcap")).unwrap();

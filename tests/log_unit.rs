@@ -1,5 +1,5 @@
 //! A run's logs are one unit: `kill -9` at any moment of a re-run leaves
-//! either the previous run's three files or the new run's, never a mix, and
+//! either the previous run's four files or the new run's, never a mix, and
 //! the next run cleans up what the killed one left.
 
 mod common;
@@ -9,7 +9,7 @@ use std::path::Path;
 use std::process::{Command, Stdio};
 use std::time::Duration;
 
-const FILES: [&str; 3] = ["run.mcap", "run.rrd", "summary.json"];
+const FILES: [&str; 4] = ["run.mcap", "run.rrd", "series.json", "summary.json"];
 
 fn read_set(dir: &Path) -> Option<BTreeMap<&'static str, Vec<u8>>> {
     if !dir.exists() {
@@ -22,7 +22,7 @@ fn read_set(dir: &Path) -> Option<BTreeMap<&'static str, Vec<u8>>> {
         .collect();
     let mut sorted = names.clone();
     sorted.sort();
-    assert_eq!(sorted, FILES, "exactly the three files of one run");
+    assert_eq!(sorted, FILES, "exactly the four files of one run");
     Some(
         FILES
             .iter()

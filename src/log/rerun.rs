@@ -421,9 +421,9 @@ impl Bounds {
     }
     fn add(&mut self, p: [f64; 3]) {
         if p.iter().all(|x| x.is_finite()) {
-            for i in 0..3 {
-                self.lo[i] = self.lo[i].min(p[i]);
-                self.hi[i] = self.hi[i].max(p[i]);
+            for ((lo, hi), x) in self.lo.iter_mut().zip(&mut self.hi).zip(p) {
+                *lo = lo.min(x);
+                *hi = hi.max(x);
             }
         }
     }
@@ -507,9 +507,12 @@ fn scene_extent(rec: &RunRecord<'_>) -> (Bounds, f64) {
 
 /// Orbit camera looking at `target` from the south-west and above, far enough that a sphere of
 /// `radius` around the target fills most of the view.
+/// A tracking-error view: title, entity paths, series.
+type ErrorGroup<'a> = (&'a str, Vec<String>, Vec<&'a [f64]>);
+
 fn eye(target: [f64; 3], radius: f64) -> EyeControls3D {
-    let dir = [-0.45, -0.8, 0.62];
-    let n = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2] as f64).sqrt();
+    let dir: [f64; 3] = [-0.45, -0.8, 0.62];
+    let n = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
     // Vertical field of view of Rerun's default camera is about 55°; 1.1 leaves a margin.
     let dist = 1.1 * radius / (27.5f64).to_radians().tan();
     let pos = [0, 1, 2].map(|i| (target[i] + dist * dir[i] / n) as f32);
@@ -606,7 +609,7 @@ fn blueprint(rec: &RunRecord<'_>) -> (Blueprint, Vec<Property>) {
 
     // Tracking errors by unit: one axis never mixes metres and radians.
     let position_idx = rec.position.map(|p| p.to_vec()).unwrap_or_default();
-    let mut groups: [(&str, Vec<String>, Vec<&[f64]>); 3] = [
+    let mut groups: [ErrorGroup<'_>; 3] = [
         ("tracking error, lengths (m)", Vec::new(), Vec::new()),
         ("tracking error, angles (rad)", Vec::new(), Vec::new()),
         ("tracking error, other coordinates", Vec::new(), Vec::new()),

@@ -1,22 +1,24 @@
 //! Angle read-back shared by the physics systems: Rapier quaternions to
 //! model angles, and continuous unwrapping across steps.
 
-use rapier3d::math::Rotation;
+use super::rapier::math::Rotation;
+use super::real::quat;
 
 pub use crate::compare::wrap_angle as wrap;
 
 /// Heading (rotation about world z, from +x towards +y) of an orientation.
 pub fn yaw(q: &Rotation) -> f64 {
-    let (x, y, z, w) = (q.x as f64, q.y as f64, q.z as f64, q.w as f64);
+    let [x, y, z, w] = quat(q);
     (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))
 }
 
 /// Angle of a rotation about one of its own axes (0 = x, 1 = y, 2 = z), in
 /// (−π, π]; exact when the rotation is about that axis.
 pub fn about_axis(q: &Rotation, axis: usize) -> f64 {
-    let s = if q.w < 0.0 { -1.0 } else { 1.0 };
-    let v = [q.x, q.y, q.z][axis.min(2)];
-    wrap(2.0 * ((s * v) as f64).atan2((s * q.w) as f64))
+    let [x, y, z, w] = quat(q);
+    let s = if w < 0.0 { -1.0 } else { 1.0 };
+    let v = [x, y, z][axis.min(2)];
+    wrap(2.0 * (s * v).atan2(s * w))
 }
 
 /// The continuous angle closest to `prev` that equals `raw` modulo 2π.

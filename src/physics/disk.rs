@@ -1,17 +1,17 @@
 //! Rigid-body rolling disk: `models/rolling_disk.urdf` on a ground plane.
 //!
-//! The wheel joint's velocity motor realises θ'. A joint between the world
-//! and the yoke locks roll and pitch (the balance controller the paper takes
-//! for granted) and servoes the yaw rate to −α' (α is measured from +y
-//! towards +x, yaw from +x towards +y: yaw = π/2 − α). Translation is free:
+//! The wheel joint's servo drive realises θ'. A joint between the world and
+//! the yoke locks roll and pitch (the balance controller the paper takes for
+//! granted) and drives the yaw with −α' (α is measured from +y towards +x,
+//! yaw from +x towards +y: yaw = π/2 − α). Translation is free:
 //! the disk moves only through wheel–ground friction.
 
-use super::urdf::SimWorld;
-use super::{angles, PhysicsSystem};
+use super::rapier::prelude::*;
+use super::real::{f, r, vector};
+use super::urdf::{Drive, SimWorld};
+use super::{angles, PhysicsSettings, PhysicsSystem};
 use crate::model::{Input, State};
 use crate::record::Pose;
-use crate::scenario::SimConfig;
-use rapier3d::prelude::*;
 use std::f64::consts::FRAC_PI_2;
 use std::path::Path;
 
@@ -27,11 +27,10 @@ pub struct DiskPhysics {
     sim: SimWorld,
     yoke: RigidBodyHandle,
     wheel: RigidBodyHandle,
-    wheel_joint: ImpulseJointHandle,
-    balance: ImpulseJointHandle,
+    /// Wheel joint drive (θ') and the balance joint's yaw drive (−α').
+    wheel_drive: Drive,
+    yaw_drive: Drive,
     r: f64,
-    gain: f64,
-    max_torque: f64,
     /// θ at the start (the URDF wheel joint starts at 0).
     theta0: f64,
     /// Unwrapped wheel joint angle and yoke yaw.
@@ -40,7 +39,7 @@ pub struct DiskPhysics {
 }
 
 /// Wheel angle about the axle (yoke +y) relative to the yoke, in (−π, π].
-fn wheel_angle(yoke: &rapier3d::math::Rotation, wheel: &rapier3d::math::Rotation) -> f64 {
+fn wheel_angle(yoke: &super::rapier::math::Rotation, wheel: &super::rapier::math::Rotation) -> f64 {
     angles::about_axis(&(yoke.inverse() * *wheel), 1)
 }
 
@@ -51,13 +50,13 @@ impl DiskPhysics {
         urdf_dir: &Path,
         radius: f64,
         start: &[f64],
-        sim: &SimConfig,
+        sim: &PhysicsSettings,
     ) -> Result<Self, String> {
         super::urdf::require_radius(robot, WHEEL, "the wheel", radius)?;
         let yaw0 = FRAC_PI_2 - start[3];
-        let root = rapier3d::math::Pose::from_parts(
-            Vector::new(start[0] as Real, start[1] as Real, radius as Real),
-            Rotation::from_rotation_z(yaw0 as Real),
+        let root = super::rapier::math::Pose::from_parts(
+            vector(start[0], start[1], radius),
+            Rotation::from_rotation_z(r(yaw0)),
         );
         let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root);
         let yoke = sw.require_link(YOKE)?;
@@ -65,24 +64,22 @@ impl DiskPhysics {
         let wheel_joint = sw.require_joint(WHEEL_JOINT)?;
         // Balance controller: roll and pitch locked, yaw servoed, translation free.
         let balance = GenericJointBuilder::new(JointAxesMask::ANG_X | JointAxesMask::ANG_Y)
-            .local_frame1(rapier3d::math::Pose::IDENTITY)
-            .local_frame2(rapier3d::math::Pose::IDENTITY)
-            .motor_velocity(JointAxis::AngZ, 0.0, sim.motor_gain as Real)
-            .motor_max_force(JointAxis::AngZ, sim.motor_max_torque as Real)
+            .local_frame1(super::rapier::math::Pose::IDENTITY)
+            .local_frame2(super::rapier::math::Pose::IDENTITY)
             .build();
         let balance = sw
             .world
             .impulse_joints
             .insert(sw.ground, yoke, balance, true);
+        let wheel_drive = sw.drive_for(wheel_joint, JointAxis::AngX, 0.0);
+        let yaw_drive = sw.drive_for(balance, JointAxis::AngZ, yaw0);
         let mut me = DiskPhysics {
             sim: sw,
             yoke,
             wheel,
-            wheel_joint,
-            balance,
+            wheel_drive,
+            yaw_drive,
             r: radius,
-            gain: sim.motor_gain,
-            max_torque: sim.motor_max_torque,
             theta0: start[2],
             joint: 0.0,
             yaw: yaw0,
@@ -96,10 +93,10 @@ impl DiskPhysics {
         let b = &self.sim.world.bodies[self.wheel];
         let v = b.linvel();
         let w = b.angvel();
-        let contact = v + w.cross(Vector::new(0.0, 0.0, -self.r as Real));
-        let heading = Vector::new(self.yaw.cos() as Real, self.yaw.sin() as Real, 0.0);
-        let axle = Vector::new(-self.yaw.sin() as Real, self.yaw.cos() as Real, 0.0);
-        (contact.dot(heading) as f64, contact.dot(axle) as f64)
+        let contact = v + w.cross(vector(0.0, 0.0, -self.r));
+        let heading = vector(self.yaw.cos(), self.yaw.sin(), 0.0);
+        let axle = vector(-self.yaw.sin(), self.yaw.cos(), 0.0);
+        (f(contact.dot(heading)), f(contact.dot(axle)))
     }
 }
 
@@ -107,20 +104,16 @@ impl PhysicsSystem for DiskPhysics {
     fn state(&self) -> State {
         let c = self.sim.world.bodies[self.wheel].translation();
         State::from_vec(vec![
-            c.x as f64,
-            c.y as f64,
+            f(c.x),
+            f(c.y),
             self.theta0 + self.joint,
             FRAC_PI_2 - self.yaw,
         ])
     }
 
     fn apply(&mut self, u: &Input) {
-        let (gain, tmax) = (self.gain, self.max_torque);
-        self.sim.drive_joint(self.wheel_joint, u[0], gain, tmax);
-        if let Some(j) = self.sim.world.impulse_joints.get_mut(self.balance, false) {
-            j.data
-                .set_motor_velocity(JointAxis::AngZ, -u[1] as Real, gain as Real);
-        }
+        self.sim.drive(&mut self.wheel_drive, u[0]);
+        self.sim.drive(&mut self.yaw_drive, -u[1]);
     }
 
     fn step(&mut self) {
@@ -143,7 +136,7 @@ impl PhysicsSystem for DiskPhysics {
 
     fn channels(&self) -> Vec<f64> {
         let (lon, lat) = self.contact_slip();
-        let z = self.sim.world.bodies[self.wheel].translation().z as f64 - self.r;
+        let z = f(self.sim.world.bodies[self.wheel].translation().z) - self.r;
         vec![lon, lat, z]
     }
 }

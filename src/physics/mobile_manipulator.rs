@@ -22,6 +22,10 @@
 //! (measured − commanded platform v, ω) and `joint_rate_error` (largest
 //! |measured − commanded| joint rate, rad/s).
 
+use super::rapier::parry::bounding_volume::Aabb;
+use super::rapier::prelude::*;
+use super::real::{self as rl, f, rotation, vector};
+use super::settings::PhysicsSettings;
 use super::urdf::SimWorld;
 use super::{angles, PhysicsSystem};
 use crate::model::ellipsoid::Superellipsoid;
@@ -32,9 +36,6 @@ use crate::model::puma560;
 use crate::model::spatial::Pose as SPose;
 use crate::model::{Input, State};
 use crate::record::Pose;
-use crate::scenario::SimConfig;
-use rapier3d::parry::bounding_volume::Aabb;
-use rapier3d::prelude::*;
 use std::fmt::Write as _;
 use std::path::Path;
 
@@ -353,11 +354,11 @@ pub struct MobileManipulatorPhysics {
     last_u: Input,
 }
 
-fn to_rapier(p: &SPose<f64>) -> rapier3d::math::Pose {
+fn to_rapier(p: &SPose<f64>) -> super::rapier::math::Pose {
     let q = p.quaternion();
-    rapier3d::math::Pose::from_parts(
-        Vector::new(p.p[0] as Real, p.p[1] as Real, p.p[2] as Real),
-        Rotation::from_xyzw(q[0] as Real, q[1] as Real, q[2] as Real, q[3] as Real),
+    super::rapier::math::Pose::from_parts(
+        vector(p.p[0], p.p[1], p.p[2]),
+        rotation(q[0], q[1], q[2], q[3]),
     )
 }
 
@@ -393,7 +394,7 @@ impl MobileManipulatorPhysics {
         robot: &urdf_rs::Robot,
         urdf_dir: &Path,
         start: &[f64],
-        sim: &SimConfig,
+        sim: &PhysicsSettings,
         obstacles: &[ObstacleShape],
     ) -> Result<Self, String> {
         check_urdf(robot)?;
@@ -413,8 +414,8 @@ impl MobileManipulatorPhysics {
             arm_joints[i] = sw.require_joint(ARM_JOINTS[i])?;
         }
         // Put the arm at the start angles (the URDF loads at q = 0).
-        for i in 0..6 {
-            sw.world.bodies[arm[i]].set_position(to_rapier(&frames.arm[i]), true);
+        for (body, pose) in arm.iter().zip(&frames.arm) {
+            sw.world.bodies[*body].set_position(to_rapier(pose), true);
         }
         let tool = link(&sw, "tool")?;
         sw.world.bodies[tool].set_position(to_rapier(&frames.tool), true);
@@ -428,37 +429,20 @@ impl MobileManipulatorPhysics {
             }
         }
         // Collision groups: robot vs ground and obstacles, never robot vs robot.
-        let robot_colliders: Vec<ColliderHandle> = sw
-            .links
-            .iter()
-            .flat_map(|h| sw.world.bodies[*h].colliders().to_vec())
-            .collect();
-        for c in &robot_colliders {
-            if let Some(col) = sw.world.colliders.get_mut(*c) {
-                col.set_collision_groups(InteractionGroups::new(
-                    ROBOT,
-                    GROUND | OBSTACLE,
-                    InteractionTestMode::And,
-                ));
-            }
-        }
-        let ground_colliders: Vec<ColliderHandle> = sw.world.bodies[sw.ground].colliders().to_vec();
-        for c in ground_colliders {
-            if let Some(col) = sw.world.colliders.get_mut(c) {
-                col.set_collision_groups(InteractionGroups::new(
-                    GROUND,
-                    ROBOT,
-                    InteractionTestMode::And,
-                ));
-            }
-        }
+        let robot_colliders = sw.colliders.clone();
+        sw.set_collision_groups(
+            &robot_colliders,
+            InteractionGroups::new(ROBOT, GROUND | OBSTACLE, InteractionTestMode::And),
+        );
+        let ground_colliders: Vec<ColliderHandle> = sw.ground_collider.into_iter().collect();
+        sw.set_collision_groups(
+            &ground_colliders,
+            InteractionGroups::new(GROUND, ROBOT, InteractionTestMode::And),
+        );
         let mut obstacle_handles = Vec::new();
         for o in obstacles {
             let (v, _) = o.shape.mesh(16, 32);
-            let pts: Vec<Vector> = v
-                .iter()
-                .map(|p| Vector::new(p[0] as Real, p[1] as Real, p[2] as Real))
-                .collect();
+            let pts: Vec<Vector> = v.iter().map(|p| vector(p[0], p[1], p[2])).collect();
             let builder = ColliderBuilder::convex_hull(&pts)
                 .ok_or_else(|| format!("obstacle `{}`: no convex hull", o.name))?
                 .collision_groups(InteractionGroups::new(
@@ -466,7 +450,7 @@ impl MobileManipulatorPhysics {
                     ROBOT,
                     InteractionTestMode::And,
                 ))
-                .friction(sim.friction as Real);
+                .friction(rl::r(sim.friction));
             let ground = sw.ground;
             obstacle_handles.push(sw.world.insert_collider(builder, Some(ground)));
         }
@@ -507,7 +491,7 @@ impl MobileManipulatorPhysics {
         let origin_rot = if i == 0 {
             Rotation::IDENTITY
         } else {
-            Rotation::from_rotation_x(puma560::DH[i - 1].alpha as Real)
+            Rotation::from_rotation_x(rl::r(puma560::DH[i - 1].alpha))
         };
         let rel = (*b[parent].rotation() * origin_rot).inverse() * *b[r.arm[i]].rotation();
         angles::about_axis(&rel, 2)
@@ -519,7 +503,7 @@ impl MobileManipulatorPhysics {
         let parent = if i == 0 { r.base } else { r.arm[i - 1] };
         let child = &b[r.arm[i]];
         let axis = *child.rotation() * Vector::Z;
-        ((child.angvel() - b[parent].angvel()).dot(axis)) as f64
+        f((child.angvel() - b[parent].angvel()).dot(axis))
     }
 
     /// Least distance between any robot collider and any obstacle (m), with an
@@ -528,7 +512,7 @@ impl MobileManipulatorPhysics {
         let cs = &self.sim.world.colliders;
         let gap = |a: &Aabb, b: &Aabb| {
             let d = (a.mins - b.maxs).max(b.mins - a.maxs).max(Vector::ZERO);
-            d.length() as f64
+            f(d.length())
         };
         // Robot AABBs once; pairs whose boxes are farther apart than the best
         // distance so far cannot improve it.
@@ -546,13 +530,13 @@ impl MobileManipulatorPhysics {
                     continue;
                 }
                 let rc = &cs[*c];
-                if let Ok(d) = rapier3d::parry::query::distance(
+                if let Ok(d) = super::rapier::parry::query::distance(
                     rc.position(),
                     rc.shape(),
                     oc.position(),
                     oc.shape(),
                 ) {
-                    best = best.min(d.distance as f64);
+                    best = best.min(f(d.distance));
                 }
             }
         }
@@ -580,7 +564,7 @@ impl PhysicsSystem for MobileManipulatorPhysics {
         let mut out = Vec::with_capacity(DOF * self.robots.len());
         for r in &self.robots {
             let t = self.sim.world.bodies[r.base].translation();
-            out.extend([t.x as f64, t.y as f64, r.theta]);
+            out.extend([f(t.x), f(t.y), r.theta]);
             out.extend(r.q);
         }
         State::from_vec(out)
@@ -613,12 +597,12 @@ impl PhysicsSystem for MobileManipulatorPhysics {
                     jt.data
                         .set_motor(
                             JointAxis::AngX,
-                            target as Real,
-                            rate as Real,
-                            (gain / SERVO_TIME) as Real,
-                            gain as Real,
+                            rl::r(target),
+                            rl::r(rate),
+                            rl::r(gain / SERVO_TIME),
+                            rl::r(gain),
                         )
-                        .set_motor_max_force(JointAxis::AngX, tmax as Real);
+                        .set_motor_max_force(JointAxis::AngX, rl::r(tmax));
                 }
             }
         }
@@ -628,7 +612,7 @@ impl PhysicsSystem for MobileManipulatorPhysics {
     fn step(&mut self) {
         self.sim.world.step();
         self.steps += 1;
-        if self.steps % CLEARANCE_EVERY == 0 {
+        if self.steps.is_multiple_of(CLEARANCE_EVERY) {
             self.clearance = self.min_clearance();
         }
         for k in 0..self.robots.len() {
@@ -641,8 +625,8 @@ impl PhysicsSystem for MobileManipulatorPhysics {
                 r.q_ref[a] += u[INPUTS * k + 2 + a] * dt;
             }
             r.theta = angles::unwrap(r.theta, yaw);
-            for i in 0..6 {
-                r.q[i] = angles::unwrap(r.q[i], q[i]);
+            for (qi, now) in r.q.iter_mut().zip(q) {
+                *qi = angles::unwrap(*qi, now);
             }
         }
     }
@@ -676,8 +660,8 @@ impl PhysicsSystem for MobileManipulatorPhysics {
         let v_axle = base.velocity_at_point(axle);
         let slip = |w: RigidBodyHandle| {
             let wb = &b[w];
-            let contact = wb.translation() - Vector::new(0.0, 0.0, WHEEL_RADIUS as Real);
-            wb.velocity_at_point(contact).dot(heading) as f64
+            let contact = wb.translation() - vector(0.0, 0.0, WHEEL_RADIUS);
+            f(wb.velocity_at_point(contact).dot(heading))
         };
         let joint_err = (0..6)
             .map(|i| (self.joint_rate(r, i) - self.last_u[2 + i]).abs())
@@ -687,9 +671,9 @@ impl PhysicsSystem for MobileManipulatorPhysics {
             self.obstacle_contacts() as f64,
             slip(r.wheels[0]),
             slip(r.wheels[1]),
-            v_axle.dot(side) as f64,
-            v_axle.dot(heading) as f64 - self.last_u[0],
-            base.angvel().z as f64 - self.last_u[1],
+            f(v_axle.dot(side)),
+            f(v_axle.dot(heading)) - self.last_u[0],
+            f(base.angvel().z) - self.last_u[1],
             joint_err,
         ]
     }

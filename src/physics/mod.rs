@@ -1,16 +1,28 @@
-//! Physics replay: rigid-body counterparts of the kinematic models in Rapier.
+//! Physics replay: rigid-body counterparts of the kinematic models in Rapier
+//! (double precision: `rapier3d-f64`).
 //!
 //! A [`PhysicsSystem`] maps model inputs to joint motors and reads the model
 //! coordinates back from the simulated bodies. [`replay`] drives it with the
 //! same controller the ideal run used, evaluated on the simulated state.
+//! Settings come in as plain [`PhysicsSettings`]; URDF robots are loaded by
+//! [`world`].
 
 pub mod angles;
 pub mod disk;
 pub mod mobile_manipulator;
+pub mod real;
 pub mod rover;
+pub mod settings;
 pub mod space_robot;
 pub mod sphere;
 pub mod urdf;
+pub mod world;
+
+/// The engine. Physics code names its types through this alias and the
+/// `Real`/`Vector`/`Rotation` aliases, so switching this line (and the
+/// dependency) to `rapier3d` builds the f32 engine for comparison.
+pub use rapier3d_f64 as rapier;
+pub use settings::PhysicsSettings;
 
 use crate::integrate::step_count;
 use crate::model::{Input, State};
@@ -37,12 +49,24 @@ pub trait PhysicsSystem {
     }
 }
 
+/// What [`replay_with`] records besides states, commands and channels.
+#[derive(Debug, Clone, Copy)]
+pub struct ReplayOptions {
+    /// Physics step, s.
+    pub dt: f64,
+    /// Zero-input time after the plan (or after a feedback policy's `done`), s.
+    pub settle: f64,
+    /// Record every link's world pose at every sample (only the 3D logs use
+    /// them; runs without logs skip the read-back).
+    pub link_poses: bool,
+}
+
 /// Replay `plan` on `sys` for its duration plus `settle` seconds (zero input),
 /// or until `settle` seconds after a feedback policy reports `done`; calling `progress(fraction)` now and then.
 ///
 /// Open-loop commands are applied at the step midpoint (so each step advances
 /// the joints by the exact integral of u to second order); feedback laws are
-/// sampled on the simulated state every hold period.
+/// sampled on the simulated state every hold period. Link poses are recorded.
 pub fn replay(
     sys: &mut dyn PhysicsSystem,
     plan: &Plan,
@@ -50,9 +74,26 @@ pub fn replay(
     settle: f64,
     progress: &mut dyn FnMut(f64),
 ) -> Result<SimTrajectory, String> {
+    let opts = ReplayOptions {
+        dt,
+        settle,
+        link_poses: true,
+    };
+    replay_with(sys, plan, &opts, progress)
+}
+
+/// [`replay`] with [`ReplayOptions`]. Every state, command and channel is
+/// recorded at every step (the metrics use the full-rate data).
+pub fn replay_with(
+    sys: &mut dyn PhysicsSystem,
+    plan: &Plan,
+    opts: &ReplayOptions,
+    progress: &mut dyn FnMut(f64),
+) -> Result<SimTrajectory, String> {
+    let dt = opts.dt;
     let mut ctl = plan.controller();
     let n_plan = step_count(plan.duration, dt);
-    let n_settle = step_count(settle, dt);
+    let n_settle = step_count(opts.settle, dt);
     let n = n_plan + n_settle;
     // A feedback policy that reports `done` ends the run `settle` seconds later.
     let mut stop_at = n;
@@ -64,66 +105,71 @@ pub fn replay(
             .collect(),
         ..Default::default()
     };
+    out.traj.t.reserve(n + 1);
+    out.traj.q.reserve(n + 1);
+    out.traj.u.reserve(n + 1);
+    out.traj.label.reserve(n + 1);
+    if opts.link_poses {
+        out.link_poses.reserve(n + 1);
+    }
     let hold = plan.hold_period();
     let mut next_sample = 0.0;
-    let mut q = sys.state();
-    let mut held = ctl.command(0.0, &q);
+    let q0 = sys.state();
+    let mut held = ctl.command(0.0, &q0);
+    let zero = Input::zeros(held.u.len());
     let mut finished = false;
-    let record = |out: &mut SimTrajectory, sys: &dyn PhysicsSystem, t: f64, q: &State| {
+    // Time, state and channels of one sample (the state is the last one read back).
+    let record = |out: &mut SimTrajectory, sys: &dyn PhysicsSystem, t: f64, q: State| {
         out.traj.t.push(t);
-        out.traj.q.push(q.clone());
-        out.link_poses.push(sys.link_poses());
+        out.traj.q.push(q);
+        if opts.link_poses {
+            out.link_poses.push(sys.link_poses());
+        }
         for (series, v) in out.channels.iter_mut().zip(sys.channels()) {
             series.1.push(v);
         }
     };
+    record(&mut out, sys, 0.0, q0);
     for k in 0..n {
         let t = k as f64 * dt;
-        let cmd = if k >= n_plan || finished {
-            let mut c = held.clone();
-            c.u.fill(0.0);
-            c
-        } else {
+        let q = out.traj.q.last().expect("the start state is recorded");
+        let idle = k >= n_plan || finished;
+        if !idle {
             match hold {
                 Some(p) => {
                     if t + 1e-12 >= next_sample {
-                        held = ctl.command(t, &q);
+                        held = ctl.command(t, q);
                         next_sample += p;
                     }
-                    held.clone()
                 }
-                None => {
-                    held = ctl.command(t + 0.5 * dt, &q);
-                    held.clone()
-                }
+                None => held = ctl.command(t + 0.5 * dt, q),
             }
-        };
-        if cmd.done && !finished {
+        }
+        if held.done && !finished {
             stop_at = stop_at.min(k + n_settle);
         }
         if k >= stop_at {
             break;
         }
-        record(&mut out, sys, t, &q);
-        finished |= cmd.done;
-        out.traj.u.push(cmd.u.clone());
-        out.traj.label.push(cmd.label);
-        sys.apply(&cmd.u);
+        finished |= held.done;
+        let u = if idle { &zero } else { &held.u };
+        out.traj.u.push(u.clone());
+        out.traj.label.push(held.label);
+        sys.apply(u);
         sys.step();
         out.steps += 1;
-        q = sys.state();
+        let q = sys.state();
         if q.iter().any(|v| !v.is_finite()) {
             return Err(format!(
                 "simulation diverged (non-finite state) at t = {:.3} s",
                 t + dt
             ));
         }
+        record(&mut out, sys, (k + 1) as f64 * dt, q);
         if k % 256 == 0 {
             progress(k as f64 / n as f64);
         }
     }
-    let t_end = out.steps as f64 * dt;
-    record(&mut out, sys, t_end, &q);
     let last = out.traj.u.last().cloned().unwrap_or_else(|| held.u.clone());
     out.traj.u.push(last);
     out.traj.label.push(held.label);

@@ -6,9 +6,9 @@
 //! which rear axle holds and which one slips (σ of the seed's multiple-model
 //! system) is decided by the contact solver.
 //!
-//! Actuation: a velocity motor on `front_wheel_joint` at u1 / ρ (u1 is the
-//! front wheel's ground speed) and a velocity motor on `steer_joint` at u2
-//! (the URDF joint limit bounds ψ). Read-back: (x, y, θ) of the chassis
+//! Actuation: servo drives on `front_wheel_joint` at u1 / ρ (u1 is the
+//! front wheel's ground speed) and on `steer_joint` at u2 (the URDF joint
+//! limit bounds ψ and the drive's commanded angle). Read-back: (x, y, θ) of the chassis
 //! frame, whose origin is the middle-axle centre (the model's reference
 //! point), and ψ the steering joint angle.
 //!
@@ -18,13 +18,13 @@
 //! applied input (`envelope_distance`, `sigma_estimate`: 0 = model a, 1 =
 //! model b, NaN when the models coincide, i.e. ψ = 0 or u1 = 0).
 
-use super::urdf::SimWorld;
-use super::{angles, PhysicsSystem};
+use super::rapier::prelude::*;
+use super::real::{f, r as real, vector};
+use super::urdf::{Drive, SimWorld};
+use super::{angles, PhysicsSettings, PhysicsSystem};
 use crate::model::rover::{envelope, RoverGeometry};
 use crate::model::{Input, State};
 use crate::record::Pose;
-use crate::scenario::SimConfig;
-use rapier3d::prelude::*;
 
 use std::path::Path;
 
@@ -59,10 +59,9 @@ pub struct RoverPhysics {
     chassis: RigidBodyHandle,
     steering: RigidBodyHandle,
     wheels: Vec<RigidBodyHandle>,
-    steer_joint: ImpulseJointHandle,
-    front_joint: ImpulseJointHandle,
-    gain: f64,
-    max_torque: f64,
+    /// Drives of the steering joint (u2) and the front wheel (u1 / ρ).
+    steer: Drive,
+    front: Drive,
     /// Unwrapped heading.
     theta: f64,
     /// Last applied input (the envelope check compares against it).
@@ -76,7 +75,7 @@ impl RoverPhysics {
         urdf_dir: &Path,
         geom: RoverGeometry,
         start: &[f64],
-        sim: &SimConfig,
+        sim: &PhysicsSettings,
     ) -> Result<Self, String> {
         let rho = super::urdf::collision_radius(robot, WHEELS[0]).ok_or_else(|| {
             format!(
@@ -100,9 +99,9 @@ impl RoverPhysics {
                 -r, geom.l, geom.r
             ));
         }
-        let root = rapier3d::math::Pose::from_parts(
-            Vector::new(start[0] as Real, start[1] as Real, rho as Real),
-            Rotation::from_rotation_z(start[2] as Real),
+        let root = super::rapier::math::Pose::from_parts(
+            vector(start[0], start[1], rho),
+            Rotation::from_rotation_z(real(start[2])),
         );
         let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root);
         let chassis = sw.require_link(CHASSIS)?;
@@ -118,25 +117,28 @@ impl RoverPhysics {
         if start[3] != 0.0 {
             let axis_pt = sw.world.bodies[chassis]
                 .position()
-                .transform_point(Vector::new(l as Real, 0.0, 0.0));
-            let rot = Rotation::from_rotation_z(start[3] as Real);
+                .transform_point(vector(l, 0.0, 0.0));
+            let rot = Rotation::from_rotation_z(real(start[3]));
             for h in [steering, wheels[0]] {
                 let b = &mut sw.world.bodies[h];
                 let p = *b.position();
                 let t = axis_pt + rot * (p.translation - axis_pt);
-                b.set_position(rapier3d::math::Pose::from_parts(t, rot * p.rotation), true);
+                b.set_position(
+                    super::rapier::math::Pose::from_parts(t, rot * p.rotation),
+                    true,
+                );
             }
         }
+        let steer = sw.drive_for(steer_joint, JointAxis::AngX, start[3]);
+        let front = sw.drive_for(front_joint, JointAxis::AngX, 0.0);
         let mut me = RoverPhysics {
             sim: sw,
             geom,
             chassis,
             steering,
             wheels,
-            steer_joint,
-            front_joint,
-            gain: sim.motor_gain,
-            max_torque: sim.motor_max_torque,
+            steer,
+            front,
             theta: start[2],
             last_u: Input::zeros(2),
         };
@@ -153,35 +155,33 @@ impl RoverPhysics {
     /// Contact-point velocity of wheel `i` along and across its rolling direction, m/s.
     pub fn wheel_slip(&self, i: usize) -> (f64, f64) {
         let b = &self.sim.world.bodies[self.wheels[i]];
-        let rho = self.geom.wheel_radius as Real;
-        let contact = b.translation() - Vector::new(0.0, 0.0, rho);
+        let contact = b.translation() - vector(0.0, 0.0, self.geom.wheel_radius);
         let v = b.velocity_at_point(contact);
         // The wheel's axle is its local y axis; rolling direction = axle × z.
         let axle = *b.rotation() * Vector::Y;
         let fwd = Vector::new(axle.y, -axle.x, 0.0).normalize_or_zero();
         let side = Vector::new(-fwd.y, fwd.x, 0.0);
-        (v.dot(fwd) as f64, v.dot(side) as f64)
+        (f(v.dot(fwd)), f(v.dot(side)))
     }
 
     /// Measured (x', y', θ') of the middle-axle point.
     pub fn body_velocity(&self) -> nalgebra::Vector3<f64> {
         let b = &self.sim.world.bodies[self.chassis];
         let v = b.velocity_at_point(b.translation());
-        nalgebra::Vector3::new(v.x as f64, v.y as f64, b.angvel().z as f64)
+        nalgebra::Vector3::new(f(v.x), f(v.y), f(b.angvel().z))
     }
 }
 
 impl PhysicsSystem for RoverPhysics {
     fn state(&self) -> State {
         let c = self.sim.world.bodies[self.chassis].translation();
-        State::from_vec(vec![c.x as f64, c.y as f64, self.theta, self.steer_angle()])
+        State::from_vec(vec![f(c.x), f(c.y), self.theta, self.steer_angle()])
     }
 
     fn apply(&mut self, u: &Input) {
-        let (gain, tmax) = (self.gain, self.max_torque);
         self.sim
-            .drive_joint(self.front_joint, u[0] / self.geom.wheel_radius, gain, tmax);
-        self.sim.drive_joint(self.steer_joint, u[1], gain, tmax);
+            .drive(&mut self.front, u[0] / self.geom.wheel_radius);
+        self.sim.drive(&mut self.steer, u[1]);
         self.last_u = u.clone();
     }
 

@@ -1,22 +1,23 @@
 //! Rigid-body free-floating space robot: `models/space_robot.urdf` in Rapier.
 //!
 //! Design (measured choices, see the scenarios and `tests/space_robot.rs`):
-//! * **Impulse joints** (rapier3d-urdf `insert_using_impulse_joints`): every
-//!   joint impulse acts equally and oppositely on two bodies, so the solver
-//!   conserves the system's linear and angular momentum up to f32 round-off.
-//!   Multibody joints drifted ~0.3 % in base attitude and injected momentum
-//!   in an earlier prototype (not re-measured here), so they are not used.
-//!   The remaining leak is small and grows with the solver iteration count
-//!   (substeps): max |L_z| on `space_robot_paper` measured 3.0e-4, 4.7e-4,
-//!   9.2e-4, 1.9e-3 kg m²/s for 4, 8, 16, 32 iterations (the vehicle alone
-//!   carries up to ~0.7 kg m²/s), so the scenarios keep Rapier's default 4.
+//! * **Impulse joints** ([`super::world`]): every joint impulse acts equally
+//!   and oppositely on two bodies, so the solver conserves the system's
+//!   linear and angular momentum. Multibody joints drifted ~0.3 % in base
+//!   attitude and injected momentum in an earlier prototype (not re-measured
+//!   here), so they are not used. What leaks (f32 round-off, Rapier's relax
+//!   pass, several substeps with position-targeting drives) is measured in
+//!   the README's space-robot section; with f64, one substep, 4 sweeps and no
+//!   relax pass (no ground) max |L_z| on `space_robot_paper` is 1.5e-6
+//!   kg m²/s (the vehicle alone carries up to ~0.7 kg m²/s).
 //! * No ground, **gravity must be zero**, bodies never sleep. Nothing holds
-//!   the vehicle: θ0 changes only because the joint motors exchange angular
+//!   the vehicle: θ0 changes only because the joint drives exchange angular
 //!   momentum between the bodies.
-//! * Joints θ1, θ2 are driven by velocity motors (the model inputs θ1', θ2').
+//! * Joints θ1, θ2 have servo drives ([`super::world::Drive`]) for the model
+//!   inputs θ1', θ2'.
 //! * **All robot self-contacts are disabled**: the loader already skips the
-//!   jointed pairs (vehicle/link 1, link 1/link 2: `enable_joint_collisions`
-//!   is false), and the non-adjacent pair vehicle/link 2 is excluded with
+//!   jointed pairs (vehicle/link 1, link 1/link 2: its joints have contacts
+//!   disabled), and the non-adjacent pair vehicle/link 2 is excluded with
 //!   collision groups (the arm may fold over the vehicle; the kinematic model
 //!   has no contacts). The `contact_pairs` channel counts active contact
 //!   pairs every step so a scenario can assert it stays 0.
@@ -32,13 +33,13 @@
 //! out-of-plane excursion (|z| of a body CoM, m, plus tilt of a body's z axis,
 //! rad) and the number of active contact pairs.
 
-use super::urdf::{SimWorld, WorldOptions};
-use super::{angles, PhysicsSystem};
+use super::rapier::prelude::*;
+use super::real::{arr, quat, r, vector};
+use super::urdf::{Drive, SimWorld, WorldOptions};
+use super::{angles, PhysicsSettings, PhysicsSystem};
 use crate::model::space_robot::SpaceRobot;
 use crate::model::{Input, State};
 use crate::record::Pose;
-use crate::scenario::SimConfig;
-use rapier3d::prelude::*;
 
 use std::path::Path;
 
@@ -58,7 +59,7 @@ pub const CHANNELS: [&str; 6] = [
 ];
 
 /// Angle about z of a rotation (exact for rotations about z).
-fn angle_z(q: &rapier3d::math::Rotation) -> f64 {
+fn angle_z(q: &super::rapier::math::Rotation) -> f64 {
     angles::about_axis(q, 2)
 }
 
@@ -159,9 +160,8 @@ pub fn check_urdf(robot: &urdf_rs::Robot, model: &SpaceRobot) -> Result<(), Stri
 pub struct SpaceRobotPhysics {
     sim: SimWorld,
     bodies: [RigidBodyHandle; 3],
-    joints: [ImpulseJointHandle; 2],
-    gain: f64,
-    max_torque: f64,
+    /// Drives of joints θ1, θ2.
+    drives: [Drive; 2],
     /// Unwrapped (θ0, θ1, θ2).
     q: [f64; 3],
     /// System CoM at the start.
@@ -172,15 +172,11 @@ pub struct SpaceRobotPhysics {
     local_com: [[f64; 3]; 3],
     /// Body inertia tensors about their CoMs in body axes.
     inertia: [[[f64; 3]; 3]; 3],
-    channels: Vec<f64>,
+    channels: [f64; CHANNELS.len()],
 }
 
-fn rot(angle: f64) -> rapier3d::math::Rotation {
-    Rotation::from_rotation_z(angle as Real)
-}
-
-fn v3(v: Vector) -> [f64; 3] {
-    [v.x as f64, v.y as f64, v.z as f64]
+fn rot(angle: f64) -> super::rapier::math::Rotation {
+    Rotation::from_rotation_z(r(angle))
 }
 
 fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
@@ -192,8 +188,8 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 }
 
 /// Rotate `v` by the quaternion `q` (f64).
-fn rotate(q: &rapier3d::math::Rotation, v: [f64; 3]) -> [f64; 3] {
-    let (x, y, z, w) = (q.x as f64, q.y as f64, q.z as f64, q.w as f64);
+fn rotate(q: &super::rapier::math::Rotation, v: [f64; 3]) -> [f64; 3] {
+    let [x, y, z, w] = quat(q);
     let u = [x, y, z];
     let t = cross(u, v).map(|c| 2.0 * c);
     let c = cross(u, t);
@@ -204,7 +200,7 @@ fn rotate(q: &rapier3d::math::Rotation, v: [f64; 3]) -> [f64; 3] {
     ]
 }
 
-fn conj(q: &rapier3d::math::Rotation) -> rapier3d::math::Rotation {
+fn conj(q: &super::rapier::math::Rotation) -> super::rapier::math::Rotation {
     q.inverse()
 }
 
@@ -215,7 +211,7 @@ impl SpaceRobotPhysics {
         urdf_dir: &Path,
         model: &SpaceRobot,
         start: &[f64],
-        sim: &SimConfig,
+        sim: &PhysicsSettings,
     ) -> Result<Self, String> {
         check_urdf(robot, model)?;
         if sim.gravity.iter().any(|g| *g != 0.0) {
@@ -227,15 +223,12 @@ impl SpaceRobotPhysics {
         let poses = model.body_poses(&State::from_column_slice(start));
         // Vehicle frame = vehicle CoM (joint 1).
         let p0 = poses[0].position;
-        let root = rapier3d::math::Pose::from_parts(
-            Vector::new(p0.x as Real, p0.y as Real, 0.0),
-            rot(start[0]),
-        );
+        let root = super::rapier::math::Pose::from_parts(vector(p0.x, p0.y, 0.0), rot(start[0]));
         let mut sw = SimWorld::new(
             robot,
             urdf_dir,
             &WorldOptions {
-                sim,
+                settings: sim,
                 root_pose: root,
                 ground: false,
             },
@@ -251,14 +244,10 @@ impl SpaceRobotPhysics {
         // Place the links at the start joint angles: link frames sit at the joints.
         let phi1 = start[0] + start[1];
         let joint1 = sw.world.bodies[bodies[0]].position().translation;
-        let frame1 = rapier3d::math::Pose::from_parts(joint1, rot(phi1));
+        let frame1 = super::rapier::math::Pose::from_parts(joint1, rot(phi1));
         let l1 = model.l1;
-        let joint2 = Vector::new(
-            (p0.x + l1 * phi1.cos()) as Real,
-            (p0.y + l1 * phi1.sin()) as Real,
-            0.0,
-        );
-        let frame2 = rapier3d::math::Pose::from_parts(joint2, rot(phi1 + start[2]));
+        let joint2 = vector(p0.x + l1 * phi1.cos(), p0.y + l1 * phi1.sin(), 0.0);
+        let frame2 = super::rapier::math::Pose::from_parts(joint2, rot(phi1 + start[2]));
         for (h, pose) in [(bodies[1], frame1), (bodies[2], frame2)] {
             if let Some(b) = sw.world.bodies.get_mut(h) {
                 b.set_position(pose, true);
@@ -266,20 +255,18 @@ impl SpaceRobotPhysics {
                 b.set_angvel(Vector::ZERO, true);
             }
         }
+        let drives = [
+            sw.drive_for(joints[0], JointAxis::AngX, start[1]),
+            sw.drive_for(joints[1], JointAxis::AngX, start[2]),
+        ];
         // No self-contacts at all (non-adjacent pairs included).
         let groups = InteractionGroups::new(
             Group::GROUP_1,
             Group::ALL.difference(Group::GROUP_1),
             InteractionTestMode::And,
         );
-        for h in bodies {
-            let colliders: Vec<ColliderHandle> = sw.world.bodies[h].colliders().to_vec();
-            for c in colliders {
-                if let Some(c) = sw.world.colliders.get_mut(c) {
-                    c.set_collision_groups(groups);
-                }
-            }
-        }
+        let colliders = sw.colliders.clone();
+        sw.set_collision_groups(&colliders, groups);
         // Mass properties as written in the URDF (checked against the model
         // above; Rapier computes its own copy only on the first step).
         let mut mass = [0.0; 3];
@@ -303,15 +290,13 @@ impl SpaceRobotPhysics {
         let mut me = SpaceRobotPhysics {
             sim: sw,
             bodies,
-            joints,
-            gain: sim.motor_gain,
-            max_torque: sim.motor_max_torque,
+            drives,
             q: [start[0], start[1], start[2]],
             com0: [0.0; 3],
             mass,
             local_com,
             inertia,
-            channels: vec![0.0; CHANNELS.len()],
+            channels: [0.0; CHANNELS.len()],
         };
         // Rapier updates world CoMs on the first step; compute them from the poses now.
         me.com0 = me.system_com();
@@ -324,7 +309,7 @@ impl SpaceRobotPhysics {
     fn body_com(&self, i: usize) -> [f64; 3] {
         let p = self.sim.world.bodies[self.bodies[i]].position();
         let c = rotate(&p.rotation, self.local_com[i]);
-        let t = v3(p.translation);
+        let t = arr(p.translation);
         [t[0] + c[0], t[1] + c[1], t[2] + c[2]]
     }
 
@@ -349,8 +334,8 @@ impl SpaceRobotPhysics {
         for (i, h) in self.bodies.iter().enumerate() {
             let b = &self.sim.world.bodies[*h];
             let m = self.mass[i];
-            let v = v3(b.linvel());
-            let w = v3(b.angvel());
+            let v = arr(b.linvel());
+            let w = arr(b.angvel());
             let c = self.body_com(i);
             let r = [c[0] - com[0], c[1] - com[1], c[2] - com[2]];
             let rv = cross(r, v);
@@ -368,7 +353,7 @@ impl SpaceRobotPhysics {
         (p, l)
     }
 
-    fn measure(&self) -> Vec<f64> {
+    fn measure(&self) -> [f64; CHANNELS.len()] {
         let (p, l) = self.momentum();
         let com = self.system_com();
         let drift = (0..3)
@@ -390,7 +375,7 @@ impl SpaceRobotPhysics {
             .contact_pairs()
             .filter(|c| c.has_any_active_contact())
             .count();
-        vec![
+        [
             l[2],
             l[0].hypot(l[1]),
             (p[0] * p[0] + p[1] * p[1] + p[2] * p[2]).sqrt(),
@@ -407,17 +392,15 @@ impl PhysicsSystem for SpaceRobotPhysics {
     }
 
     fn apply(&mut self, u: &Input) {
-        let (gain, tmax) = (self.gain, self.max_torque);
-        for (j, rate) in self.joints.into_iter().zip(u.iter()) {
-            self.sim.drive_joint(j, *rate, gain, tmax);
+        for (d, rate) in self.drives.iter_mut().zip(u.iter()) {
+            self.sim.drive(d, *rate);
         }
     }
 
     fn step(&mut self) {
         self.sim.world.step();
         let b = &self.sim.world.bodies;
-        let r: Vec<rapier3d::math::Rotation> =
-            self.bodies.iter().map(|h| *b[*h].rotation()).collect();
+        let r = self.bodies.map(|h| *b[h].rotation());
         let read = [
             angle_z(&r[0]),
             angle_z(&(conj(&r[0]) * r[1])),
@@ -438,6 +421,6 @@ impl PhysicsSystem for SpaceRobotPhysics {
     }
 
     fn channels(&self) -> Vec<f64> {
-        self.channels.clone()
+        self.channels.to_vec()
     }
 }

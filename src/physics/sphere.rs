@@ -14,14 +14,14 @@
 //! the orientation the commanded ω produces when integrated exactly, i.e. the ideal
 //! orientation up to O(dt²)), `height` (centre height minus the radius, m).
 
+use super::rapier::prelude::*;
+use super::real::{f, quat, r, rotation, vector};
 use super::urdf::SimWorld;
-use super::PhysicsSystem;
+use super::{PhysicsSettings, PhysicsSystem};
 use crate::model::rolling_sphere::geodesic_angle;
 use crate::model::{Input, State};
 use crate::record::Pose;
-use crate::scenario::SimConfig;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
-use rapier3d::prelude::*;
 use std::path::Path;
 
 /// The link the URDF must provide.
@@ -50,7 +50,7 @@ impl SpherePhysics {
         urdf_dir: &Path,
         radius: f64,
         start: &[f64],
-        sim: &SimConfig,
+        sim: &PhysicsSettings,
     ) -> Result<Self, String> {
         super::urdf::require_radius(robot, BALL, "the ball", radius)?;
         if start.len() != 6 {
@@ -62,21 +62,20 @@ impl SpherePhysics {
         let q0 = UnitQuaternion::from_quaternion(Quaternion::new(
             start[2], start[3], start[4], start[5],
         ));
-        let rot = Rotation::from_xyzw(q0.i as Real, q0.j as Real, q0.k as Real, q0.w as Real);
-        let root = rapier3d::math::Pose::from_parts(
-            Vector::new(start[0] as Real, start[1] as Real, radius as Real),
-            rot,
+        let root = super::rapier::math::Pose::from_parts(
+            vector(start[0], start[1], radius),
+            rotation(q0.i, q0.j, q0.k, q0.w),
         );
         let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root);
         let ball = sw.require_link(BALL)?;
         // The drive: no locked axes, angular velocity motors about the world axes.
         let mut b = GenericJointBuilder::new(JointAxesMask::empty())
-            .local_frame1(rapier3d::math::Pose::IDENTITY)
-            .local_frame2(rapier3d::math::Pose::IDENTITY);
+            .local_frame1(super::rapier::math::Pose::IDENTITY)
+            .local_frame2(super::rapier::math::Pose::IDENTITY);
         for axis in [JointAxis::AngX, JointAxis::AngY, JointAxis::AngZ] {
             b = b
-                .motor_velocity(axis, 0.0, sim.motor_gain as Real)
-                .motor_max_force(axis, sim.motor_max_torque as Real);
+                .motor_velocity(axis, 0.0, r(sim.motor_gain))
+                .motor_max_force(axis, r(sim.motor_max_torque));
         }
         let drive = sw
             .world
@@ -105,8 +104,8 @@ impl SpherePhysics {
     /// Horizontal velocity of the ball's lowest point, m/s.
     fn contact_slip(&self) -> f64 {
         let b = &self.sim.world.bodies[self.ball];
-        let v = b.linvel() + b.angvel().cross(Vector::new(0.0, 0.0, -self.a as Real));
-        (v.x as f64).hypot(v.y as f64)
+        let v = b.linvel() + b.angvel().cross(vector(0.0, 0.0, -self.a));
+        f(v.x).hypot(f(v.y))
     }
 }
 
@@ -114,24 +113,24 @@ impl PhysicsSystem for SpherePhysics {
     fn state(&self) -> State {
         let c = self.sim.world.bodies[self.ball].translation();
         let [w, x, y, z] = self.q;
-        State::from_vec(vec![c.x as f64, c.y as f64, w, x, y, z])
+        State::from_vec(vec![f(c.x), f(c.y), w, x, y, z])
     }
 
     fn apply(&mut self, u: &Input) {
         self.u = [u[0], u[1]];
-        let gain = self.gain as Real;
+        let gain = r(self.gain);
         if let Some(j) = self.sim.world.impulse_joints.get_mut(self.drive, false) {
             j.data
-                .set_motor_velocity(JointAxis::AngX, u[0] as Real, gain)
-                .set_motor_velocity(JointAxis::AngY, u[1] as Real, gain)
+                .set_motor_velocity(JointAxis::AngX, r(u[0]), gain)
+                .set_motor_velocity(JointAxis::AngY, r(u[1]), gain)
                 .set_motor_velocity(JointAxis::AngZ, 0.0, gain);
         }
     }
 
     fn step(&mut self) {
         self.sim.world.step();
-        let r = *self.sim.world.bodies[self.ball].rotation();
-        let mut q = [r.w as f64, r.x as f64, r.y as f64, r.z as f64];
+        let [x, y, z, w] = quat(self.sim.world.bodies[self.ball].rotation());
+        let mut q = [w, x, y, z];
         let dot: f64 = q.iter().zip(&self.q).map(|(a, b)| a * b).sum();
         if dot < 0.0 {
             q = q.map(|v| -v);
@@ -156,9 +155,9 @@ impl PhysicsSystem for SpherePhysics {
         let b = &self.sim.world.bodies[self.ball];
         vec![
             self.contact_slip(),
-            b.angvel().z as f64,
+            f(b.angvel().z),
             geodesic_angle(&self.q_cmd, &self.quat()).to_degrees(),
-            b.translation().z as f64 - self.a,
+            f(b.translation().z) - self.a,
         ]
     }
 }

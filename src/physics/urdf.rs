@@ -1,23 +1,44 @@
-//! URDF loading: validation, visual geometry for the logs, and insertion into
-//! a Rapier world (rapier3d-urdf, impulse joints, bodies that never sleep).
+//! URDF files: reading and validation, visual geometry for the logs. The
+//! loader into a Rapier world is [`super::world`] (re-exported here).
 
 use crate::record::{LinkVisual, Pose, Shape, Visual};
-use crate::scenario::SimConfig;
 use nalgebra::UnitQuaternion;
-use rapier3d::prelude::*;
-use rapier3d_urdf::{UrdfLoaderOptions, UrdfRobot};
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
-use urdf_rs::Robot;
+use urdf_rs::{Geometry, JointType, Robot};
+
+pub use super::world::{Drive, RobotHandles, SimWorld, WorldOptions};
 
 /// Read and validate a URDF file. Errors are one-line, user-facing strings.
 ///
-/// rapier3d-urdf indexes links by name without checking, so dangling joint
-/// references, cycles and massless links are rejected here, before it runs.
+/// The loader ([`super::world`]) indexes links by name and places them from
+/// the root down, so everything it cannot represent is rejected here: dangling
+/// joint references, a graph that is not one tree, links without positive
+/// mass or with a non-finite or negative inertia, collision meshes, and
+/// moving joints without an axis.
 pub fn read(path: &Path) -> Result<Robot, String> {
+    let robot = parse(path)?;
+    validate(&robot)?;
+    Ok(robot)
+}
+
+/// Read and parse a URDF file without [`validate`] (the validation pass checks
+/// numbers first, to name the element and line).
+pub fn parse(path: &Path) -> Result<Robot, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read URDF: {e}"))?;
-    let robot = urdf_rs::read_from_string(&text)
-        .map_err(|e| format!("URDF does not parse: {}", e.to_string().replace('\n', " ")))?;
+    urdf_rs::read_from_string(&text)
+        .map_err(|e| format!("URDF does not parse: {}", e.to_string().replace('\n', " ")))
+}
+
+/// The checks of [`read`] on an already parsed robot.
+pub fn validate(robot: &Robot) -> Result<(), String> {
+    validate_tree(robot)?;
+    validate_loadable(robot)
+}
+
+/// One tree of uniquely named links with positive masses (the validation pass
+/// runs this first, then its own number checks, then [`validate_loadable`]).
+pub fn validate_tree(robot: &Robot) -> Result<(), String> {
     if robot.links.is_empty() {
         return Err("URDF has no links".into());
     }
@@ -39,8 +60,35 @@ pub fn read(path: &Path) -> Result<Robot, String> {
             ));
         }
     }
-    if has_parent.len() >= robot.links.len() {
-        return Err("URDF kinematic graph has no root (cycle)".into());
+    let roots: Vec<&str> = robot
+        .links
+        .iter()
+        .map(|l| l.name.as_str())
+        .filter(|n| !has_parent.contains(n))
+        .collect();
+    match roots.len() {
+        0 => return Err("URDF kinematic graph has no root (cycle)".into()),
+        1 => {}
+        _ => {
+            return Err(format!(
+                "URDF has {} root links ({}): it must be one tree",
+                roots.len(),
+                roots.join(", ")
+            ))
+        }
+    }
+    // One root and one parent per link: a tree exactly when every link is reachable.
+    let mut reached = HashSet::from([roots[0]]);
+    let mut frontier = vec![roots[0]];
+    while let Some(l) = frontier.pop() {
+        for j in robot.joints.iter().filter(|j| j.parent.link == l) {
+            if reached.insert(j.child.link.as_str()) {
+                frontier.push(j.child.link.as_str());
+            }
+        }
+    }
+    if reached.len() != robot.links.len() {
+        return Err("URDF kinematic graph has a cycle".into());
     }
     for l in &robot.links {
         let m = l.inertial.mass.value;
@@ -51,7 +99,39 @@ pub fn read(path: &Path) -> Result<Robot, String> {
             ));
         }
     }
-    Ok(robot)
+    Ok(())
+}
+
+/// What the loader needs beyond a tree: finite inertias, axes on moving
+/// joints, no mesh collisions.
+pub fn validate_loadable(robot: &Robot) -> Result<(), String> {
+    for j in &robot.joints {
+        let moving = !matches!(j.joint_type, JointType::Fixed | JointType::Floating);
+        let a = j.axis.xyz.0;
+        if moving && !(a.iter().all(|c| c.is_finite()) && a.iter().any(|c| *c != 0.0)) {
+            return Err(format!("URDF joint `{}` needs a non-zero <axis>", j.name));
+        }
+    }
+    for l in &robot.links {
+        let t = &l.inertial.inertia;
+        let all = [t.ixx, t.ixy, t.ixz, t.iyy, t.iyz, t.izz];
+        if all.iter().any(|v| !v.is_finite()) || t.ixx < 0.0 || t.iyy < 0.0 || t.izz < 0.0 {
+            return Err(format!(
+                "URDF link `{}` inertia must be finite with ixx, iyy, izz ≥ 0",
+                l.name
+            ));
+        }
+        if l.collision
+            .iter()
+            .any(|c| matches!(c.geometry, Geometry::Mesh { .. }))
+        {
+            return Err(format!(
+                "URDF link `{}` has a mesh <collision>: only box, cylinder, capsule and sphere are supported",
+                l.name
+            ));
+        }
+    }
+    Ok(())
 }
 
 /// Radius of the first sphere or cylinder collision of `link`, if any.
@@ -143,151 +223,55 @@ pub fn visuals(robot: &Robot) -> Vec<LinkVisual> {
         .collect()
 }
 
-/// A Rapier world holding one URDF robot (and optionally a ground plane).
-pub struct SimWorld {
-    /// The physics world.
-    pub world: PhysicsWorld,
-    /// Body of each URDF link, in URDF link order.
-    pub links: Vec<RigidBodyHandle>,
-    /// Joint handles by URDF joint name.
-    pub joints: HashMap<String, ImpulseJointHandle>,
-    /// Link index by name.
-    pub link_index: HashMap<String, usize>,
-    /// The fixed ground body (present even without a ground collider, as a joint anchor).
-    pub ground: RigidBodyHandle,
-}
+#[cfg(test)]
+mod tests {
+    use super::*;
 
-/// Settings for [`SimWorld::new`].
-pub struct WorldOptions<'a> {
-    /// Physics settings.
-    pub sim: &'a SimConfig,
-    /// Root link pose in the world.
-    pub root_pose: rapier3d::math::Pose,
-    /// Add a ground plane z = 0 with the scenario's friction.
-    pub ground: bool,
-}
+    const LINK: &str = r#"<inertial><mass value="1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial>"#;
 
-impl SimWorld {
-    /// Build the world; `robot` must come from [`read`].
-    pub fn new(robot: &Robot, urdf_dir: &Path, opts: &WorldOptions) -> SimWorld {
-        let mut world = PhysicsWorld::new();
-        let g = opts.sim.gravity;
-        world.gravity = Vector::new(g[0] as Real, g[1] as Real, g[2] as Real);
-        world.integration_parameters.dt = opts.sim.dt as Real;
-        world.integration_parameters.num_solver_iterations = opts.sim.solver_iterations;
-        let mu = opts.sim.friction as Real;
-        let ground = world.insert_body(RigidBodyBuilder::fixed());
-        if opts.ground {
-            let plane = ColliderBuilder::halfspace(nalgebra::Unit::new_unchecked(Vector::Z))
-                .friction(mu)
-                .friction_combine_rule(CoefficientCombineRule::Min);
-            world.insert_collider(plane, Some(ground));
+    fn robot(links: &[&str], joints: &[(&str, &str, &str)], extra: &str) -> Result<(), String> {
+        let mut s = String::from("<robot name=\"r\">");
+        for l in links {
+            s += &format!("<link name=\"{l}\">{LINK}</link>");
         }
-        let options = UrdfLoaderOptions {
-            squeeze_empty_fixed_links: false,
-            shift: opts.root_pose,
-            rigid_body_blueprint: RigidBodyBuilder::dynamic().can_sleep(false),
-            collider_blueprint: ColliderBuilder::default()
-                .density(0.0)
-                .friction(mu)
-                .friction_combine_rule(CoefficientCombineRule::Min),
-            ..Default::default()
-        };
-        let urdf = UrdfRobot::from_robot(robot, options, urdf_dir);
-        let handles = urdf.insert_using_impulse_joints(
-            &mut world.bodies,
-            &mut world.colliders,
-            &mut world.impulse_joints,
-        );
-        let links: Vec<RigidBodyHandle> = handles.links.iter().map(|l| l.body).collect();
-        let joints = robot
-            .joints
-            .iter()
-            .zip(&handles.joints)
-            .map(|(j, h)| (j.name.clone(), h.joint))
-            .collect();
-        let link_index = robot
-            .links
-            .iter()
-            .enumerate()
-            .map(|(i, l)| (l.name.clone(), i))
-            .collect();
-        SimWorld {
-            world,
-            links,
-            joints,
-            link_index,
-            ground,
+        for (i, (t, p, c)) in joints.iter().enumerate() {
+            s += &format!(
+                "<joint name=\"j{i}\" type=\"{t}\"><parent link=\"{p}\"/><child link=\"{c}\"/><axis xyz=\"0 0 1\"/></joint>"
+            );
         }
+        s += extra;
+        s += "</robot>";
+        validate(&urdf_rs::read_from_string(&s).map_err(|e| e.to_string())?)
     }
 
-    /// Body handle of a named link.
-    pub fn link(&self, name: &str) -> Option<RigidBodyHandle> {
-        self.link_index.get(name).map(|&i| self.links[i])
+    #[test]
+    fn trees_pass_and_other_graphs_are_named() {
+        let j = |p, c| ("continuous", p, c);
+        robot(&["a", "b", "c"], &[j("a", "b"), j("a", "c")], "").unwrap();
+        let e = robot(&["a", "b", "c"], &[j("a", "b")], "").unwrap_err();
+        assert!(e.contains("2 root links (a, c)"), "{e}");
+        let e = robot(&["a", "b", "c"], &[j("b", "c"), j("c", "b")], "").unwrap_err();
+        assert!(e.contains("cycle"), "{e}");
+        let e = robot(&["a", "b"], &[j("a", "b"), j("a", "b")], "").unwrap_err();
+        assert!(e.contains("two parent joints"), "{e}");
+        let e = robot(&["a"], &[j("a", "x")], "").unwrap_err();
+        assert!(e.contains("unknown link `x`"), "{e}");
     }
 
-    /// Body of a link the system needs; the error names the missing link.
-    pub fn require_link(&self, name: &str) -> Result<RigidBodyHandle, String> {
-        self.link(name)
-            .ok_or_else(|| format!("URDF has no link `{name}`"))
-    }
-
-    /// Handle of a joint the system needs; the error names the missing joint.
-    pub fn require_joint(&self, name: &str) -> Result<ImpulseJointHandle, String> {
-        self.joints
-            .get(name)
-            .copied()
-            .ok_or_else(|| format!("URDF has no joint `{name}`"))
-    }
-
-    /// A world with a ground plane, the robot's root at `root_pose`.
-    pub fn on_ground(
-        robot: &Robot,
-        urdf_dir: &Path,
-        sim: &SimConfig,
-        root_pose: rapier3d::math::Pose,
-    ) -> SimWorld {
-        SimWorld::new(
-            robot,
-            urdf_dir,
-            &WorldOptions {
-                sim,
-                root_pose,
-                ground: true,
-            },
-        )
-    }
-
-    /// World pose of every link, in URDF order.
-    pub fn link_poses(&self) -> Vec<Pose> {
-        self.links
-            .iter()
-            .map(|h| to_pose(self.world.bodies[*h].position()))
-            .collect()
-    }
-
-    /// Set a velocity motor on the free axis of a revolute joint.
-    pub fn drive_joint(
-        &mut self,
-        joint: ImpulseJointHandle,
-        rate: f64,
-        gain: f64,
-        max_torque: f64,
-    ) {
-        if let Some(j) = self.world.impulse_joints.get_mut(joint, false) {
-            j.data
-                .set_motor_velocity(JointAxis::AngX, rate as Real, gain as Real)
-                .set_motor_max_force(JointAxis::AngX, max_torque as Real);
-        }
-    }
-}
-
-/// Rapier pose (f32) as a record [`Pose`].
-pub fn to_pose(p: &rapier3d::math::Pose) -> Pose {
-    let t = p.translation;
-    let r = p.rotation;
-    Pose {
-        translation: [t.x as f64, t.y as f64, t.z as f64],
-        rotation: [r.x as f64, r.y as f64, r.z as f64, r.w as f64],
+    #[test]
+    fn unsupported_content_is_rejected() {
+        let mesh = r#"<link name="m"><inertial><mass value="1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial><collision><geometry><mesh filename="m.stl"/></geometry></collision></link>
+            <joint name="jm" type="fixed"><parent link="a"/><child link="m"/></joint>"#;
+        let e = robot(&["a"], &[], mesh).unwrap_err();
+        assert!(e.contains("`m` has a mesh <collision>"), "{e}");
+        let neg = r#"<link name="n"><inertial><mass value="1"/><inertia ixx="-1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>
+            <joint name="jn" type="fixed"><parent link="a"/><child link="n"/></joint>"#;
+        let e = robot(&["a"], &[], neg).unwrap_err();
+        assert!(e.contains("`n` inertia"), "{e}");
+        let axis = r#"<link name="z">"#.to_string()
+            + LINK
+            + r#"</link><joint name="jz" type="revolute"><parent link="a"/><child link="z"/><axis xyz="0 0 0"/><limit lower="-1" upper="1" effort="1" velocity="1"/></joint>"#;
+        let e = robot(&["a"], &[], &axis).unwrap_err();
+        assert!(e.contains("`jz` needs a non-zero <axis>"), "{e}");
     }
 }

@@ -154,7 +154,7 @@ fn path(tr: &Trajectory, [ix, iy]: [usize; 2]) -> Vec<[f32; 2]> {
         .step_by(stride)
         .map(|k| [tr.q[k][ix] as f32, tr.q[k][iy] as f32])
         .collect();
-    if n > 0 && (n - 1) % stride != 0 {
+    if n > 0 && !(n - 1).is_multiple_of(stride) {
         out.push([tr.q[n - 1][ix] as f32, tr.q[n - 1][iy] as f32]);
     }
     out

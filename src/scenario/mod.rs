@@ -16,7 +16,7 @@ pub mod doc;
 mod sweep_config;
 
 pub use config::{build_system, ModelConfig, PlannerConfig, PAIRS};
-pub use sweep_config::{variant_seed, SweepConfig, Variant};
+pub use sweep_config::{sweep_metric_names, variant_seed, SweepConfig, Variant};
 
 use crate::error::Error;
 use crate::input::{read_text, SCENARIO_MAX_BYTES};
@@ -53,8 +53,12 @@ impl Default for LimitsConfig {
 pub struct SimConfig {
     /// Physics (and ideal integration) step, s.
     pub dt: f64,
-    /// Rapier solver iterations per step.
+    /// Rapier solver iterations (substeps) per step.
     pub solver_iterations: usize,
+    /// Projected Gauss–Seidel sweeps per substep.
+    pub solver_pgs_iterations: usize,
+    /// Velocity relax pass after each substep; default: only with a ground plane.
+    pub solver_relax_pass: Option<bool>,
     /// Coulomb friction coefficient between robot and ground (both sides set to it).
     pub friction: f64,
     /// Gravity, m/s².
@@ -63,19 +67,42 @@ pub struct SimConfig {
     pub motor_max_torque: f64,
     /// Velocity motor gain (Rapier's motor factor), 1/s-like; higher tracks tighter.
     pub motor_gain: f64,
+    /// Rate (1/s) at which joint drives remove the error between joint angle and commanded
+    /// angle ∫u dt (servo integral action); 0 = pure velocity motors.
+    pub motor_angle_gain: f64,
     /// Extra simulated time after the plan ends, s (lets the body come to rest).
     pub settle: f64,
+}
+
+impl SimConfig {
+    /// The physics layer's settings (everything but `settle`, which the replay takes).
+    pub fn physics(&self) -> crate::physics::PhysicsSettings {
+        crate::physics::PhysicsSettings {
+            dt: self.dt,
+            solver_iterations: self.solver_iterations,
+            pgs_iterations: self.solver_pgs_iterations,
+            relax_pass: self.solver_relax_pass,
+            friction: self.friction,
+            gravity: self.gravity,
+            motor_max_torque: self.motor_max_torque,
+            motor_gain: self.motor_gain,
+            motor_angle_gain: self.motor_angle_gain,
+        }
+    }
 }
 
 impl Default for SimConfig {
     fn default() -> Self {
         Self {
             dt: 1e-3,
-            solver_iterations: 4,
+            solver_iterations: 1,
+            solver_pgs_iterations: 4,
+            solver_relax_pass: None,
             friction: 1.0,
             gravity: [0.0, 0.0, -9.81],
             motor_max_torque: 50.0,
             motor_gain: 1.0e6,
+            motor_angle_gain: 1000.0,
             settle: 0.0,
         }
     }
@@ -359,6 +386,11 @@ impl Scenario {
                 "key `sim.solver_iterations`: must be in 1..=1000".into()
             ));
         }
+        if s.solver_pgs_iterations == 0 || s.solver_pgs_iterations > 1000 {
+            return Err(bad(
+                "key `sim.solver_pgs_iterations`: must be in 1..=1000".into()
+            ));
+        }
         if s.friction < 0.0 {
             return Err(bad("key `sim.friction`: must be ≥ 0".into()));
         }
@@ -369,6 +401,9 @@ impl Scenario {
             if v <= 0.0 {
                 return Err(bad(format!("key `{key}`: must be > 0")));
             }
+        }
+        if s.motor_angle_gain < 0.0 {
+            return Err(bad("key `sim.motor_angle_gain`: must be ≥ 0".into()));
         }
         if s.settle < 0.0 {
             return Err(bad("key `sim.settle`: must be ≥ 0".into()));

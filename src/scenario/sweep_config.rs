@@ -148,3 +148,18 @@ impl Variant {
         }
     }
 }
+
+/// Names of the metrics a sweep reports (the sweep's outcome carries these instead of the
+/// single-run metrics).
+pub fn sweep_metric_names() -> Vec<String> {
+    let mut out = vec![
+        "sweep_success_rate".to_string(),
+        "sweep_variants".to_string(),
+    ];
+    for name in ["sweep_final_error", "sweep_time_to_goal"] {
+        for s in ["median", "p95", "max"] {
+            out.push(format!("{name}_{s}"));
+        }
+    }
+    out
+}

@@ -24,6 +24,11 @@ use crate::model::ellipsoid::Superellipsoid;
 use crate::model::mobile_manipulator::{self as mm, CollisionShape, Link, MobileManipulator};
 use crate::model::{KinematicModel, State};
 use crate::physics::mobile_manipulator::{MobileManipulatorPhysics, ObstacleShape};
+use crate::physics::rapier::parry::bounding_volume::Aabb;
+use crate::physics::rapier::parry::shape::{Ball, ConvexPolyhedron, Cuboid, Cylinder, Shape};
+use crate::physics::rapier::prelude::Vector;
+use crate::physics::real as rl;
+use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::dilf::control::{self, vdot_scaled, Gains};
@@ -32,10 +37,6 @@ use crate::planner::dilf::potential::{Obstacle, PotentialParams, Scene};
 use crate::planner::dilf::{self, DilfParams};
 use crate::planner::PlanError;
 use crate::record::{Comparison, Overlay, Series, SimTrajectory};
-use crate::scenario::SimConfig;
-use rapier3d::parry::bounding_volume::Aabb;
-use rapier3d::parry::shape::{Ball, ConvexPolyhedron, Cuboid, Cylinder, Shape};
-use rapier3d::prelude::{Real, Rotation, Vector};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -394,7 +395,7 @@ impl System for Dilf {
         robot: &urdf_rs::Robot,
         urdf_dir: &Path,
         start: &[f64],
-        sim: &SimConfig,
+        sim: &PhysicsSettings,
     ) -> Result<Box<dyn PhysicsSystem>, String> {
         // The model's own check first, naming the key: a start inside an
         // obstacle is bad input, not a physics failure.
@@ -579,11 +580,11 @@ struct ClearanceProbe {
     links: Vec<(Link, Box<dyn Shape>, crate::model::spatial::Pose<f64>)>,
 }
 
-fn rapier_pose(p: &crate::model::spatial::Pose<f64>) -> rapier3d::math::Pose {
+fn rapier_pose(p: &crate::model::spatial::Pose<f64>) -> crate::physics::rapier::math::Pose {
     let q = p.quaternion();
-    rapier3d::math::Pose::from_parts(
-        Vector::new(p.p[0] as Real, p.p[1] as Real, p.p[2] as Real),
-        Rotation::from_xyzw(q[0] as Real, q[1] as Real, q[2] as Real, q[3] as Real),
+    crate::physics::rapier::math::Pose::from_parts(
+        rl::vector(p.p[0], p.p[1], p.p[2]),
+        rl::rotation(q[0], q[1], q[2], q[3]),
     )
 }
 
@@ -594,10 +595,7 @@ impl ClearanceProbe {
             .iter()
             .filter_map(|(_, s)| {
                 let (v, _) = s.mesh(16, 32);
-                let pts: Vec<Vector> = v
-                    .iter()
-                    .map(|p| Vector::new(p[0] as Real, p[1] as Real, p[2] as Real))
-                    .collect();
+                let pts: Vec<Vector> = v.iter().map(|p| rl::vector(p[0], p[1], p[2])).collect();
                 let hull = ConvexPolyhedron::from_convex_hull(&pts)?;
                 let aabb = hull.local_aabb();
                 Some((hull, aabb))
@@ -609,16 +607,12 @@ impl ClearanceProbe {
                 match shape {
                     CollisionShape::Cuboid { center, half } => (
                         link,
-                        Box::new(Cuboid::new(Vector::new(
-                            half[0] as Real,
-                            half[1] as Real,
-                            half[2] as Real,
-                        ))),
+                        Box::new(Cuboid::new(rl::vector(half[0], half[1], half[2]))),
                         Pose::translation(center),
                     ),
                     CollisionShape::Sphere { center, radius } => (
                         link,
-                        Box::new(Ball::new(radius as Real)),
+                        Box::new(Ball::new(rl::r(radius))),
                         Pose::translation(center),
                     ),
                     CollisionShape::Cylinder {
@@ -637,7 +631,7 @@ impl ClearanceProbe {
                         };
                         (
                             link,
-                            Box::new(Cylinder::new(half_length as Real, radius as Real)),
+                            Box::new(Cylinder::new(rl::r(half_length), rl::r(radius))),
                             Pose { r, p: center },
                         )
                     }
@@ -664,12 +658,14 @@ impl ClearanceProbe {
                 let d = (aabb.mins - ob.maxs)
                     .max(ob.mins - aabb.maxs)
                     .max(Vector::ZERO);
-                if (d.length() as f64) >= best {
+                if rl::f(d.length()) >= best {
                     continue;
                 }
-                let id = rapier3d::math::Pose::IDENTITY;
-                if let Ok(d) = rapier3d::parry::query::distance(&pose, shape.as_ref(), &id, hull) {
-                    best = best.min(d.distance as f64);
+                let id = crate::physics::rapier::math::Pose::IDENTITY;
+                if let Ok(d) =
+                    crate::physics::rapier::parry::query::distance(&pose, shape.as_ref(), &id, hull)
+                {
+                    best = best.min(rl::f(d.distance));
                 }
             }
         }

@@ -5,11 +5,11 @@ use crate::model::disk::RollingDisk;
 use crate::model::{KinematicModel, State};
 use crate::paper::{rows_from, same, PaperRow};
 use crate::physics::disk::DiskPhysics;
+use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::stokes_disk::{self, Algorithm, StokesDiskParams};
 use crate::planner::PlanError;
-use crate::scenario::SimConfig;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -59,7 +59,7 @@ impl System for Disk {
         robot: &urdf_rs::Robot,
         urdf_dir: &Path,
         start: &[f64],
-        sim: &SimConfig,
+        sim: &PhysicsSettings,
     ) -> Result<Box<dyn PhysicsSystem>, String> {
         let p = DiskPhysics::new(robot, urdf_dir, self.model.r, start, sim)?;
         Ok(Box::new(p))

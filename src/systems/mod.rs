@@ -40,13 +40,11 @@ use crate::baseline::Direction;
 use crate::integrate::Trajectory;
 use crate::model::{KinematicModel, State};
 use crate::paper::PaperRow;
+use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::PlanError;
 use crate::record::{Comparison, Overlay, Series, SimTrajectory};
-// The one remaining edge to the scenario layer: issue 10 gives physics its own
-// settings struct and changes `System::physics` to take it.
-use crate::scenario::SimConfig;
 use std::path::Path;
 
 /// A model, a configured planner and the physics counterpart.
@@ -72,7 +70,7 @@ pub trait System: Send + Sync {
         robot: &urdf_rs::Robot,
         urdf_dir: &Path,
         start: &[f64],
-        sim: &SimConfig,
+        sim: &PhysicsSettings,
     ) -> Result<Box<dyn PhysicsSystem>, String>;
     /// Goal heading as a world yaw (rad) for the 3D views, if the model has one.
     fn goal_heading(&self, _goal: &State) -> Option<f64> {

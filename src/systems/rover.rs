@@ -15,13 +15,13 @@ use crate::model::rover::{RoverGeometry, SwitchingRover, SwitchingSignal};
 use crate::model::{Input, KinematicModel, State};
 use crate::paper::{rows_from, same, PaperRow};
 use crate::physics::rover::RoverPhysics;
+use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Command, ControlLaw, Controller, Limits, Plan, PolicyFactory};
 use crate::planner::rover_primitives::{self, se2_distance, RoverPrimitiveParams, TurnDirection};
 use crate::planner::PlanError;
 use crate::record::Comparison;
 use crate::record::{Overlay, SimTrajectory};
-use crate::scenario::SimConfig;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -207,7 +207,7 @@ impl System for Rover {
         robot: &urdf_rs::Robot,
         urdf_dir: &Path,
         start: &[f64],
-        sim: &SimConfig,
+        sim: &PhysicsSettings,
     ) -> Result<Box<dyn PhysicsSystem>, String> {
         Ok(Box::new(RoverPhysics::new(
             robot,

@@ -26,6 +26,7 @@ use crate::model::space_robot::{SpaceRobot, SpaceRobotModel};
 use crate::model::{KinematicModel, State};
 use crate::paper::{rows_from, same, PaperRow};
 use crate::physics::space_robot::SpaceRobotPhysics;
+use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::endogenous::{self, EndogenousParams};
@@ -33,7 +34,6 @@ use crate::planner::stokes_space::{self, FixedSide, StokesSpaceParams};
 use crate::planner::PlanError;
 use crate::record::Comparison;
 use crate::record::SimTrajectory;
-use crate::scenario::SimConfig;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -150,7 +150,7 @@ impl System for Space {
         robot: &urdf_rs::Robot,
         urdf_dir: &Path,
         start: &[f64],
-        sim: &SimConfig,
+        sim: &PhysicsSettings,
     ) -> Result<Box<dyn PhysicsSystem>, String> {
         let p = SpaceRobotPhysics::new(robot, urdf_dir, &self.model.robot, start, sim)?;
         Ok(Box::new(p))

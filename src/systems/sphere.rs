@@ -25,13 +25,13 @@ use crate::model::rolling_sphere::{
 use crate::model::{KinematicModel, State};
 use crate::paper::{detail, rows_from, same, PaperRow};
 use crate::physics::sphere::SpherePhysics;
+use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::sphere_geometric::{self, ArcDirection, SphereGeometricParams};
 use crate::planner::sphere_triangle::{self, SphereTriangleParams};
 use crate::planner::PlanError;
 use crate::record::{Comparison, Overlay, SimTrajectory};
-use crate::scenario::SimConfig;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
@@ -161,7 +161,7 @@ impl System for Sphere {
         robot: &urdf_rs::Robot,
         urdf_dir: &Path,
         start: &[f64],
-        sim: &SimConfig,
+        sim: &PhysicsSettings,
     ) -> Result<Box<dyn PhysicsSystem>, String> {
         Ok(Box::new(SpherePhysics::new(
             robot,

@@ -82,7 +82,7 @@ impl Prepared {
         }
         let mut regressable = known.clone();
         if scenario.sweep.is_some() {
-            regressable.extend(crate::sweep::metric_names());
+            regressable.extend(crate::scenario::sweep_metric_names());
         }
         if let Some(k) = scenario.regression.unknown_metrics(&regressable).next() {
             return Err(scenario.error(format!(
@@ -217,7 +217,7 @@ fn build_physics(
 ) -> Result<Box<dyn PhysicsSystem>, Error> {
     let dir = sc.urdf.parent().unwrap_or(Path::new("."));
     system
-        .physics(robot, dir, &sc.start, &sc.sim)
+        .physics(robot, dir, &sc.start, &sc.sim.physics())
         .map_err(|m| physics_error(sc, &m))
 }
 

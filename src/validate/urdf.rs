@@ -36,16 +36,20 @@ impl Place {
 /// Read, parse and check a URDF.
 pub fn load(path: &Path) -> Result<Robot, Error> {
     let text = read_text(path, "URDF", URDF_MAX_BYTES)?;
-    let robot = crate::physics::urdf::read(path).map_err(|m| Error::Input {
+    let to_error = |m: String| Error::Input {
         path: path.into(),
         line: line_of_message(&text, &m),
         message: m,
-    })?;
+    };
+    let robot = crate::physics::urdf::parse(path).map_err(to_error)?;
+    crate::physics::urdf::validate_tree(&robot).map_err(to_error)?;
+    // Numbers before the loader's own checks: their errors name the element.
     check_numbers(&robot).map_err(|(place, m)| Error::Input {
         path: path.into(),
         line: locate(&text, &place),
         message: m,
     })?;
+    crate::physics::urdf::validate_loadable(&robot).map_err(to_error)?;
     Ok(robot)
 }
 

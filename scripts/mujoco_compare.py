@@ -1,0 +1,252 @@
+#!/usr/bin/env python3
+"""Physics steps per second: the harness (Rapier) next to MuJoCo on the same URDFs.
+
+For each system it runs one shipped scenario with the harness
+(`anholonomy run`, logs to a temporary directory) and reads the harness's own
+rate from summary.json (`sim_steps_per_second`: physics steps over the replay's
+wall time, read-back and channels included). It then loads the same URDF into
+MuJoCo with MuJoCo's own URDF importer, adds what the harness adds (a floating
+base, a ground plane with the scenario's friction, velocity actuators on the
+driven joints, the disk's roll/pitch lock, zero gravity and no contacts for the
+space robot), and replays the commands the harness logged (`/plan/command` in
+run.mcap, one per step, zero after they end) for the same number of steps at
+the same dt with `mujoco.rollout` on one thread. Harness and MuJoCo runs
+alternate, `--repeats` times each, and medians are printed.
+
+The MuJoCo side only has to do the same work per step: it is not a fidelity
+comparison (the sphere's drive acts about body axes in MuJoCo, world axes in
+the harness).
+
+Usage (from the repository root, after `cargo build --release`):
+
+    python3 scripts/mujoco_compare.py [--repeats 5] [--bin target/release/anholonomy]
+
+Installs `mujoco` and `mcap` with pip (--user) when they are missing. Not run
+by .ci/run.
+"""
+
+import argparse
+import json
+import os
+import math
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+import tomllib
+import xml.etree.ElementTree as ET
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+def ensure(modules):
+    missing = []
+    for mod, pkg in modules:
+        try:
+            __import__(mod)
+        except ImportError:
+            missing.append(pkg)
+    if missing:
+        print(f"installing {' '.join(missing)} with pip ...", file=sys.stderr)
+        subprocess.check_call(
+            [sys.executable, "-m", "pip", "install", "--quiet", "--user", *missing]
+        )
+        import site
+
+        site.addsitedir(site.getusersitepackages())
+
+
+ensure([("mujoco", "mujoco"), ("mcap", "mcap"), ("numpy", "numpy")])
+
+import mujoco  # noqa: E402
+import numpy as np  # noqa: E402
+from mcap.reader import make_reader  # noqa: E402
+from mujoco import rollout  # noqa: E402
+
+# system, scenario, URDF root link, actuated joints (with the command scale)
+SYSTEMS = [
+    ("rolling disk", "disk_paper", "yoke"),
+    ("space robot", "space_robot_paper", "vehicle"),
+    ("rover (5 wheel contacts)", "rover_open_loop", "chassis"),
+    ("rolling sphere", "sphere_triangle_paper", "ball"),
+]
+
+
+def harness_run(binary, scenario, logs):
+    path = os.path.join(ROOT, "scenarios", f"{scenario}.toml")
+    subprocess.run(
+        [binary, "run", path, "--logs", logs, "--quiet"],
+        check=True,
+        stdout=subprocess.DEVNULL,
+    )
+    with open(os.path.join(logs, scenario, "summary.json")) as f:
+        return json.load(f)
+
+
+def logged_commands(mcap_path):
+    rows = []
+    with open(mcap_path, "rb") as f:
+        for _schema, _channel, msg in make_reader(f).iter_messages(topics=["/plan/command"]):
+            rows.append(list(json.loads(msg.data)["values"].values()))
+    return np.array(rows, dtype=float)
+
+
+def floating_urdf(urdf_path, root):
+    """The URDF with a `world` link and a floating joint to the root (MuJoCo: free joint)."""
+    tree = ET.parse(urdf_path)
+    robot = tree.getroot()
+    robot.insert(0, ET.Element("link", name="world"))
+    joint = ET.SubElement(robot, "joint", name="world_to_root", type="floating")
+    ET.SubElement(joint, "parent", link="world")
+    ET.SubElement(joint, "child", link=root)
+    return ET.tostring(robot, encoding="unicode")
+
+
+def mujoco_model(system, summary, urdf_path, root):
+    """MJCF built from MuJoCo's import of the URDF plus the harness's additions."""
+    m = mujoco.MjModel.from_xml_string(floating_urdf(urdf_path, root))
+    with tempfile.TemporaryDirectory() as tmp:
+        xml_path = os.path.join(tmp, "model.xml")
+        mujoco.mj_saveLastXML(xml_path, m)
+        mjcf = ET.parse(xml_path).getroot()
+    sim = summary["sim_settings"]
+    option = ET.SubElement(mjcf, "option")
+    option.set("timestep", repr(sim["dt"]))
+    option.set("gravity", " ".join(repr(g) for g in sim["gravity"]))
+    option.set("integrator", "implicitfast")
+    world = mjcf.find("worldbody")
+    body = world.find(f".//body[@name='{root}']")
+    free = body.find("freejoint")
+    if free is None:
+        free = body.find("joint[@type='free']")
+    free.set("name", "world_to_root")
+    actuators = ET.SubElement(mjcf, "actuator")
+
+    # Velocity servos without force limits (nor the joint limits MuJoCo imports
+    # from the URDF's `effort`): a clamped actuator force is applied explicitly
+    # and makes the light steering link unstable at this gain.
+    for j in mjcf.iter("joint"):
+        j.attrib.pop("actuatorfrcrange", None)
+
+    def velocity(joint, gear="1"):
+        ET.SubElement(actuators, "velocity", joint=joint, kv="1000", gear=gear)
+
+    mu = repr(sim["friction"])
+    if system != "space robot":
+        ET.SubElement(world, "geom", type="plane", size="0 0 1", friction=f"{mu} 0.005 0.0001")
+    model = summary["model"]
+    if system == "rolling disk":
+        # Balance controller: translation free, yaw driven, roll and pitch locked.
+        body.remove(free)
+        for i, axis in enumerate(["1 0 0", "0 1 0", "0 0 1"]):
+            body.insert(i, ET.Element("joint", name=f"slide{i}", type="slide", axis=axis))
+        body.insert(3, ET.Element("joint", name="yaw", type="hinge", axis="0 0 1"))
+        body.set("pos", f"0 0 {model['radius']}")
+        velocity("wheel_joint")
+        velocity("yaw", gear="-1")
+    elif system == "space robot":
+        ET.SubElement(option, "flag", contact="disable")
+        velocity("joint1")
+        velocity("joint2")
+    elif system.startswith("rover"):
+        rho = model["geometry"]["wheel_radius"]
+        body.set("pos", f"0 0 {rho}")
+        velocity("front_wheel_joint", gear=repr(rho))  # ctrl u1 (m/s) → u1/ρ rad/s
+        velocity("steer_joint")
+    else:
+        body.set("pos", f"0 0 {model['radius']}")
+        # The free joint's rotational dofs (body axes; timing only).
+        velocity("world_to_root", gear="0 0 0 1 0 0")
+        velocity("world_to_root", gear="0 0 0 0 1 0")
+    return mujoco.MjModel.from_xml_string(ET.tostring(mjcf, encoding="unicode"))
+
+
+def quat_z(angle):
+    return [math.cos(angle / 2), 0.0, 0.0, math.sin(angle / 2)]
+
+
+def quat_mul(a, b):
+    w1, x1, y1, z1 = a
+    w2, x2, y2, z2 = b
+    return [
+        w1 * w2 - x1 * x2 - y1 * y2 - z1 * z2,
+        w1 * x2 + x1 * w2 + y1 * z2 - z1 * y2,
+        w1 * y2 - x1 * z2 + y1 * w2 + z1 * x2,
+        w1 * z2 + x1 * y2 - y1 * x2 + z1 * w2,
+    ]
+
+
+def set_start(m, d, system, scenario, summary):
+    """The scenario's start state (file units: m and degrees) in MuJoCo's coordinates."""
+    with open(os.path.join(ROOT, "scenarios", f"{scenario}.toml"), "rb") as f:
+        start = tomllib.load(f)["start"]
+
+    def q(joint):
+        return m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, joint)]
+
+    rad = [math.radians(v) for v in start]
+    model = summary["model"]
+    if system == "rolling disk":
+        d.qpos[q("slide0")], d.qpos[q("slide1")] = start[0], start[1]
+        d.qpos[q("yaw")] = math.pi / 2 - rad[3]
+        return
+    free = q("world_to_root")
+    if system == "space robot":
+        d.qpos[free + 3 : free + 7] = quat_z(rad[0])
+        d.qpos[q("joint1")], d.qpos[q("joint2")] = rad[1], rad[2]
+    elif system.startswith("rover"):
+        d.qpos[free : free + 3] = [start[0], start[1], model["geometry"]["wheel_radius"]]
+        d.qpos[free + 3 : free + 7] = quat_z(rad[2])
+        d.qpos[q("steer_joint")] = rad[3]
+    else:
+        # z-y-z Euler angles (α, θ, φ): R = Rz(α) Ry(θ) Rz(φ).
+        ry = [math.cos(rad[3] / 2), 0.0, math.sin(rad[3] / 2), 0.0]
+        d.qpos[free : free + 3] = [start[0], start[1], model["radius"]]
+        d.qpos[free + 3 : free + 7] = quat_mul(quat_mul(quat_z(rad[2]), ry), quat_z(rad[4]))
+
+
+def mujoco_rate(m, controls, steps, start):
+    d = mujoco.MjData(m)
+    start(d)
+    mujoco.mj_forward(m, d)
+    state = np.empty(mujoco.mj_stateSize(m, mujoco.mjtState.mjSTATE_FULLPHYSICS))
+    mujoco.mj_getState(m, d, state, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    ctrl = np.zeros((steps, m.nu))
+    n = min(steps, len(controls))
+    ctrl[:n, : controls.shape[1]] = controls[:n, : m.nu]
+    t0 = time.perf_counter()
+    rollout.rollout(m, d, state, ctrl[None, :, :])
+    wall = time.perf_counter() - t0
+    return steps / wall
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--bin", default=os.path.join(ROOT, "target", "release", "anholonomy"))
+    ap.add_argument("--repeats", type=int, default=3)
+    args = ap.parse_args()
+    if not os.path.exists(args.bin):
+        sys.exit(f"{args.bin} not found: run `cargo build --release` first (or pass --bin)")
+    print(f"MuJoCo {mujoco.__version__}, {args.repeats} alternating runs each, medians")
+    header = f"{'system':<26} {'scenario':<22} {'steps':>7} {'harness/s':>10} {'MuJoCo/s':>10} {'ratio':>6}"
+    print(header)
+    for system, scenario, root in SYSTEMS:
+        harness, muj = [], []
+        with tempfile.TemporaryDirectory() as logs:
+            for _ in range(args.repeats):
+                summary = harness_run(args.bin, scenario, logs)
+                harness.append(summary["sim_steps_per_second"])
+                if not muj:
+                    urdf = os.path.join(ROOT, "scenarios", summary["model"]["urdf"])
+                    m = mujoco_model(system, summary, os.path.normpath(urdf), root)
+                    controls = logged_commands(os.path.join(logs, scenario, "run.mcap"))
+                    steps = summary["sim_steps"]
+                start = lambda d: set_start(m, d, system, scenario, summary)  # noqa: E731
+                muj.append(mujoco_rate(m, controls, steps, start))
+        h, k = statistics.median(harness), statistics.median(muj)
+        print(f"{system:<26} {scenario:<22} {steps:>7} {h:>10.0f} {k:>10.0f} {h / k:>6.2f}")
+
+
+if __name__ == "__main__":
+    main()

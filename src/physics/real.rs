@@ -1,0 +1,52 @@
+//! Conversions between the engine's scalar ([`Real`], f64 in this build) and
+//! the harness's f64, in one place so the physics code compiles unchanged
+//! against f32 Rapier (used to measure f32 against f64, see the README).
+#![allow(clippy::unnecessary_cast)] // the casts are no-ops in f64 builds only
+
+use super::rapier::math::{Pose as RPose, Real, Rotation, Vector};
+use crate::record::Pose;
+
+/// Engine scalar → f64.
+#[inline]
+pub fn f(x: Real) -> f64 {
+    x as f64
+}
+
+/// f64 → engine scalar.
+#[inline]
+pub fn r(x: f64) -> Real {
+    x as Real
+}
+
+/// Engine vector → f64 array.
+#[inline]
+pub fn arr(v: Vector) -> [f64; 3] {
+    [v.x as f64, v.y as f64, v.z as f64]
+}
+
+/// f64 components → engine vector.
+#[inline]
+pub fn vector(x: f64, y: f64, z: f64) -> Vector {
+    Vector::new(x as Real, y as Real, z as Real)
+}
+
+/// Engine rotation → (x, y, z, w) in f64.
+#[inline]
+pub fn quat(q: &Rotation) -> [f64; 4] {
+    [q.x as f64, q.y as f64, q.z as f64, q.w as f64]
+}
+
+/// f64 quaternion (x, y, z, w) → engine rotation (normalised).
+#[inline]
+pub fn rotation(x: f64, y: f64, z: f64, w: f64) -> Rotation {
+    Rotation::from_xyzw(x as Real, y as Real, z as Real, w as Real).normalize()
+}
+
+/// Engine pose → record [`Pose`].
+#[inline]
+pub fn to_pose(p: &RPose) -> Pose {
+    Pose {
+        translation: arr(p.translation),
+        rotation: quat(&p.rotation),
+    }
+}
