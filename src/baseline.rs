@@ -2,7 +2,8 @@
 //! regression check of a run against them.
 //!
 //! One file per scenario, `<dir>/<scenario>.json`: format version, scenario
-//! name, planner kind and every metric, keys sorted, NaN written as `null`.
+//! name, planner kind and every metric, keys sorted, NaN written as `null`,
+//! ±∞ as `"inf"` / `"-inf"`.
 //! `anholonomy baseline PATHS --baseline DIR` (or `check --update-baseline`)
 //! writes them; `check PATHS --baseline DIR` compares.
 //!
@@ -197,7 +198,15 @@ impl Baseline {
             q(&self.planner)
         );
         for (i, (k, v)) in self.metrics.iter().enumerate() {
-            let v = serde_json::Number::from_f64(*v).map_or(Value::Null, Value::Number);
+            // JSON has no infinities: ±∞ (e.g. the clearance of a run
+            // without obstacles) is the string "inf" / "-inf", NaN is null.
+            let v = match serde_json::Number::from_f64(*v) {
+                Some(n) => Value::Number(n),
+                None if v.is_infinite() => {
+                    Value::String(if *v > 0.0 { "inf" } else { "-inf" }.into())
+                }
+                None => Value::Null,
+            };
             s.push_str(if i == 0 { "\n" } else { ",\n" });
             s.push_str(&format!("    {}: {v}", q(k)));
         }
@@ -305,7 +314,9 @@ impl Baseline {
             let x = match v {
                 Value::Null => f64::NAN,
                 Value::Number(n) => n.as_f64().unwrap_or(f64::NAN),
-                _ => return Err(bad(k, "must be a number or null".into())),
+                Value::String(t) if t == "inf" => f64::INFINITY,
+                Value::String(t) if t == "-inf" => f64::NEG_INFINITY,
+                _ => return Err(bad(k, "must be a number, \"inf\", \"-inf\" or null".into())),
             };
             metrics.insert(k.clone(), x);
         }
@@ -610,6 +621,12 @@ mod tests {
         let p = Path::new("b.json");
         let back = Baseline::parse(p, &text, "s", "p").unwrap();
         assert!(back.metrics["a"].is_nan());
+        let mut inf = Baseline::parse(p, &text, "s", "p").unwrap();
+        inf.metrics.insert("c".into(), f64::INFINITY);
+        inf.metrics.insert("d".into(), f64::NEG_INFINITY);
+        let again = Baseline::parse(p, &inf.to_json(), "s", "p").unwrap();
+        assert_eq!(again.metrics["c"], f64::INFINITY);
+        assert_eq!(again.metrics["d"], f64::NEG_INFINITY);
         assert_eq!(back.metrics["z"], 0.1);
         assert_eq!(back.metrics["m"], 1e-300);
         let e = Baseline::parse(p, &text, "other", "p")
