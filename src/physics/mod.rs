@@ -5,6 +5,7 @@
 //! same controller the ideal run used, evaluated on the simulated state.
 
 pub mod angles;
+pub mod beam;
 pub mod disk;
 pub mod mobile_manipulator;
 pub mod rover;
