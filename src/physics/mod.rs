@@ -8,6 +8,7 @@
 //! [`world`].
 
 pub mod angles;
+pub mod beam;
 pub mod disk;
 pub mod mobile_manipulator;
 pub mod real;
