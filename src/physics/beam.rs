@@ -178,7 +178,7 @@ pub struct PhysicsBeam {
 }
 
 fn real(v: f64) -> Real {
-    v as Real
+    v
 }
 
 impl PhysicsBeam {

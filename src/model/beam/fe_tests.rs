@@ -97,7 +97,7 @@ fn check_stiffness(beam: &Beam) -> Result<(), TestCaseError> {
     let q = r.qr().q();
     for &i in &zero {
         let v = eig.eigenvectors.column(i).into_owned();
-        let residual = &v - &q * (q.transpose() * &v);
+        let residual = v - q * (q.transpose() * v);
         prop_assert!(residual.norm() < 1e-8, "zero mode {i} is not rigid");
     }
     Ok(())
@@ -123,7 +123,9 @@ fn check_cantilever(beam: &Beam) -> Result<(), TestCaseError> {
     let p = 0.03 * ei / l.powi(2);
     let t = 0.01 * gj / l;
     let m = 0.01 * ei / l;
-    let cases: [(usize, f64, [(usize, f64); 4]); 5] = [
+    // (tip DOF loaded, load, [(node-1/2 DOF, expected)]).
+    type Case = (usize, f64, [(usize, f64); 4]);
+    let cases: [Case; 5] = [
         // (tip DOF loaded, load, [(node-1/2 DOF, expected)]).
         (
             1,
@@ -271,11 +273,8 @@ fn check_sag(beam: &Beam) -> Result<(), TestCaseError> {
         let mid = fe.centerline(&q, l / 2.0);
         let mut expect = [l / 2.0, 0.0, 0.0];
         expect[axis] += want;
-        for d in 0..3 {
-            prop_assert!(
-                (mid.p[d] - expect[d]).abs() <= 1e-12 * l,
-                "centreline at L/2"
-            );
+        for (d, e) in expect.iter().enumerate() {
+            prop_assert!((mid.p[d] - e).abs() <= 1e-12 * l, "centreline at L/2");
         }
         let start = fe.centerline(&q, 0.0);
         prop_assert!(start.p.iter().all(|x| x.abs() < 1e-15));

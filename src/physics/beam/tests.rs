@@ -74,8 +74,8 @@ fn rel(measured: Real, expected: Real) -> Real {
 #[test]
 fn cantilever_tip_load() {
     let beam = rod(2.0);
-    let ei = beam.bending_stiffness() as Real;
-    let l = beam.length as Real;
+    let ei = beam.bending_stiffness();
+    let l = beam.length;
     let p: Real = 0.1;
     let mut w = world(0.0);
     let mut b = cantilever(&mut w, &beam, &static_opts(N));
@@ -100,7 +100,7 @@ fn cantilever_tip_load() {
     );
     // Midpoint-rule chain: δ = δ_ref (1 − 1/(4N²)), θ exact; 1e-3 covers
     // the geometric nonlinearity (θ² ~ 1e-4) and f32 rounding.
-    let chain = 1.0 - 1.0 / (4.0 * (N * N) as Real);
+    let chain = 1.0 - 1.0 / (4.0 * (N * N) as f64);
     assert!((delta / d_ref - chain).abs() < 1e-3);
     assert!(rel(theta, t_ref).abs() < 1e-3);
     assert!(rel(wr.force.z, p).abs() < 1e-3);
@@ -114,9 +114,9 @@ fn cantilever_tip_load() {
 #[test]
 fn clamped_clamped_sag() {
     let beam = rod(2.0);
-    let ei = beam.bending_stiffness() as Real;
-    let l = beam.length as Real;
-    let wl = beam.mass_per_length() as Real * 9.81;
+    let ei = beam.bending_stiffness();
+    let l = beam.length;
+    let wl = beam.mass_per_length() * 9.81;
     let mut w = world(9.81);
     let ground = w.insert_body(RigidBodyBuilder::fixed());
     let slider = w.insert_body(
@@ -177,8 +177,8 @@ fn clamped_clamped_sag() {
 #[test]
 fn cantilever_torsion() {
     let beam = rod(2.0);
-    let gj = beam.torsional_stiffness() as Real;
-    let l = beam.length as Real;
+    let gj = beam.torsional_stiffness();
+    let l = beam.length;
     let t: Real = 0.02;
     let mut w = world(0.0);
     let mut b = cantilever(&mut w, &beam, &static_opts(N));
@@ -205,9 +205,9 @@ fn cantilever_torsion() {
 #[test]
 fn cantilever_self_weight_is_stable() {
     let beam = rod(2.0);
-    let ei = beam.bending_stiffness() as Real;
-    let l = beam.length as Real;
-    let wl = beam.mass_per_length() as Real * 9.81;
+    let ei = beam.bending_stiffness();
+    let l = beam.length;
+    let wl = beam.mass_per_length() * 9.81;
     let lin = wl * l.powi(4) / (8.0 * ei);
     let mut w = world(9.81);
     let mut b = cantilever(&mut w, &beam, &BeamOptions::default());
@@ -239,7 +239,7 @@ fn cantilever_self_weight_is_stable() {
     let per_s = (1.0 / DT) as usize;
     let first = span(&tip[..per_s]);
     let last = span(&tip[steps - per_s..]);
-    let mean_last = tip[steps - per_s..].iter().sum::<Real>() / per_s as Real;
+    let mean_last = tip[steps - per_s..].iter().sum::<Real>() / per_s as f64;
     eprintln!(
         "self-weight 10 s: tip mean {mean_last:.5} (linear theory {lin:.5}, {:+.3e}), swing first s {first:.4}, last s {last:.4}, worst joint gap {worst_gap:.2e} m",
         rel(mean_last, lin)
@@ -257,7 +257,7 @@ fn cantilever_self_weight_is_stable() {
 #[test]
 fn free_beam_straightens_without_drift() {
     let beam = rod(2.0);
-    let l = beam.length as Real;
+    let l = beam.length;
     let kappa: Real = 0.5;
     let arc = move |s: Real| {
         let phi = kappa * (s - 0.5 * l);
