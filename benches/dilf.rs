@@ -1,5 +1,6 @@
 //! Seed 004 benchmarks: the feedback policy (V, ∂V/∂q by dual numbers, and
-//! Eq. 18) for the door scenario, and that scenario's full run.
+//! Eq. 18) for the door scenario, V and ∂V/∂q of the two robots with the
+//! beam, and the door scenario's full run.
 //!
 //! `cargo bench --bench dilf`. Medians are quoted in the README.
 
@@ -37,6 +38,80 @@ fn policy(c: &mut Criterion) {
     g.finish();
 }
 
+/// V and ∂V/∂q of the 18-DOF pair carrying the beam (issue 11's budget:
+/// ≤ 200 µs), at Table I's start and at nearby states, warm.
+fn pair_field(c: &mut Criterion) {
+    use anholonomy::model::beam::{Beam, GFRP_ROD_10MM};
+    use anholonomy::model::mobile_manipulator::default_parts;
+    use anholonomy::planner::dilf::object::Carried;
+    use anholonomy::planner::dilf::potential::{PotentialParams, Scene};
+    use std::f64::consts::PI;
+    let q0 = vec![
+        -11.0,
+        3.0,
+        -PI / 2.0,
+        PI / 2.0,
+        -PI / 2.0,
+        2.0 * PI / 3.0,
+        0.0,
+        -PI / 6.0,
+        0.0,
+        -8.0,
+        3.0,
+        -PI / 2.0,
+        -PI / 3.0,
+        -PI / 2.0,
+        2.0 * PI / 3.0,
+        0.0,
+        -PI / 4.0,
+        0.0,
+    ];
+    let mut goal = q0.clone();
+    goal[1] -= 2.0;
+    goal[10] -= 2.0;
+    let (material, section) = GFRP_ROD_10MM;
+    let beam = Beam {
+        material,
+        section,
+        length: 1.0,
+    };
+    let carried = Carried::at_rest(&beam, None, &q0, 4.0, 8, 0.02).expect("beam");
+    let scene = Scene::new(
+        2,
+        default_parts(),
+        Vec::new(),
+        goal,
+        PotentialParams {
+            lambda: 1.0,
+            kv: 3.0,
+            goal_frame: Default::default(),
+            singularity: Default::default(),
+            field_power: 1.75,
+        },
+    )
+    .expect("scene")
+    .with_object(carried);
+    // States 1 cm / 0.6° apart, as consecutive policy samples are.
+    let states: Vec<Vec<f64>> = (0..50)
+        .map(|i| {
+            q0.iter()
+                .enumerate()
+                .map(|(j, x)| x + 0.01 * i as f64 * ((j as f64 * 0.7).sin()))
+                .collect()
+        })
+        .collect();
+    let mut warm = scene.warm();
+    let mut k = 0;
+    let mut g = c.benchmark_group("dilf_pair_field");
+    g.bench_function("v_and_gradient_18dof_with_beam", |b| {
+        b.iter(|| {
+            k = (k + 1) % states.len();
+            scene.field(&states[k], &mut warm).expect("field")
+        })
+    });
+    g.finish();
+}
+
 fn full_run(c: &mut Criterion) {
     let prep = prepared("dilf_single_door");
     let logs = tempfile::tempdir().expect("tempdir");
@@ -52,5 +127,5 @@ fn full_run(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, policy, full_run);
+criterion_group!(benches, policy, pair_field, full_run);
 criterion_main!(benches);
