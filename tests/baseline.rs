@@ -212,7 +212,10 @@ fn bad_baselines_are_input_errors_and_nothing_is_written() {
         .replace("disk_paper", "disk_fixture")
         .replace("{}", "{\"x\": \"1\"}");
     std::fs::write(&file, text_metric).unwrap();
-    one_line_input_error(&check(), "key `x`: must be a number or null");
+    one_line_input_error(
+        &check(),
+        "key `x`: must be a number, \"inf\", \"-inf\" or null",
+    );
     assert!(
         files_below(&dir.join("logs")).is_empty(),
         "logs written despite bad input"

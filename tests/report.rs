@@ -87,6 +87,7 @@ fn report_of_a_run_and_a_sweep() {
     assert!(!page.contains("<h2>Paper</h2>"), "not the paper's task");
     let sw = std::fs::read_to_string(logs.join("sw/report.html")).unwrap();
     assert_self_contained(&sw);
+    assert!(!sw.contains("wall NaN"), "the sweep's wall time is read");
     for needle in [
         "final error (sim_goal_position)",
         "final error vs friction coefficient",

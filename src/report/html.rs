@@ -137,7 +137,7 @@ pub fn index_page(runs: &[Loaded]) -> String {
                     100.0 * s["success_rate"].as_f64().unwrap_or(f64::NAN),
                     s["variants_run"].as_u64().unwrap_or(0),
                     num(s["final_error"]["median"].as_f64()),
-                    s["wall_time_s"].as_f64().unwrap_or(f64::NAN),
+                    sweep_wall(s),
                     baseline_summary(&l.regression),
                     fails.join("; ")
                 );
@@ -622,7 +622,7 @@ pub fn scenario_page(l: &Loaded) -> Result<String, String> {
                 s["successes"].as_u64().unwrap_or(0),
                 100.0 * s["success_rate"].as_f64().unwrap_or(f64::NAN),
                 100.0 * s["sweep"]["min_success_rate"].as_f64().unwrap_or(0.0),
-                s["wall_time_s"].as_f64().unwrap_or(f64::NAN),
+                sweep_wall(s),
                 num(s["final_error"]["median"].as_f64()),
                 num(s["final_error"]["p95"].as_f64()),
                 num(s["final_error"]["max"].as_f64()),
@@ -647,4 +647,13 @@ pub fn scenario_page(l: &Loaded) -> Result<String, String> {
         }
     }
     Ok(page(&format!("{} — anholonomy", l.name), &b))
+}
+
+/// A sweep's wall time: `wall_time_s.total` (older logs: a plain number).
+fn sweep_wall(s: &Value) -> f64 {
+    let w = &s["wall_time_s"];
+    w["total"]
+        .as_f64()
+        .or_else(|| w.as_f64())
+        .unwrap_or(f64::NAN)
 }
