@@ -45,27 +45,7 @@ fn pair_field(c: &mut Criterion) {
     use anholonomy::model::mobile_manipulator::default_parts;
     use anholonomy::planner::dilf::object::Carried;
     use anholonomy::planner::dilf::potential::{PotentialParams, Scene};
-    use std::f64::consts::PI;
-    let q0 = vec![
-        -11.0,
-        3.0,
-        -PI / 2.0,
-        PI / 2.0,
-        -PI / 2.0,
-        2.0 * PI / 3.0,
-        0.0,
-        -PI / 6.0,
-        0.0,
-        -8.0,
-        3.0,
-        -PI / 2.0,
-        -PI / 3.0,
-        -PI / 2.0,
-        2.0 * PI / 3.0,
-        0.0,
-        -PI / 4.0,
-        0.0,
-    ];
+    let q0 = anholonomy::planner::dilf::object::table_i_start();
     let mut goal = q0.clone();
     goal[1] -= 2.0;
     goal[10] -= 2.0;

@@ -181,6 +181,17 @@ impl Carried {
     }
 }
 
+/// Table I's initial configuration of both robots (x, y, θ, q1..q6 each; rad).
+pub fn table_i_start() -> Vec<f64> {
+    use std::f64::consts::PI;
+    let arm = |q1: f64, q5: f64| [q1, -PI / 2.0, 2.0 * PI / 3.0, 0.0, q5, 0.0];
+    let mut q = vec![-11.0, 3.0, -PI / 2.0];
+    q.extend(arm(PI / 2.0, -PI / 6.0));
+    q.extend([-8.0, 3.0, -PI / 2.0]);
+    q.extend(arm(-PI / 3.0, -PI / 4.0));
+    q
+}
+
 /// Distance between the grasp points of two robots at q (for messages).
 pub fn grasp_distance(q: &[f64]) -> f64 {
     let d = spatial::sub(
@@ -194,36 +205,13 @@ pub fn grasp_distance(q: &[f64]) -> f64 {
 mod tests {
     use super::*;
     use crate::model::beam::GFRP_ROD_10MM;
+    use crate::planner::dilf::potential::tests::assert_field_is_scaled_gradient;
     use crate::planner::dilf::potential::{
         GoalFrame, PotentialParams, Scene, SingularityEnclosure,
     };
     use rand::{Rng, SeedableRng};
     use rand_chacha::ChaCha8Rng;
     use std::f64::consts::PI;
-
-    /// Table I's initial configuration (both robots).
-    pub(crate) fn table_start() -> Vec<f64> {
-        vec![
-            -11.0,
-            3.0,
-            -PI / 2.0,
-            PI / 2.0,
-            -PI / 2.0,
-            2.0 * PI / 3.0,
-            0.0,
-            -PI / 6.0,
-            0.0,
-            -8.0,
-            3.0,
-            -PI / 2.0,
-            -PI / 3.0,
-            -PI / 2.0,
-            2.0 * PI / 3.0,
-            0.0,
-            -PI / 4.0,
-            0.0,
-        ]
-    }
 
     fn beam() -> Beam {
         let (material, section) = GFRP_ROD_10MM;
@@ -264,7 +252,7 @@ mod tests {
 
     #[test]
     fn at_rest_only_gravity_deforms_the_beam() {
-        let q = table_start();
+        let q = table_i_start();
         let c = carried(&q, 4.0);
         let st = c.state(&q);
         // q_s (node 2) vanishes: the grasps hold the beam straight.
@@ -289,7 +277,7 @@ mod tests {
     /// platforms together (a rigid motion of the whole system) leaves it.
     #[test]
     fn deformation_is_invariant_under_a_common_rigid_motion() {
-        let q0 = table_start();
+        let q0 = table_i_start();
         let c = carried(&q0, 4.0);
         let mut rng = ChaCha8Rng::seed_from_u64(7);
         for _ in 0..20 {
@@ -315,7 +303,7 @@ mod tests {
 
     #[test]
     fn v_with_the_beam_has_exact_gradients() {
-        let q0 = table_start();
+        let q0 = table_i_start();
         let mut goal = q0.clone();
         goal[0] += 2.0;
         goal[DOF] += 2.0;
@@ -329,22 +317,8 @@ mod tests {
                 continue;
             }
             checked += 1;
-            let (e, f) = s.field(&q, &mut s.warm()).unwrap();
-            let d2 = e.d * e.d;
-            let v = |q: &[f64]| s.evaluate::<f64>(q, &mut s.warm()).unwrap().v;
-            let scale = f.iter().map(|x| x.abs()).fold(0.0, f64::max) / d2;
-            for i in 0..q.len() {
-                let h = 1e-6;
-                let (mut qp, mut qm) = (q.clone(), q.clone());
-                qp[i] += h;
-                qm[i] -= h;
-                let fd = (v(&qp) - v(&qm)) / (2.0 * h);
-                let exact = f[i] / d2;
-                assert!(
-                    (fd - exact).abs() <= 1e-5 * scale.max(exact.abs()),
-                    "coord {i}: exact {exact:e}, fd {fd:e}"
-                );
-            }
+            let what = format!("pair with beam, sample {checked}");
+            assert_field_is_scaled_gradient(&s, &q, 1e-5, &what);
         }
     }
 
@@ -352,7 +326,7 @@ mod tests {
     /// start/goal check refuses such a configuration.
     #[test]
     fn overstraining_the_beam_zeroes_v() {
-        let q0 = table_start();
+        let q0 = table_i_start();
         // The goal 2 m ahead of both robots (their heading is −y), so the
         // dipole terms do not vanish.
         let mut goal = q0.clone();
@@ -398,7 +372,7 @@ mod tests {
         use crate::model::mobile_manipulator::MobileManipulator;
         use crate::model::State;
         use crate::planner::dilf::{self, DilfParams};
-        let q0 = table_start();
+        let q0 = table_i_start();
         let mut goal = q0.clone();
         goal[1] -= 2.0;
         goal[DOF + 1] -= 2.0;

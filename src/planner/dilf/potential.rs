@@ -590,25 +590,33 @@ pub(crate) mod tests {
             let mut rng = ChaCha8Rng::seed_from_u64(40 + robots as u64);
             for trial in 0..12 {
                 let q = random_q(&s, &mut rng);
-                let (e, f) = s.field(&q, &mut s.warm()).unwrap();
-                let d2 = e.d * e.d;
-                let v = |q: &[f64]| s.evaluate::<f64>(q, &mut s.warm()).unwrap().v;
-                let scale = f.iter().map(|x| x.abs()).fold(0.0, f64::max) / d2;
-                for i in 0..q.len() {
-                    let h = 1e-6;
-                    let (mut qp, mut qm) = (q.clone(), q.clone());
-                    qp[i] += h;
-                    qm[i] -= h;
-                    let fd = (v(&qp) - v(&qm)) / (2.0 * h);
-                    let exact = f[i] / d2;
-                    assert!(
-                        (fd - exact).abs() <= 1e-6 * scale.max(exact.abs()),
-                        "k={robots} {frame:?} trial {trial} coord {i}: exact {exact:e}, fd {fd:e}"
-                    );
-                }
+                let what = format!("k={robots} {frame:?} trial {trial}");
+                assert_field_is_scaled_gradient(&s, &q, 1e-6, &what);
             }
         }
     }
+
+    /// f / D^p at q against central differences of V (relative to the
+    /// largest component).
+    pub(crate) fn assert_field_is_scaled_gradient(s: &Scene, q: &[f64], rel: f64, what: &str) {
+        let (e, f) = s.field(q, &mut s.warm()).unwrap();
+        let dp = e.d.powf(s.params.field_power);
+        let v = |q: &[f64]| s.evaluate::<f64>(q, &mut s.warm()).unwrap().v;
+        let scale = f.iter().map(|x| x.abs()).fold(0.0, f64::max) / dp;
+        for i in 0..q.len() {
+            let h = 1e-6;
+            let (mut qp, mut qm) = (q.to_vec(), q.to_vec());
+            qp[i] += h;
+            qm[i] -= h;
+            let fd = (v(&qp) - v(&qm)) / (2.0 * h);
+            let exact = f[i] / dp;
+            assert!(
+                (fd - exact).abs() <= rel * scale.max(exact.abs()),
+                "{what} coord {i}: exact {exact:e}, fd {fd:e}"
+            );
+        }
+    }
+
     /// Definition 1 (ii): V grows without bound as the goal is approached
     /// along the dipole axis (every other coordinate at its goal): V ~ c/t.
     #[test]
