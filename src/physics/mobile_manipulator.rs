@@ -429,7 +429,7 @@ impl MobileManipulatorPhysics {
             }
         }
         // Collision groups: robot vs ground and obstacles, never robot vs robot.
-        let robot_colliders = sw.colliders.clone();
+        let robot_colliders = sw.robot.colliders.clone();
         sw.set_collision_groups(
             &robot_colliders,
             InteractionGroups::new(ROBOT, GROUND | OBSTACLE, InteractionTestMode::And),

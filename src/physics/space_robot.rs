@@ -265,7 +265,7 @@ impl SpaceRobotPhysics {
             Group::ALL.difference(Group::GROUP_1),
             InteractionTestMode::And,
         );
-        let colliders = sw.colliders.clone();
+        let colliders = sw.robot.colliders.clone();
         sw.set_collision_groups(&colliders, groups);
         // Mass properties as written in the URDF (checked against the model
         // above; Rapier computes its own copy only on the first step).

@@ -235,14 +235,8 @@ pub fn insert_robot(world: &mut PhysicsWorld, robot: &Robot, root: RPose, mu: f6
 pub struct SimWorld {
     /// The physics world.
     pub world: PhysicsWorld,
-    /// Body of each URDF link of the first robot, in URDF link order.
-    pub links: Vec<RigidBodyHandle>,
-    /// Joint handles of the first robot by URDF joint name.
-    pub joints: HashMap<String, ImpulseJointHandle>,
-    /// Link index of the first robot by name.
-    pub link_index: HashMap<String, usize>,
-    /// Colliders of the first robot.
-    pub colliders: Vec<ColliderHandle>,
+    /// Handles of the first robot (links, joints, colliders).
+    pub robot: RobotHandles,
     /// The fixed ground body (present even without a ground collider, as a joint anchor).
     pub ground: RigidBodyHandle,
     /// The ground half-space z ≤ 0, when the world has one.
@@ -286,13 +280,10 @@ impl SimWorld {
                 .colliders
                 .insert_with_parent(plane, ground, &mut world.bodies)
         });
-        let h = insert_robot(&mut world, robot, opts.root_pose, s.friction);
+        let robot = insert_robot(&mut world, robot, opts.root_pose, s.friction);
         SimWorld {
             world,
-            links: h.links,
-            joints: h.joints,
-            link_index: h.link_index,
-            colliders: h.colliders,
+            robot,
             ground,
             ground_collider,
             settings: s.clone(),
@@ -323,7 +314,7 @@ impl SimWorld {
         insert_robot(&mut self.world, robot, root_pose, self.settings.friction)
     }
 
-    /// Put `colliders` (e.g. [`SimWorld::colliders`] or [`RobotHandles::colliders`])
+    /// Put `colliders` (e.g. the first robot's or [`RobotHandles::colliders`])
     /// in collision groups: two colliders interact only when each one's
     /// memberships intersect the other's filter.
     pub fn set_collision_groups(
@@ -340,29 +331,22 @@ impl SimWorld {
 
     /// Body handle of a named link of the first robot.
     pub fn link(&self, name: &str) -> Option<RigidBodyHandle> {
-        self.link_index.get(name).map(|&i| self.links[i])
+        self.robot.link(name)
     }
 
-    /// Body of a link the system needs; the error names the missing link.
+    /// Body of a link of the first robot the system needs (see [`RobotHandles::require_link`]).
     pub fn require_link(&self, name: &str) -> Result<RigidBodyHandle, String> {
-        self.link(name)
-            .ok_or_else(|| format!("URDF has no link `{name}`"))
+        self.robot.require_link(name)
     }
 
-    /// Handle of a joint the system needs; the error names the missing joint.
+    /// Handle of a joint of the first robot (see [`RobotHandles::require_joint`]).
     pub fn require_joint(&self, name: &str) -> Result<ImpulseJointHandle, String> {
-        self.joints
-            .get(name)
-            .copied()
-            .ok_or_else(|| format!("URDF has no joint `{name}`"))
+        self.robot.require_joint(name)
     }
 
     /// World pose of every link of the first robot, in URDF order.
     pub fn link_poses(&self) -> Vec<Pose> {
-        self.links
-            .iter()
-            .map(|h| to_pose(self.world.bodies[*h].position()))
-            .collect()
+        self.robot.link_poses(&self.world.bodies)
     }
 
     /// Set a velocity motor on the free axis of a revolute joint.
@@ -583,7 +567,7 @@ mod tests {
                 expect.push(expect.last().unwrap() * o);
             }
             for (i, l) in links.iter().enumerate() {
-                let b = &sw.world.bodies[sw.links[i]];
+                let b = &sw.world.bodies[sw.robot.links[i]];
                 let got = iso(b.position());
                 prop_assert!((got.translation.vector - expect[i].translation.vector).norm() < 1e-12);
                 prop_assert!(got.rotation.angle_to(&expect[i].rotation) < 1e-9);
@@ -598,13 +582,13 @@ mod tests {
                 let got = Matrix3::from_column_slice(&m.to_cols_array().map(f));
                 prop_assert!((got - want).norm() < 1e-9 * want.norm(), "{got} vs {want}");
                 // The cylinder collision stands along the collision frame's z axis.
-                let c = &sw.world.colliders[sw.colliders[i]];
+                let c = &sw.world.colliders[sw.robot.colliders[i]];
                 let axis = Vector3::from(arr(c.position().rotation * Vector::Y));
                 let col = expect[i] * Isometry3::from_parts(Translation3::new(0.1, 0.0, 0.0), rot([l.3[2], l.3[0], l.3[1]]));
                 prop_assert!((axis - col.rotation * Vector3::z()).norm() < 1e-9);
             }
             for (i, j) in joints.iter().enumerate() {
-                let data = &sw.world.impulse_joints.get(sw.joints[&format!("j{i}")]).unwrap().data;
+                let data = &sw.world.impulse_joints.get(sw.robot.joints[&format!("j{i}")]).unwrap().data;
                 // The free axis (local x of the parent-side frame) is the URDF axis in the joint frame.
                 let x = Vector3::from(arr(data.local_frame1.rotation * Vector::X));
                 let want = rot(j.2) * Vector3::from(j.3).normalize();
@@ -633,12 +617,12 @@ mod tests {
         let mut sw = SimWorld::on_ground(&robot, Path::new("."), &settings, RPose::IDENTITY);
         let shift = RPose::from_parts(vector(2.0, -1.0, 0.0), Rotation::from_rotation_z(r(0.5)));
         let b = sw.add_robot(&robot, Path::new("."), shift);
-        assert_eq!(b.links.len(), sw.links.len());
-        assert!(b.links.iter().all(|h| !sw.links.contains(h)));
+        assert_eq!(b.links.len(), sw.robot.links.len());
+        assert!(b.links.iter().all(|h| !sw.robot.links.contains(h)));
         assert!(b
             .joints
             .values()
-            .all(|h| !sw.joints.values().any(|a| a == h)));
+            .all(|h| !sw.robot.joints.values().any(|a| a == h)));
         let (a_poses, b_poses) = (sw.link_poses(), b.link_poses(&sw.world.bodies));
         for (pa, pb) in a_poses.iter().zip(&b_poses) {
             let pa = shift.transform_point(vector(
@@ -666,6 +650,7 @@ mod tests {
             .iter()
             .all(|c| sw.world.colliders[*c].collision_groups() == groups));
         assert!(sw
+            .robot
             .colliders
             .iter()
             .all(|c| sw.world.colliders[*c].collision_groups() != groups));
