@@ -444,18 +444,12 @@ fn single_figures(summary: &Value, sf: &SeriesFile) -> Result<String, String> {
     }
     b.push_str("</div><h2>Commands</h2><div class=\"grid\">");
     for (k, c) in sf.commands.iter().enumerate() {
-        let line = Line {
-            name: c.name.clone(),
-            t: &c.t,
-            v: scaled(c, 1.0),
-            color: plots::series_color(k),
-            step: true,
-        };
-        b.push_str(&plots::time_chart(
-            &format!("command: {}", c.name),
-            &c.name,
-            &[line],
-            &[],
+        let title = format!("command: {}", c.name);
+        b.push_str(&one_series(
+            &title,
+            c,
+            plots::series_color(k),
+            true,
             &sh,
             t_end,
         )?);
@@ -464,25 +458,30 @@ fn single_figures(summary: &Value, sf: &SeriesFile) -> Result<String, String> {
     if !sf.channels.is_empty() {
         b.push_str("<h2>Physics channels</h2><div class=\"grid\">");
         for c in &sf.channels {
-            let line = Line {
-                name: c.name.clone(),
-                t: &c.t,
-                v: scaled(c, 1.0),
-                color: plots::BLUE,
-                step: false,
-            };
-            b.push_str(&plots::time_chart(
-                &c.name,
-                &c.name,
-                &[line],
-                &[],
-                &sh,
-                t_end,
-            )?);
+            b.push_str(&one_series(&c.name, c, plots::BLUE, false, &sh, t_end)?);
         }
         b.push_str("</div>");
     }
     Ok(b)
+}
+
+/// A time chart of one series (a command or a channel), unscaled.
+fn one_series(
+    title: &str,
+    c: &Series,
+    color: plotters::style::RGBColor,
+    step: bool,
+    sh: &[Shade],
+    t_end: f64,
+) -> Result<String, String> {
+    let line = Line {
+        name: c.name.clone(),
+        t: &c.t,
+        v: scaled(c, 1.0),
+        color,
+        step,
+    };
+    plots::time_chart(title, &c.name, &[line], &[], sh, t_end)
 }
 
 fn sweep_figures(s: &Value) -> Result<String, String> {

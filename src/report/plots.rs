@@ -64,6 +64,22 @@ pub type Shade = (f64, f64, usize);
 
 type Res<T> = Result<T, String>;
 
+/// The legend every chart uses: upper right, translucent white box.
+fn legend<'a, DB, CT>(chart: &mut ChartContext<'a, DB, CT>) -> Res<()>
+where
+    DB: DrawingBackend + 'a,
+    CT: CoordTranslate,
+{
+    chart
+        .configure_series_labels()
+        .position(SeriesLabelPosition::UpperRight)
+        .background_style(WHITE.mix(0.85))
+        .border_style(RGBColor(200, 200, 200))
+        .label_font(("sans-serif", 11))
+        .draw()
+        .map_err(err)
+}
+
 fn err<E: std::fmt::Debug>(e: E) -> String {
     format!("plot failed: {e:?}")
 }
@@ -199,14 +215,7 @@ pub fn time_chart(
                 }
             }
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(200, 200, 200))
-            .label_font(("sans-serif", 11))
-            .draw()
-            .map_err(err)?;
+        legend(&mut chart)?;
         Ok(())
     })
 }
@@ -319,14 +328,7 @@ pub fn path_chart(paths: &[Path2<'_>], markers: &[Marker<'_>]) -> Res<String> {
                     .map_err(err)?;
             }
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(200, 200, 200))
-            .label_font(("sans-serif", 11))
-            .draw()
-            .map_err(err)?;
+        legend(&mut chart)?;
         Ok(())
     })
 }
@@ -387,14 +389,7 @@ pub fn histogram(
                 .map_err(err)?
                 .label(name)
                 .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], RED));
-            chart
-                .configure_series_labels()
-                .position(SeriesLabelPosition::UpperRight)
-                .background_style(WHITE.mix(0.85))
-                .border_style(RGBColor(200, 200, 200))
-                .label_font(("sans-serif", 11))
-                .draw()
-                .map_err(err)?;
+            legend(&mut chart)?;
         }
         Ok(())
     })
@@ -458,14 +453,7 @@ pub fn scatter(
                 .label(name)
                 .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], RED));
         }
-        chart
-            .configure_series_labels()
-            .position(SeriesLabelPosition::UpperRight)
-            .background_style(WHITE.mix(0.85))
-            .border_style(RGBColor(200, 200, 200))
-            .label_font(("sans-serif", 11))
-            .draw()
-            .map_err(err)?;
+        legend(&mut chart)?;
         Ok(())
     })
 }
