@@ -7,7 +7,7 @@ use crate::error::Error;
 use crate::integrate::{simulate, Trajectory};
 use crate::log::unit::LogUnit;
 use crate::model::{KinematicModel, State};
-use crate::physics::{replay_with, urdf, ReplayOptions};
+use crate::physics::{replay_with, ReplayOptions};
 use crate::plan::Plan;
 use crate::record::{RunRecord, SimTrajectory};
 use serde::Serialize;
@@ -217,9 +217,9 @@ fn write_logs(
         series,
     } = *run;
     let model = prep.model();
-    let links = urdf::visuals(&prep.robot);
     let goal_v: Vec<f64> = goal.iter().copied().collect();
     let (start, _) = prep.start_goal();
+    let links = prep.system.links(&prep.robot, &start);
     let overlays = prep.system.overlays(&start, goal);
     let rec = RunRecord {
         scenario: &prep.scenario.name,

@@ -23,7 +23,10 @@ use crate::integrate::Trajectory;
 use crate::model::ellipsoid::Superellipsoid;
 use crate::model::mobile_manipulator::{self as mm, CollisionShape, Link, MobileManipulator};
 use crate::model::{KinematicModel, State};
-use crate::physics::mobile_manipulator::{MobileManipulatorPhysics, ObstacleShape};
+use crate::physics::beam::BeamOptions;
+use crate::physics::mobile_manipulator::{
+    link_visuals, CarriedBeam, MobileManipulatorPhysics, ObstacleShape, Setup,
+};
 use crate::physics::rapier::parry::bounding_volume::Aabb;
 use crate::physics::rapier::parry::shape::{Ball, ConvexPolyhedron, Cuboid, Cylinder, Shape};
 use crate::physics::rapier::prelude::Vector;
@@ -36,7 +39,7 @@ use crate::planner::dilf::object::Carried;
 use crate::planner::dilf::potential::{Obstacle, PotentialParams, Scene};
 use crate::planner::dilf::{self, DilfParams};
 use crate::planner::PlanError;
-use crate::record::{Comparison, Overlay, Series, SimTrajectory};
+use crate::record::{Comparison, LinkVisual, Overlay, Series, SimTrajectory};
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -294,6 +297,16 @@ impl Dilf {
         )
     }
 
+    /// The beam as the physics holds it: the scene's grasps and FE beam.
+    fn carried_beam(&self, scene: &Scene) -> Option<CarriedBeam> {
+        let c = scene.object.as_ref()?;
+        Some(CarriedBeam {
+            beam: *c.fe.beam(),
+            grasp: c.grasp,
+            options: BeamOptions::default(),
+        })
+    }
+
     /// The first time a trajectory is within the planner's tolerance (NaN if never).
     fn time_to_goal(&self, tr: &Trajectory, goal: &State) -> f64 {
         let g = goal.as_slice();
@@ -315,6 +328,24 @@ impl Dilf {
         (0..tr.t.len()).step_by(every).collect()
     }
 }
+
+/// Metrics of two robots carrying the beam: ‖q_f‖∞ of the FE model at the
+/// ideal and at the simulated grasps (policy samples), of the physics beam
+/// (every step), the largest gap between the physics beam's and the FE
+/// model's ‖q_f‖∞ at the same step, the least robot–robot distance, the
+/// most non-obstacle collision pairs (robot–robot, beam–platform/ground),
+/// the largest grasp force and torque, robot 2's largest lateral slip.
+const PAIR_METRICS: [&str; 9] = [
+    "ideal_max_deformation",
+    "sim_max_deformation",
+    "sim_beam_max_deformation",
+    "sim_beam_fe_gap",
+    "sim_robot_clearance",
+    "sim_body_contacts",
+    "sim_grasp_force_max",
+    "sim_grasp_torque_max",
+    "slip_lateral_2_max",
+];
 
 /// Metrics of the V̇ ≥ 0 claim and the ellipsoid model along one run.
 struct Along {
@@ -405,16 +436,6 @@ impl System for Dilf {
         {
             return Err(format!("key `{name}`: {reason}"));
         }
-        if self.model.robots == 2 {
-            // Refused rather than replaying robot 1 alone: a replay without
-            // the second robot and the beam would answer another question.
-            return Err(
-                "key `model.robots`: two robots carrying a beam have no physics \
-                 counterpart yet (the beam in Rapier is issue 11's open part); the ideal \
-                 side (FE beam, b_f, beam obstacles) is in `planner::dilf::object`"
-                    .into(),
-            );
-        }
         let obstacles: Vec<ObstacleShape> = self
             .obstacles
             .iter()
@@ -423,9 +444,26 @@ impl System for Dilf {
                 shape: *shape,
             })
             .collect();
+        let beam = self.carried_beam(&scene);
+        let setup = Setup {
+            start,
+            obstacles: &obstacles,
+            beam: beam.as_ref(),
+        };
         Ok(Box::new(MobileManipulatorPhysics::new(
-            robot, urdf_dir, start, sim, &obstacles,
+            robot, urdf_dir, sim, &setup,
         )?))
+    }
+    fn links(&self, robot: &urdf_rs::Robot, start: &State) -> Vec<LinkVisual> {
+        let beam = self
+            .scene(start.as_slice(), start)
+            .ok()
+            .and_then(|s| self.carried_beam(&s));
+        link_visuals(
+            crate::physics::urdf::visuals(robot),
+            self.model.robots,
+            beam.as_ref(),
+        )
     }
     fn goal_heading(&self, goal: &State) -> Option<f64> {
         Some(goal[2])
@@ -442,13 +480,20 @@ impl System for Dilf {
                 [0.85, 0.2, 0.2, 1.0],
             ));
         }
-        for p in mm::default_parts() {
-            out.extend(wireframe(
-                &format!("ellipsoid_{}", p.name),
-                &p.shape,
-                Some(p.link.urdf_name()),
-                [0.2, 0.75, 0.9, 1.0],
-            ));
+        for r in 1..=self.model.robots {
+            let prefix = if r == 1 {
+                String::new()
+            } else {
+                format!("r{r}_")
+            };
+            for p in mm::default_parts() {
+                out.extend(wireframe(
+                    &format!("ellipsoid_{}", p.name),
+                    &p.shape,
+                    Some(&format!("{prefix}{}", p.link.urdf_name())),
+                    [0.2, 0.75, 0.9, 1.0],
+                ));
+            }
         }
         out
     }
@@ -469,7 +514,7 @@ impl System for Dilf {
         .map(String::from)
         .to_vec();
         if self.beam.is_some() {
-            names.extend(["ideal_max_deformation", "sim_max_deformation"].map(String::from));
+            names.extend(PAIR_METRICS.map(String::from));
         }
         names
     }
@@ -530,6 +575,32 @@ impl System for Dilf {
             // at every policy sample.
             metrics.push(("ideal_max_deformation".into(), a_ideal.max_deformation));
             metrics.push(("sim_max_deformation".into(), a_sim.max_deformation));
+            let max_of = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
+            let gap = chan("beam_deformation")
+                .iter()
+                .zip(chan("fe_deformation"))
+                .fold(0.0f64, |m, (a, b)| m.max((a - b).abs()));
+            metrics.extend([
+                (
+                    "sim_beam_max_deformation".into(),
+                    max_of(chan("beam_deformation")),
+                ),
+                ("sim_beam_fe_gap".into(), gap),
+                (
+                    "sim_robot_clearance".into(),
+                    min_of(chan("robot_clearance")),
+                ),
+                ("sim_body_contacts".into(), max_abs(chan("body_contacts"))),
+                (
+                    "sim_grasp_force_max".into(),
+                    max_of(chan("grasp1_force")).max(max_of(chan("grasp2_force"))),
+                ),
+                (
+                    "sim_grasp_torque_max".into(),
+                    max_of(chan("grasp1_torque")).max(max_of(chan("grasp2_torque"))),
+                ),
+                ("slip_lateral_2_max".into(), max_abs(chan("slip_lateral_2"))),
+            ]);
         }
         (
             metrics,

@@ -44,7 +44,7 @@ use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::PlanError;
-use crate::record::{Comparison, Overlay, Series, SimTrajectory};
+use crate::record::{Comparison, LinkVisual, Overlay, Series, SimTrajectory};
 use std::path::Path;
 
 /// A model, a configured planner and the physics counterpart.
@@ -75,6 +75,11 @@ pub trait System: Send + Sync {
     /// Goal heading as a world yaw (rad) for the 3D views, if the model has one.
     fn goal_heading(&self, _goal: &State) -> Option<f64> {
         None
+    }
+    /// The links the logs draw, in the order of the physics' link poses:
+    /// the URDF's own by default.
+    fn links(&self, robot: &urdf_rs::Robot, _start: &State) -> Vec<LinkVisual> {
+        crate::physics::urdf::visuals(robot)
     }
     /// Extra polylines for the 3D views (e.g. a target line).
     fn overlays(&self, _start: &State, _goal: &State) -> Vec<Overlay> {

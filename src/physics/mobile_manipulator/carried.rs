@@ -1,0 +1,266 @@
+//! The beam two mobile manipulators carry, in the physics world: a
+//! [`PhysicsBeam`] fixed to both tools at the planner's grasp offsets, and
+//! what the harness reads from it.
+//!
+//! The beam is inserted along the FE model's centreline at the start grasps
+//! (the planner's `Carried::at_rest` makes it straight there but for its
+//! sag under gravity), so the replay starts near equilibrium. Contacts between the beam and the tools are
+//! off by the collision groups (see the module above), so no grip clearance
+//! joints are needed.
+//!
+//! Deformation read-back, in the FE model's convention ([`FeBeam`]): with
+//! P0, P1, P2 the world poses of the chain's node bodies (end 0, the middle,
+//! end 2), q_s = log((g⁰)⁻¹ P0⁻¹ P2) and q_o = (P0⁻¹ P1 translation − (L/2,
+//! 0, 0), rotation vector of P0⁻¹ P1): the physics beam's q_f. Next to it
+//! the FE model's q_f at the *simulated* grasps (tool poses times the grasp
+//! offsets), so the two differ only by what the FE model leaves out
+//! (dynamics, the compliance of the fixed joints, large rotations of the
+//! chain) and not by where the robots went.
+
+use super::super::beam::{Attachment, BeamOptions, PhysicsBeam};
+use super::super::rapier::math::Matrix;
+use super::super::rapier::math::Pose as RPose;
+use super::super::rapier::prelude::*;
+use super::super::real::{f, to_pose};
+use super::to_rapier;
+use crate::model::beam::se3_log;
+use crate::model::beam::{Beam, FeBeam};
+use crate::model::spatial::{self, Pose as SPose};
+use crate::record::{LinkVisual, Pose, Shape, Visual};
+
+/// The beam as the physics needs it (plain data, from the planner's grasp).
+#[derive(Debug, Clone)]
+pub struct CarriedBeam {
+    /// Material, section and rest length.
+    pub beam: Beam,
+    /// Tool frame → beam end frame: robot 1 holds end 0, robot 2 end 2.
+    pub grasp: [SPose<f64>; 2],
+    /// Chain resolution and damping.
+    pub options: BeamOptions,
+}
+
+/// Channels of a pair (after the single robot's): `robot_clearance` (m),
+/// `body_contacts` (robot–robot, beam–platform, beam–ground and non-wheel
+/// ground contacts), robot 2's `slip_lateral_2` and `joint_rate_error_2`,
+/// then ‖q_f‖∞ of the physics beam (`beam_deformation`) and of the FE model
+/// at the simulated grasps (`fe_deformation`), the middle node's translation
+/// q_o[0..3] in the end-0 frame from both (`beam_mid_*`, `fe_mid_*`, m; the
+/// paper's Fig. 17 quantity), and the wrench magnitudes each gripper exerts
+/// on the beam (`grasp1_force` N, `grasp1_torque` N m, `grasp2_*`).
+pub const PAIR_CHANNELS: [&str; 16] = [
+    "robot_clearance",
+    "body_contacts",
+    "slip_lateral_2",
+    "joint_rate_error_2",
+    "beam_deformation",
+    "fe_deformation",
+    "beam_mid_x",
+    "beam_mid_y",
+    "beam_mid_z",
+    "fe_mid_x",
+    "fe_mid_y",
+    "fe_mid_z",
+    "grasp1_force",
+    "grasp1_torque",
+    "grasp2_force",
+    "grasp2_torque",
+];
+
+/// The beam in the world, held by two tools.
+pub(super) struct Held {
+    beam: PhysicsBeam,
+    fe: FeBeam,
+    grasp: [SPose<f64>; 2],
+    tools: [RigidBodyHandle; 2],
+}
+
+/// An engine pose as the model's pose type.
+fn to_spatial(p: &RPose) -> SPose<f64> {
+    let m = Matrix::from_quat(p.rotation);
+    let cols = [m.x_axis, m.y_axis, m.z_axis];
+    SPose {
+        r: std::array::from_fn(|i| std::array::from_fn(|j| f(cols[j][i]))),
+        p: [f(p.translation.x), f(p.translation.y), f(p.translation.z)],
+    }
+}
+
+fn norm(v: Vector) -> f64 {
+    f(v.length())
+}
+
+/// The FE model's q_f at the simulated grasps (the tools' poses times the
+/// grasp offsets), under the world's gravity.
+fn fe_deformation(
+    fe: &FeBeam,
+    grasp: &[SPose<f64>; 2],
+    tools: [RigidBodyHandle; 2],
+    world: &PhysicsWorld,
+) -> [f64; 12] {
+    let g = |k: usize| to_spatial(world.bodies[tools[k]].position()).then(&grasp[k]);
+    let (g0, g2) = (g(0), g(1));
+    let w = world.gravity;
+    let grav = spatial::mul_mtv(&g0.r, [f(w.x), f(w.y), f(w.z)]);
+    fe.deformation(&g0.inverse().then(&g2), grav)
+}
+
+impl Held {
+    /// Insert the beam straight from robot 1's grasp frame, its ends fixed
+    /// to `tools` (robot 1's, robot 2's); colliders in `groups`.
+    pub(super) fn insert(
+        world: &mut PhysicsWorld,
+        spec: &CarriedBeam,
+        tools: [RigidBodyHandle; 2],
+        groups: InteractionGroups,
+    ) -> Result<Held, String> {
+        let fe = FeBeam::new(&spec.beam)?;
+        // Start in the FE model's equilibrium under gravity (not straight),
+        // so the replay does not begin with the rod dropping into its sag.
+        let q_f = fe_deformation(&fe, &spec.grasp, tools, world);
+        let end0 = to_spatial(world.bodies[tools[0]].position()).then(&spec.grasp[0]);
+        let line = |s: Real| to_rapier(&end0.then(&fe.centerline(&q_f, f(s))));
+        let opts = BeamOptions {
+            grip_clearance: 0.0,
+            ..spec.options
+        };
+        let at = |k: usize| {
+            Some(Attachment {
+                body: tools[k],
+                frame: to_rapier(&spec.grasp[k]),
+            })
+        };
+        let beam = PhysicsBeam::insert(world, &spec.beam, &opts, &line, [at(0), at(1)], groups)?;
+        Ok(Held {
+            beam,
+            fe,
+            grasp: spec.grasp,
+            tools,
+        })
+    }
+
+    /// Record the step's velocities (for the grasp wrenches).
+    pub(super) fn after_step(&mut self, world: &PhysicsWorld) {
+        self.beam.after_step(world);
+    }
+
+    /// The segments' colliders.
+    pub(super) fn colliders<'a>(
+        &'a self,
+        world: &'a PhysicsWorld,
+    ) -> impl Iterator<Item = ColliderHandle> + 'a {
+        self.beam
+            .bodies()
+            .into_iter()
+            .flat_map(move |b| world.bodies[b].colliders().to_vec())
+    }
+
+    /// Each segment's centre pose, x along it (the order of [`link_visuals`]).
+    pub(super) fn segment_poses(&self, world: &PhysicsWorld) -> Vec<Pose> {
+        self.beam
+            .segment_poses(world)
+            .iter()
+            .map(|(p, _, _)| to_pose(p))
+            .collect()
+    }
+
+    /// The physics beam's q_f (FE convention, see the module doc).
+    fn measured(&self, world: &PhysicsWorld) -> [f64; 12] {
+        let [p0, p1, p2] = self.beam.node_poses(world).map(|p| to_spatial(&p));
+        let inv = p0.inverse();
+        let (rel1, rel2) = (inv.then(&p1), inv.then(&p2));
+        let l = self.fe.beam().length;
+        let qs = se3_log(&SPose {
+            r: rel2.r,
+            p: [rel2.p[0] - l, rel2.p[1], rel2.p[2]],
+        });
+        let w1 = se3_log(&rel1);
+        let mut out = [0.0; 12];
+        out[..6].copy_from_slice(&qs);
+        out[6..9].copy_from_slice(&[rel1.p[0] - 0.5 * l, rel1.p[1], rel1.p[2]]);
+        out[9..].copy_from_slice(&w1[3..]);
+        out
+    }
+
+    /// The beam's part of [`PAIR_CHANNELS`] (from `beam_deformation` on).
+    pub(super) fn channels(&self, world: &PhysicsWorld) -> [f64; 12] {
+        let q = self.measured(world);
+        let m = fe_deformation(&self.fe, &self.grasp, self.tools, world);
+        let inf = |v: &[f64; 12]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
+        let w = self.beam.grasp_wrenches(world);
+        let mag = |k: usize| w[k].map_or([f64::NAN; 2], |w| [norm(w.force), norm(w.torque)]);
+        let ([f1, t1], [f2, t2]) = (mag(0), mag(1));
+        [
+            inf(&q),
+            inf(&m),
+            q[6],
+            q[7],
+            q[8],
+            m[6],
+            m[7],
+            m[8],
+            f1,
+            t1,
+            f2,
+            t2,
+        ]
+    }
+}
+
+/// The links the logs draw for `robots` copies of a robot (robot 2's link
+/// names prefixed `r2_`) and the beam's segments (`beam_0` … `beam_N`,
+/// capsules along the segment): the order of the physics' link poses.
+pub fn link_visuals(
+    robot: Vec<LinkVisual>,
+    robots: usize,
+    beam: Option<&CarriedBeam>,
+) -> Vec<LinkVisual> {
+    let mut out = robot.clone();
+    for r in 2..=robots {
+        out.extend(robot.iter().map(|l| LinkVisual {
+            name: format!("r{r}_{}", l.name),
+            visuals: l.visuals.clone(),
+        }));
+    }
+    if let Some(b) = beam {
+        let n = b.options.segments;
+        let l = b.beam.length / n as f64;
+        let radius = b.beam.section.outer_diameter / 2.0;
+        // Record capsules run along z: turn z onto the segment's x.
+        let s = std::f64::consts::FRAC_1_SQRT_2;
+        let origin = Pose {
+            translation: [0.0; 3],
+            rotation: [0.0, s, 0.0, s],
+        };
+        out.extend((0..=n).map(|k| LinkVisual {
+            name: format!("beam_{k}"),
+            visuals: vec![Visual {
+                shape: Shape::Capsule {
+                    radius,
+                    length: if k == 0 || k == n { 0.5 * l } else { l },
+                },
+                origin,
+                rgba: [0.95, 0.8, 0.2, 1.0],
+            }],
+        }));
+    }
+    out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn engine_and_model_poses_agree() {
+        let sp = SPose::<f64>::from_xyz_rpy([0.3, -1.2, 2.0], [0.4, -0.7, 2.5]);
+        let back = to_spatial(&to_rapier(&sp));
+        for i in 0..3 {
+            assert!((back.p[i] - sp.p[i]).abs() < 1e-12);
+            for j in 0..3 {
+                assert!(
+                    (back.r[i][j] - sp.r[i][j]).abs() < 1e-12,
+                    "{back:?} vs {sp:?}"
+                );
+            }
+        }
+    }
+}

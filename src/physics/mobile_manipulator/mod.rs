@@ -1,0 +1,659 @@
+//! Rigid-body mobile manipulator (seed 004): `models/mobile_manipulator.urdf`
+//! on a ground plane among fixed obstacles.
+//!
+//! The platform is a differential drive: two driven wheels on the axle
+//! through the model's reference point, two frictionless ball casters. The
+//! unicycle constraint of Eq. 1 holds only as well as wheel friction allows.
+//! The PUMA 560 arm's six joints and both wheels carry velocity motors:
+//! wheel rates (v ∓ ω b)/r for the inputs (v, ω), joint rates u_a.
+//!
+//! Obstacles are fixed colliders: the convex hull of each generalized
+//! ellipsoid's surface mesh (inscribed, so slightly smaller than the shape the
+//! planner avoids). Robot colliders meet the ground, the obstacles and the
+//! other robot's colliders, never their own robot's.
+//!
+//! Two robots may carry a beam ([`CarriedBeam`], see [`carried`]): a
+//! [`PhysicsBeam`](super::beam::PhysicsBeam) fixed to both tools at the planner's grasp offsets. The
+//! beam meets the ground, the obstacles and both platforms (the platform
+//! boxes); arms, columns and grippers pass it (the planner's
+//! `Carried::held` pairs, and the gripper holds it).
+//!
+//! Read-back: (x, y, θ) of `base_link` (θ unwrapped), each joint angle from
+//! the relative rotation of its two links. Channels: `min_clearance` (least
+//! distance, m, between any robot collider and any obstacle collider, parry
+//! distance queries), `obstacle_contacts` (robot–obstacle collider pairs in
+//! contact), `slip_left`/`slip_right` (wheel contact-point speed along the
+//! heading, m/s), `slip_lateral` (axle-centre speed across the heading: the
+//! violated nonholonomic constraint, m/s), `speed_error`, `turn_rate_error`
+//! (measured − commanded platform v, ω) and `joint_rate_error` (largest
+//! |measured − commanded| joint rate, rad/s). With two robots, the channels
+//! of [`carried::PAIR_CHANNELS`] follow.
+
+mod carried;
+mod urdf;
+
+pub use carried::{link_visuals, CarriedBeam};
+pub use urdf::urdf;
+
+use super::rapier::parry::bounding_volume::Aabb;
+use super::rapier::prelude::*;
+use super::real::{self as rl, f, rotation, vector};
+use super::settings::PhysicsSettings;
+use super::urdf::{RobotHandles, SimWorld};
+use super::{angles, PhysicsSystem};
+use crate::model::ellipsoid::Superellipsoid;
+use crate::model::mobile_manipulator::{
+    self as mm, Link, DOF, HALF_TRACK, INPUTS, MOUNT, WHEEL_RADIUS,
+};
+use crate::model::puma560;
+use crate::model::spatial::Pose as SPose;
+use crate::model::{Input, State};
+use crate::record::Pose;
+use std::path::Path;
+
+/// Collision groups of robot 1's and robot 2's colliders.
+const ROBOT: [Group; 2] = [Group::GROUP_1, Group::GROUP_4];
+/// Collision group of the ground.
+const GROUND: Group = Group::GROUP_2;
+/// Collision group of obstacles.
+const OBSTACLE: Group = Group::GROUP_3;
+/// Collision group of the beam's segments.
+const BEAM: Group = Group::GROUP_5;
+/// Collision group of the platform boxes (which meet the beam).
+const PLATFORM: Group = Group::GROUP_6;
+
+/// The clearance channel is recomputed every this many steps (held between:
+/// the distance queries cost more than a physics step).
+const CLEARANCE_EVERY: usize = 5;
+
+/// Time constant of the joint servos' pull towards their references, s.
+const SERVO_TIME: f64 = 0.05;
+
+/// Mass of the platform body, kg (a choice: a PUMA-carrying base).
+pub(crate) const PLATFORM_MASS: f64 = 120.0;
+/// Wheel mass, kg.
+pub(crate) const WHEEL_MASS: f64 = 2.0;
+/// Gripper mass, kg.
+pub(crate) const TOOL_MASS: f64 = 0.5;
+
+/// URDF joint names of the arm, in order.
+pub const ARM_JOINTS: [&str; 6] = ["joint1", "joint2", "joint3", "joint4", "joint5", "joint6"];
+
+/// An obstacle for the physics: a fixed convex collider.
+#[derive(Debug, Clone)]
+pub struct ObstacleShape {
+    /// Name.
+    pub name: String,
+    /// Shape (world frame).
+    pub shape: Superellipsoid,
+}
+
+/// Handles of one robot in the world.
+struct RobotBodies {
+    base: RigidBodyHandle,
+    wheels: [RigidBodyHandle; 2],
+    wheel_joints: [ImpulseJointHandle; 2],
+    arm: [RigidBodyHandle; 6],
+    arm_joints: [ImpulseJointHandle; 6],
+    tool: RigidBodyHandle,
+    /// Every collider of the robot, and those that roll on the ground
+    /// (wheels and casters: their ground contacts are not collisions).
+    colliders: Vec<ColliderHandle>,
+    rolling: Vec<ColliderHandle>,
+    /// Link bodies in URDF order (for the logs).
+    links: Vec<RigidBodyHandle>,
+    /// Unwrapped heading and joint angles.
+    theta: f64,
+    q: [f64; 6],
+    /// Joint references: the integral of the commanded joint rates.
+    q_ref: [f64; 6],
+}
+
+/// The mobile manipulator(s) in Rapier.
+pub struct MobileManipulatorPhysics {
+    sim: SimWorld,
+    robots: Vec<RobotBodies>,
+    obstacles: Vec<ColliderHandle>,
+    /// World AABBs of the (fixed) obstacles.
+    obstacle_aabbs: Vec<Aabb>,
+    /// The carried beam, if any.
+    beam: Option<carried::Held>,
+    /// The clearance channels (to obstacles, robot to robot), refreshed
+    /// every [`CLEARANCE_EVERY`] steps.
+    clearance: f64,
+    robot_clearance: f64,
+    steps: usize,
+    gain: f64,
+    max_torque: f64,
+    dt: f64,
+    last_u: Input,
+}
+
+/// What the world holds besides the ground.
+#[derive(Debug, Clone, Copy)]
+pub struct Setup<'a> {
+    /// Start configuration, 9 coordinates per robot.
+    pub start: &'a [f64],
+    /// Obstacles.
+    pub obstacles: &'a [ObstacleShape],
+    /// The beam two robots carry.
+    pub beam: Option<&'a CarriedBeam>,
+}
+
+fn to_rapier(p: &SPose<f64>) -> super::rapier::math::Pose {
+    let q = p.quaternion();
+    super::rapier::math::Pose::from_parts(
+        vector(p.p[0], p.p[1], p.p[2]),
+        rotation(q[0], q[1], q[2], q[3]),
+    )
+}
+
+/// Check the URDF's arm joints against the DH table the planner uses.
+fn check_urdf(robot: &urdf_rs::Robot) -> Result<(), String> {
+    for (i, name) in ARM_JOINTS.iter().enumerate() {
+        let j = robot
+            .joints
+            .iter()
+            .find(|j| j.name == *name)
+            .ok_or_else(|| format!("URDF has no joint `{name}`"))?;
+        let (xyz, rpy) = if i == 0 {
+            (MOUNT, [0.0; 3])
+        } else {
+            let r = puma560::DH[i - 1];
+            ([r.a, 0.0, r.d], [r.alpha, 0.0, 0.0])
+        };
+        let bad = (0..3).any(|k| {
+            (j.origin.xyz[k] - xyz[k]).abs() > 1e-9 || (j.origin.rpy[k] - rpy[k]).abs() > 1e-9
+        }) || j.axis.xyz.0 != [0.0, 0.0, 1.0];
+        if bad {
+            return Err(format!(
+                "URDF joint `{name}` differs from the PUMA 560 model (origin {xyz:?} rpy {rpy:?}, axis z expected)"
+            ));
+        }
+    }
+    Ok(())
+}
+
+impl MobileManipulatorPhysics {
+    /// Build the world: one robot per 9 start coordinates (one or two), the
+    /// obstacles, and the beam when two robots carry one.
+    pub fn new(
+        robot: &urdf_rs::Robot,
+        urdf_dir: &Path,
+        sim: &PhysicsSettings,
+        setup: &Setup,
+    ) -> Result<Self, String> {
+        check_urdf(robot)?;
+        let start = setup.start;
+        let k = start.len() / DOF;
+        if !(1..=2).contains(&k) || start.len() != k * DOF {
+            return Err(format!(
+                "mobile manipulator physics: {} start coordinates (9 per robot, one or two robots)",
+                start.len()
+            ));
+        }
+        if setup.beam.is_some() != (k == 2) {
+            return Err("mobile manipulator physics: a beam needs exactly two robots".into());
+        }
+        let root = |r: usize| to_rapier(&mm::frames::<f64>(&start[DOF * r..DOF * (r + 1)]).base);
+        let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root(0));
+        let mut handles = vec![sw.robot.clone()];
+        if k == 2 {
+            handles.push(sw.add_robot(robot, urdf_dir, root(1)));
+        }
+        let mut robots = Vec::with_capacity(k);
+        for (r, h) in handles.iter().enumerate() {
+            robots.push(place_robot(&mut sw, h, &start[DOF * r..DOF * (r + 1)])?);
+        }
+        // Collision groups: each robot against the ground, the obstacles and
+        // the other robot; the platform boxes also against the beam.
+        for (r, rb) in robots.iter().enumerate() {
+            let other = if r == 0 { ROBOT[1] } else { ROBOT[0] };
+            let filter = GROUND | OBSTACLE | other;
+            for c in &rb.colliders {
+                let platform = is_platform(&sw, rb.base, *c);
+                let groups = if platform {
+                    InteractionGroups::new(
+                        ROBOT[r] | PLATFORM,
+                        filter | BEAM,
+                        InteractionTestMode::And,
+                    )
+                } else {
+                    InteractionGroups::new(ROBOT[r], filter, InteractionTestMode::And)
+                };
+                sw.set_collision_groups(&[*c], groups);
+            }
+        }
+        let ground_colliders: Vec<ColliderHandle> = sw.ground_collider.into_iter().collect();
+        sw.set_collision_groups(
+            &ground_colliders,
+            InteractionGroups::new(GROUND, ROBOT[0] | ROBOT[1] | BEAM, InteractionTestMode::And),
+        );
+        let mut obstacle_handles = Vec::new();
+        for o in setup.obstacles {
+            let (v, _) = o.shape.mesh(16, 32);
+            let pts: Vec<Vector> = v.iter().map(|p| vector(p[0], p[1], p[2])).collect();
+            let builder = ColliderBuilder::convex_hull(&pts)
+                .ok_or_else(|| format!("obstacle `{}`: no convex hull", o.name))?
+                .collision_groups(InteractionGroups::new(
+                    OBSTACLE,
+                    ROBOT[0] | ROBOT[1] | BEAM,
+                    InteractionTestMode::And,
+                ))
+                .friction(rl::r(sim.friction));
+            let ground = sw.ground;
+            obstacle_handles.push(sw.world.insert_collider(builder, Some(ground)));
+        }
+        let beam = match setup.beam {
+            Some(spec) => Some(carried::Held::insert(
+                &mut sw.world,
+                spec,
+                [robots[0].tool, robots[1].tool],
+                InteractionGroups::new(
+                    BEAM,
+                    GROUND | OBSTACLE | PLATFORM,
+                    InteractionTestMode::And,
+                ),
+            )?),
+            None => None,
+        };
+        let mut me = MobileManipulatorPhysics {
+            robots,
+            obstacle_aabbs: obstacle_handles
+                .iter()
+                .map(|h| sw.world.colliders[*h].compute_aabb())
+                .collect(),
+            beam,
+            clearance: f64::INFINITY,
+            robot_clearance: f64::INFINITY,
+            steps: 0,
+            sim: sw,
+            obstacles: obstacle_handles,
+            gain: sim.motor_gain,
+            max_torque: sim.motor_max_torque,
+            dt: sim.dt,
+            last_u: Input::zeros(INPUTS * k),
+        };
+        me.apply(&Input::zeros(INPUTS * k));
+        me.refresh_clearances();
+        Ok(me)
+    }
+
+    fn refresh_clearances(&mut self) {
+        self.clearance = self.min_clearance();
+        if self.robots.len() == 2 {
+            self.robot_clearance = self.robot_robot_clearance();
+        }
+    }
+
+    /// Joint i's angle from its two links (parent frame · joint origin vs child).
+    fn joint_angle(&self, r: &RobotBodies, i: usize) -> f64 {
+        let b = &self.sim.world.bodies;
+        let parent = if i == 0 { r.base } else { r.arm[i - 1] };
+        let origin_rot = if i == 0 {
+            Rotation::IDENTITY
+        } else {
+            Rotation::from_rotation_x(rl::r(puma560::DH[i - 1].alpha))
+        };
+        let rel = (*b[parent].rotation() * origin_rot).inverse() * *b[r.arm[i]].rotation();
+        angles::about_axis(&rel, 2)
+    }
+
+    /// Joint rate of joint i: relative angular velocity about the joint axis.
+    fn joint_rate(&self, r: &RobotBodies, i: usize) -> f64 {
+        let b = &self.sim.world.bodies;
+        let parent = if i == 0 { r.base } else { r.arm[i - 1] };
+        let child = &b[r.arm[i]];
+        let axis = *child.rotation() * Vector::Z;
+        f((child.angvel() - b[parent].angvel()).dot(axis))
+    }
+
+    /// Least distance between any robot or beam collider and any obstacle
+    /// (m), with an AABB pre-filter; 0 when touching or overlapping.
+    pub fn min_clearance(&self) -> f64 {
+        let cs = &self.sim.world.colliders;
+        let gap = |a: &Aabb, b: &Aabb| {
+            let d = (a.mins - b.maxs).max(b.mins - a.maxs).max(Vector::ZERO);
+            f(d.length())
+        };
+        // Robot AABBs once; pairs whose boxes are farther apart than the best
+        // distance so far cannot improve it.
+        let beam = self.beam.iter().flat_map(|b| b.colliders(&self.sim.world));
+        let robot: Vec<(ColliderHandle, Aabb)> = self
+            .robots
+            .iter()
+            .flat_map(|r| r.colliders.iter().copied())
+            .chain(beam)
+            .map(|c| (c, cs[c].compute_aabb()))
+            .collect();
+        let mut best = f64::INFINITY;
+        for (o, ob) in self.obstacles.iter().zip(&self.obstacle_aabbs) {
+            let oc = &cs[*o];
+            for (c, rb) in &robot {
+                if gap(rb, ob) >= best {
+                    continue;
+                }
+                let rc = &cs[*c];
+                if let Ok(d) = super::rapier::parry::query::distance(
+                    rc.position(),
+                    rc.shape(),
+                    oc.position(),
+                    oc.shape(),
+                ) {
+                    best = best.min(f(d.distance));
+                }
+            }
+        }
+        best
+    }
+
+    /// Least distance between the two robots' colliders (m; AABB pre-filter).
+    pub fn robot_robot_clearance(&self) -> f64 {
+        let cs = &self.sim.world.colliders;
+        let boxes = |r: &RobotBodies| -> Vec<(ColliderHandle, Aabb)> {
+            r.colliders
+                .iter()
+                .map(|c| (*c, cs[*c].compute_aabb()))
+                .collect()
+        };
+        let (a, b) = (boxes(&self.robots[0]), boxes(&self.robots[1]));
+        let mut best = f64::INFINITY;
+        for (ca, ba) in &a {
+            for (cb, bb) in &b {
+                let gap = (ba.mins - bb.maxs).max(bb.mins - ba.maxs).max(Vector::ZERO);
+                if f(gap.length()) >= best {
+                    continue;
+                }
+                let (x, y) = (&cs[*ca], &cs[*cb]);
+                if let Ok(d) = super::rapier::parry::query::distance(
+                    x.position(),
+                    x.shape(),
+                    y.position(),
+                    y.shape(),
+                ) {
+                    best = best.min(f(d.distance));
+                }
+            }
+        }
+        best
+    }
+
+    /// Collider pairs in contact that are collisions, obstacles aside: robot
+    /// against robot, the beam against a platform or the ground, any robot
+    /// body but a wheel or caster on the ground.
+    pub fn body_contacts(&self) -> usize {
+        let ground = self.sim.ground_collider;
+        let rolling = |c: ColliderHandle| self.robots.iter().any(|r| r.rolling.contains(&c));
+        self.sim
+            .world
+            .narrow_phase
+            .contact_pairs()
+            .filter(|p| p.has_any_active_contact())
+            .filter(|p| {
+                let (a, b) = (p.collider1, p.collider2);
+                let obstacle = self.obstacles.contains(&a) || self.obstacles.contains(&b);
+                let on_ground = Some(a) == ground && rolling(b) || Some(b) == ground && rolling(a);
+                !obstacle && !on_ground
+            })
+            .count()
+    }
+
+    /// Robot– and beam–obstacle collider pairs with an active contact.
+    pub fn obstacle_contacts(&self) -> usize {
+        self.obstacles
+            .iter()
+            .map(|o| {
+                self.sim
+                    .world
+                    .narrow_phase
+                    .contact_pairs_with(*o)
+                    .filter(|p| p.has_any_active_contact())
+                    .count()
+            })
+            .sum()
+    }
+}
+
+/// Look up one robot's bodies and joints, put its arm at the start angles
+/// (the URDF loads at q = 0) and free its casters.
+fn place_robot(sw: &mut SimWorld, h: &RobotHandles, q: &[f64]) -> Result<RobotBodies, String> {
+    let frames = mm::frames::<f64>(q);
+    let base = h.require_link("base_link")?;
+    let wheels = [
+        h.require_link("left_wheel")?,
+        h.require_link("right_wheel")?,
+    ];
+    let wheel_joints = [
+        h.require_joint("left_wheel_joint")?,
+        h.require_joint("right_wheel_joint")?,
+    ];
+    let mut arm = [base; 6];
+    let mut arm_joints = [wheel_joints[0]; 6];
+    for i in 0..6 {
+        arm[i] = h.require_link(Link::Arm(i as u8 + 1).urdf_name())?;
+        arm_joints[i] = h.require_joint(ARM_JOINTS[i])?;
+    }
+    for (body, pose) in arm.iter().zip(&frames.arm) {
+        sw.world.bodies[*body].set_position(to_rapier(pose), true);
+    }
+    let tool = h.require_link("tool")?;
+    sw.world.bodies[tool].set_position(to_rapier(&frames.tool), true);
+    let mut rolling = Vec::new();
+    for name in ["caster_front", "caster_rear"] {
+        let b = h.require_link(name)?;
+        for c in sw.world.bodies[b].colliders().to_vec() {
+            if let Some(col) = sw.world.colliders.get_mut(c) {
+                // Casters roll freely: no friction.
+                col.set_friction(0.0);
+            }
+            rolling.push(c);
+        }
+    }
+    for w in wheels {
+        rolling.extend(sw.world.bodies[w].colliders().iter().copied());
+    }
+    Ok(RobotBodies {
+        base,
+        wheels,
+        wheel_joints,
+        arm,
+        arm_joints,
+        tool,
+        colliders: h.colliders.clone(),
+        rolling,
+        links: h.links.clone(),
+        theta: q[2],
+        q: std::array::from_fn(|i| q[3 + i]),
+        q_ref: std::array::from_fn(|i| q[3 + i]),
+    })
+}
+
+/// Whether collider `c` is a platform box: a cuboid on the base body.
+fn is_platform(sw: &SimWorld, base: RigidBodyHandle, c: ColliderHandle) -> bool {
+    sw.world
+        .colliders
+        .get(c)
+        .is_some_and(|col| col.parent() == Some(base) && col.shape().as_cuboid().is_some())
+}
+
+impl PhysicsSystem for MobileManipulatorPhysics {
+    fn state(&self) -> State {
+        let mut out = Vec::with_capacity(DOF * self.robots.len());
+        for r in &self.robots {
+            let t = self.sim.world.bodies[r.base].translation();
+            out.extend([f(t.x), f(t.y), r.theta]);
+            out.extend(r.q);
+        }
+        State::from_vec(out)
+    }
+
+    fn apply(&mut self, u: &Input) {
+        let (gain, tmax) = (self.gain, self.max_torque);
+        for (k, r) in self.robots.iter().enumerate() {
+            let j = INPUTS * k;
+            let (v, w) = (u[j], u[j + 1]);
+            let left = (v - w * HALF_TRACK) / WHEEL_RADIUS;
+            let right = (v + w * HALF_TRACK) / WHEEL_RADIUS;
+            self.sim.drive_joint(r.wheel_joints[0], left, gain, tmax);
+            self.sim.drive_joint(r.wheel_joints[1], right, gain, tmax);
+            for a in 0..6 {
+                // A joint servo: the commanded rate plus a stiff pull towards the
+                // integral of the commanded rates (the reference at the end of this
+                // step), as a real arm's position servos execute velocity commands.
+                // A bare velocity motor lets the arm sag under gravity (joint 3
+                // drifts 0.05 rad/s at 8 solver iterations), which the feedback law,
+                // whose gains vanish at the goal, cannot undo.
+                let rate = u[j + 2 + a];
+                let target = angles::wrap(r.q_ref[a] + rate * self.dt);
+                if let Some(jt) = self
+                    .sim
+                    .world
+                    .impulse_joints
+                    .get_mut(r.arm_joints[a], false)
+                {
+                    jt.data
+                        .set_motor(
+                            JointAxis::AngX,
+                            rl::r(target),
+                            rl::r(rate),
+                            rl::r(gain / SERVO_TIME),
+                            rl::r(gain),
+                        )
+                        .set_motor_max_force(JointAxis::AngX, rl::r(tmax));
+                }
+            }
+        }
+        self.last_u = u.clone();
+    }
+
+    fn step(&mut self) {
+        self.sim.world.step();
+        self.steps += 1;
+        if let Some(b) = &mut self.beam {
+            b.after_step(&self.sim.world);
+        }
+        if self.steps.is_multiple_of(CLEARANCE_EVERY) {
+            self.refresh_clearances();
+        }
+        for k in 0..self.robots.len() {
+            let yaw = angles::yaw(self.sim.world.bodies[self.robots[k].base].rotation());
+            let q: [f64; 6] = std::array::from_fn(|i| self.joint_angle(&self.robots[k], i));
+            let u = &self.last_u;
+            let dt = self.dt;
+            let r = &mut self.robots[k];
+            for a in 0..6 {
+                r.q_ref[a] += u[INPUTS * k + 2 + a] * dt;
+            }
+            r.theta = angles::unwrap(r.theta, yaw);
+            for (qi, now) in r.q.iter_mut().zip(q) {
+                *qi = angles::unwrap(*qi, now);
+            }
+        }
+    }
+
+    /// Every robot's links in URDF order, then the beam's segments (the
+    /// order of [`link_visuals`]).
+    fn link_poses(&self) -> Vec<Pose> {
+        let bodies = &self.sim.world.bodies;
+        let mut out: Vec<Pose> = self
+            .robots
+            .iter()
+            .flat_map(|r| r.links.iter().map(|h| rl::to_pose(bodies[*h].position())))
+            .collect();
+        if let Some(b) = &self.beam {
+            out.extend(b.segment_poses(&self.sim.world));
+        }
+        out
+    }
+
+    fn channel_names(&self) -> Vec<String> {
+        [
+            "min_clearance",
+            "obstacle_contacts",
+            "slip_left",
+            "slip_right",
+            "slip_lateral",
+            "speed_error",
+            "turn_rate_error",
+            "joint_rate_error",
+        ]
+        .map(String::from)
+        .into_iter()
+        .chain(
+            (self.robots.len() == 2)
+                .then_some(carried::PAIR_CHANNELS)
+                .into_iter()
+                .flatten()
+                .map(String::from),
+        )
+        .collect()
+    }
+
+    fn channels(&self) -> Vec<f64> {
+        let r = &self.robots[0];
+        let m = self.platform_motion(0);
+        let mut out = vec![
+            self.clearance,
+            self.obstacle_contacts() as f64,
+            m.slip[0],
+            m.slip[1],
+            m.lateral,
+            m.speed - self.last_u[0],
+            m.turn_rate - self.last_u[1],
+            self.joint_rate_error(r, 0),
+        ];
+        if self.robots.len() == 2 {
+            let m2 = self.platform_motion(1);
+            out.extend([
+                self.robot_clearance,
+                self.body_contacts() as f64,
+                m2.lateral,
+                self.joint_rate_error(&self.robots[1], 1),
+            ]);
+            if let Some(b) = &self.beam {
+                out.extend(b.channels(&self.sim.world));
+            }
+        }
+        out
+    }
+}
+
+/// One platform's measured motion.
+struct PlatformMotion {
+    /// Wheel contact-point speeds along the heading (left, right), m/s.
+    slip: [f64; 2],
+    /// Axle-centre speed across the heading, m/s.
+    lateral: f64,
+    /// Axle-centre speed along the heading, m/s, and yaw rate, rad/s.
+    speed: f64,
+    turn_rate: f64,
+}
+
+impl MobileManipulatorPhysics {
+    fn platform_motion(&self, k: usize) -> PlatformMotion {
+        let b = &self.sim.world.bodies;
+        let r = &self.robots[k];
+        let base = &b[r.base];
+        let heading = *base.rotation() * Vector::X;
+        let side = *base.rotation() * Vector::Y;
+        let v_axle = base.velocity_at_point(base.translation());
+        let slip = |w: RigidBodyHandle| {
+            let wb = &b[w];
+            let contact = wb.translation() - vector(0.0, 0.0, WHEEL_RADIUS);
+            f(wb.velocity_at_point(contact).dot(heading))
+        };
+        PlatformMotion {
+            slip: [slip(r.wheels[0]), slip(r.wheels[1])],
+            lateral: f(v_axle.dot(side)),
+            speed: f(v_axle.dot(heading)),
+            turn_rate: f(base.angvel().z),
+        }
+    }
+
+    /// Largest |measured − commanded| joint rate of robot `k`, rad/s.
+    fn joint_rate_error(&self, r: &RobotBodies, k: usize) -> f64 {
+        (0..6)
+            .map(|i| (self.joint_rate(r, i) - self.last_u[INPUTS * k + 2 + i]).abs())
+            .fold(0.0, f64::max)
+    }
+}
