@@ -106,6 +106,14 @@ pub struct BeamConfig {
     /// Their cross semi-axes, m (the rod's radius plus a margin).
     #[serde(default = "default_beam_radius")]
     pub radius: f64,
+    /// Compliant joints of the physics beam's chain (even, 2..=40; N + 1
+    /// rigid segments, see `physics::beam`).
+    #[serde(default = "default_physics_segments")]
+    pub physics_segments: usize,
+}
+
+fn default_physics_segments() -> usize {
+    BeamOptions::default().segments
 }
 
 fn default_e() -> f64 {
@@ -161,6 +169,12 @@ impl BeamConfig {
         }
         if !(1..=64).contains(&self.segments) {
             return Err("key `model.beam.segments`: must be in 1..=64".into());
+        }
+        let n = self.physics_segments;
+        if !((2..=40).contains(&n) && n.is_multiple_of(2)) {
+            return Err(format!(
+                "key `model.beam.physics_segments`: must be even and in 2..=40, got {n}"
+            ));
         }
         Ok(b)
     }
@@ -303,7 +317,10 @@ impl Dilf {
         Some(CarriedBeam {
             beam: *c.fe.beam(),
             grasp: c.grasp,
-            options: BeamOptions::default(),
+            options: BeamOptions {
+                segments: self.beam.as_ref().map_or(10, |b| b.physics_segments),
+                ..BeamOptions::default()
+            },
         })
     }
 
