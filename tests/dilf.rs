@@ -260,6 +260,11 @@ fn negative_stiffness_and_bound_are_bad_input() {
         "youngs_modulus =",
     );
     bad(
+        &pair_text("max_deformation = 0.3\nphysics_segments = 3"),
+        "model.beam.physics_segments",
+        "physics_segments =",
+    );
+    bad(
         &pair_text("max_deformation = -1.0"),
         "model.beam.max_deformation",
         "max_deformation =",

@@ -16,7 +16,9 @@
 //! `ideal_min_obstacle_function` / `sim_min_obstacle_function` (least β of the
 //! ellipsoid model, > 0 free), `ideal_vdot_violations` / `sim_vdot_violations`
 //! (policy samples with V̇ < 0 under the applied input: the paper's V̇ ≥ 0
-//! claim, Appendix G), `slip_lateral_max`, `joint_rate_error_max`.
+//! claim, Appendix G), `ideal_min_manipulability` / `sim_min_manipulability`
+//! (least √det(JᵀJ) = |det J| of any arm at the policy samples, m³: the
+//! singularity-avoidance claim), `slip_lateral_max`, `joint_rate_error_max`.
 
 use super::System;
 use crate::integrate::Trajectory;
@@ -364,9 +366,18 @@ const PAIR_METRICS: [&str; 9] = [
     "slip_lateral_2_max",
 ];
 
+/// √det(JᵀJ) of a PUMA 560 at joint angles `q` (6): |det J| = |a2 f_shoulder
+/// f_elbow f_wrist| for the square geometric Jacobian, m³.
+fn manipulability(q: &[f64]) -> f64 {
+    let [s, e, w] = crate::model::puma560::singularity_factors::<f64>(q);
+    (crate::model::puma560::DH[1].a * s * e * w).abs()
+}
+
 /// Metrics of the V̇ ≥ 0 claim and the ellipsoid model along one run.
 struct Along {
     min_beta: f64,
+    /// Least √det(JᵀJ) = |det J| of any arm, m³ (zero at a singularity).
+    min_manipulability: f64,
     max_deformation: f64,
     vdot_violations: usize,
     v: Series,
@@ -377,6 +388,7 @@ fn along(scene: &Scene, gains: &Gains, tr: &Trajectory, samples: &[usize], name:
     let mut warm = scene.warm();
     let mut out = Along {
         min_beta: f64::INFINITY,
+        min_manipulability: f64::INFINITY,
         max_deformation: 0.0,
         vdot_violations: 0,
         v: Series::new(format!("V/{name}")),
@@ -384,6 +396,9 @@ fn along(scene: &Scene, gains: &Gains, tr: &Trajectory, samples: &[usize], name:
     };
     for &k in samples {
         let q = tr.q[k].as_slice();
+        for arm in q.chunks(mm::DOF) {
+            out.min_manipulability = out.min_manipulability.min(manipulability(&arm[3..]));
+        }
         match scene.field(q, &mut warm) {
             Ok((e, f)) => {
                 out.min_beta = out.min_beta.min(e.min_beta);
@@ -525,6 +540,8 @@ impl System for Dilf {
             "sim_min_obstacle_function",
             "ideal_vdot_violations",
             "sim_vdot_violations",
+            "ideal_min_manipulability",
+            "sim_min_manipulability",
             "slip_lateral_max",
             "joint_rate_error_max",
         ]
@@ -581,6 +598,11 @@ impl System for Dilf {
                 a_ideal.vdot_violations as f64,
             ),
             ("sim_vdot_violations".into(), a_sim.vdot_violations as f64),
+            (
+                "ideal_min_manipulability".into(),
+                a_ideal.min_manipulability,
+            ),
+            ("sim_min_manipulability".into(), a_sim.min_manipulability),
             ("slip_lateral_max".into(), max_abs(chan("slip_lateral"))),
             (
                 "joint_rate_error_max".into(),
