@@ -47,6 +47,16 @@ pub fn readable(v: f64) -> String {
     with_digits(v, 4)
 }
 
+/// The shortest text that reads back as `v` (`1e-9`, `0.089`, `2e6`).
+pub fn shortest(v: f64) -> String {
+    let a = v.abs();
+    if v.is_finite() && v != 0.0 && !(1e-3..1e6).contains(&a) {
+        format!("{v:e}")
+    } else {
+        format!("{v}")
+    }
+}
+
 /// A value and the bound it breached, each with the fewest significant
 /// digits (at least 3) at which the two print differently, so a message
 /// such as `x = 1.0000002e-9 > 1e-9` shows the breach.
@@ -54,7 +64,7 @@ pub fn breach(value: f64, bound: f64) -> (String, String) {
     for sig in 3..=17 {
         let (a, b) = (with_digits(value, sig), with_digits(bound, sig));
         if a != b || sig == 17 {
-            return (a, with_digits(bound, 17));
+            return (a, shortest(bound));
         }
     }
     unreachable!("the loop returns at sig = 17")
