@@ -665,3 +665,50 @@ fn search_picks_the_cheapest() {
         }
     }
 }
+
+proptest! {
+    #![proptest_config(ProptestConfig::with_cases(32))]
+    /// Issue 13 item 5: random tasks with the default search. A plan is
+    /// returned or the refusal names its reason; the plan's legs, integrated
+    /// independently of the harness's RK4 (exact line integrals, Gauss-Legendre),
+    /// land on the goal; duration and joint travel stay within the limits.
+    #[test]
+    fn random_tasks_default_search(
+        s in prop::array::uniform3(-180.0f64..180.0),
+        g in prop::array::uniform3(-150.0f64..150.0),
+    ) {
+        let model = SpaceRobotModel::default();
+        let r = &model.robot;
+        let (s, g) = (deg(s), deg(g));
+        let params = StokesSpaceParams::default();
+        let p = match plan(&model, &s, &g, &params, &limits()) {
+            Ok(p) => p,
+            Err(PlanError::Unreachable(m)) => {
+                prop_assert!(
+                    m.contains("no real γ") || m.contains("over max_"),
+                    "refusal without a stated reason: {}", m
+                );
+                return Ok(());
+            }
+            Err(e) => return Err(TestCaseError::fail(format!("{e}"))),
+        };
+        prop_assert!(p.duration <= params.max_duration_s + 1e-9);
+        let travel = p.details["joint_travel_deg"].as_f64().unwrap();
+        prop_assert!(travel <= params.max_joint_travel_deg + 1e-9);
+        let d = search(r, &s, &g, &params, Some(&limits())).unwrap();
+        let mut q = [g[1], g[2]];
+        let mut th0 = s[0] + segment_rotation(r, [s[1], s[2]], q);
+        let mut sum = (g[1] - s[1]).abs() + (g[2] - s[2]).abs();
+        for _ in 0..d.cycles {
+            for l in &d.cycle_legs {
+                let n = [q[0] + l[0], q[1] + l[1]];
+                th0 += segment_rotation(r, q, n);
+                sum += l[0].abs() + l[1].abs();
+                q = n;
+            }
+        }
+        prop_assert!(wrap(th0 - g[0]).abs() < 1e-9, "θ0 error {}", wrap(th0 - g[0]));
+        prop_assert!((q[0] - g[1]).abs() < 1e-12 && (q[1] - g[2]).abs() < 1e-12);
+        prop_assert!((sum.to_degrees() - travel).abs() < 1e-6);
+    }
+}
