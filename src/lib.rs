@@ -17,6 +17,7 @@ pub mod integrate;
 pub mod junit;
 pub mod log;
 pub mod model;
+pub mod numfmt;
 pub mod paper;
 pub mod physics;
 pub mod plan;

@@ -84,6 +84,11 @@ enum Cmd {
         /// Print JSON instead of text.
         #[arg(long)]
         json: bool,
+        /// Step budget: refuse (exit 2, before anything runs) a scenario whose plan
+        /// plus `sim.settle`, or whose planner's own recorded run, takes more than N
+        /// steps of `sim.dt` (memory and time grow with the step count).
+        #[arg(long, value_name = "N", default_value_t = anholonomy::validate::DEFAULT_MAX_STEPS)]
+        max_steps: u64,
     },
     /// List scenarios with model, planner and description.
     ///
@@ -94,6 +99,11 @@ enum Cmd {
     List {
         /// Scenario files or directories (*.toml, not recursive) [default: scenarios/].
         paths: Vec<PathBuf>,
+        /// Step budget: refuse (exit 2, before anything runs) a scenario whose plan
+        /// plus `sim.settle`, or whose planner's own recorded run, takes more than N
+        /// steps of `sim.dt` (memory and time grow with the step count).
+        #[arg(long, value_name = "N", default_value_t = anholonomy::validate::DEFAULT_MAX_STEPS)]
+        max_steps: u64,
     },
 }
 
@@ -130,6 +140,11 @@ struct RunArgs {
     /// Also write the HTML report of this run into the log directory.
     #[arg(long)]
     report: bool,
+    /// Step budget: refuse (exit 2, before anything runs) a scenario whose plan
+    /// plus `sim.settle`, or whose planner's own recorded run, takes more than N
+    /// steps of `sim.dt` (memory and time grow with the step count).
+    #[arg(long, value_name = "N", default_value_t = anholonomy::validate::DEFAULT_MAX_STEPS)]
+    max_steps: u64,
 }
 
 /// What `run_cmd` does with the baselines.
@@ -263,6 +278,7 @@ fn run_cmd(args: &RunArgs, mode: Mode) -> Result<u8, Vec<Error>> {
     let call = Call {
         log_root: log_root.as_deref(),
         sharded: shard.is_some(),
+        max_steps: Some(args.max_steps),
     };
     let preps = prepare_all(&args.paths, &call)?;
     let base_dir = check_options(args, mode)?;
@@ -421,14 +437,18 @@ fn report_cmd(logdir: &Path) -> Result<u8, Vec<Error>> {
     Ok(0)
 }
 
-fn plan_cmd(file: &std::path::Path, as_json: bool) -> Result<u8, Vec<Error>> {
+fn plan_cmd(file: &std::path::Path, as_json: bool, max_steps: u64) -> Result<u8, Vec<Error>> {
     if file.is_dir() {
         return Err(vec![Error::input(
             file,
             "`plan` takes one scenario file, not a directory",
         )]);
     }
-    let preps = prepare_all(&[file.to_path_buf()], &Call::default())?;
+    let call = Call {
+        max_steps: Some(max_steps),
+        ..Call::default()
+    };
+    let preps = prepare_all(&[file.to_path_buf()], &call)?;
     let prep = &preps[0];
     let plan = &prep.planned;
     let (start, _goal) = prep.start_goal();
@@ -452,10 +472,10 @@ fn plan_cmd(file: &std::path::Path, as_json: bool) -> Result<u8, Vec<Error>> {
         say!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
     } else {
         say!(
-            "{} ({}), duration {:.3} s",
+            "{} ({}), duration {} s",
             prep.scenario.name,
             prep.scenario.planner.kind(),
-            plan.duration
+            anholonomy::numfmt::with_digits(plan.duration, 7)
         );
         for s in &plan.segments {
             say!(
@@ -474,13 +494,17 @@ fn plan_cmd(file: &std::path::Path, as_json: bool) -> Result<u8, Vec<Error>> {
     Ok(0)
 }
 
-fn list_cmd(paths: &[PathBuf]) -> Result<u8, Vec<Error>> {
+fn list_cmd(paths: &[PathBuf], max_steps: u64) -> Result<u8, Vec<Error>> {
     let paths = if paths.is_empty() {
         vec![PathBuf::from("scenarios")]
     } else {
         paths.to_vec()
     };
-    let (preps, errors) = prepare_each(&paths, &Call::default());
+    let call = Call {
+        max_steps: Some(max_steps),
+        ..Call::default()
+    };
+    let (preps, errors) = prepare_each(&paths, &call);
     if !preps.is_empty() {
         say!(
             "{:<30} {:<14} {:<17} description",
@@ -513,8 +537,12 @@ fn main() -> ExitCode {
         Cmd::Check(a) => run_cmd(a, Mode::Check),
         Cmd::Baseline(a) => run_cmd(a, Mode::WriteBaselines),
         Cmd::Report { logdir } => report_cmd(logdir),
-        Cmd::Plan { file, json } => plan_cmd(file, *json),
-        Cmd::List { paths } => list_cmd(paths),
+        Cmd::Plan {
+            file,
+            json,
+            max_steps,
+        } => plan_cmd(file, *json, *max_steps),
+        Cmd::List { paths, max_steps } => list_cmd(paths, *max_steps),
     };
     match res {
         Ok(code) => ExitCode::from(code),

@@ -139,13 +139,15 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
     for (k, limit) in &sc.thresholds {
         let v = value(k);
         if v.is_nan() || v > *limit {
-            failures.push(format!("{k} = {v:.6} > {limit}"));
+            let (v, limit) = crate::numfmt::breach(v, *limit);
+            failures.push(format!("{k} = {v} > {limit}"));
         }
     }
     for (k, floor) in &sc.minimums {
         let v = value(k);
         if v.is_nan() || v < *floor {
-            failures.push(format!("{k} = {v:.6} < {floor}"));
+            let (v, floor) = crate::numfmt::breach(v, *floor);
+            failures.push(format!("{k} = {v} < {floor}"));
         }
     }
     let mut outcome = RunOutcome {

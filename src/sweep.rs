@@ -205,10 +205,8 @@ pub fn run_sweep_report(
     }
     let mut failures = failed_to_run.clone();
     if rate < cfg.min_success_rate {
-        failures.push(format!(
-            "sweep_success_rate = {rate:.3} < {}",
-            cfg.min_success_rate
-        ));
+        let (rate, floor) = crate::numfmt::breach(rate, cfg.min_success_rate);
+        failures.push(format!("sweep_success_rate = {rate} < {floor}"));
     }
     let steps = results.iter().map(|r| r.steps).sum();
     let wall = t_all.elapsed().as_secs_f64();

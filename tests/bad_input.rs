@@ -405,3 +405,77 @@ fn shard_without_sweep_is_an_error() {
         "d.toml: --shard: this scenario has no [sweep] table",
     );
 }
+
+/// The step budget (issue 13): a run over it is refused up front with the
+/// key responsible and the step count, in readable numbers; `--max-steps`
+/// moves the budget both ways.
+#[test]
+fn step_budget_names_dt_and_step_count() {
+    let dir = tempfile::tempdir().unwrap();
+    let base = disk_scenario(&model("rolling_disk.urdf"), "", "");
+    let tiny = base.replacen("dt = 0.001", "dt = 1e-12", 1);
+    std::fs::write(dir.path().join("tiny.toml"), &tiny).unwrap();
+    let line = tiny.lines().position(|l| l == "dt = 1e-12").unwrap() + 1;
+    for args in [
+        &["run", "tiny.toml", "--logs", "logs"][..],
+        &["plan", "tiny.toml"],
+    ] {
+        let out = cli(dir.path(), args);
+        let err = check_contract(&out, dir.path(), &format!("tiny.toml:{line}: key `sim.dt`"));
+        // ~4.4 s of plan at 1e-12 s: ~4.4e12 steps, in readable numbers.
+        assert!(err.contains("at sim.dt = 1e-12 s is 4.37"), "{err}");
+        assert!(err.contains("e12 steps"), "{err}");
+        assert!(err.contains("budget of 2e6 steps"), "{err}");
+        assert!(err.contains("--max-steps"), "{err}");
+    }
+    // dt = 1e-5: ~437 600 steps, within the default budget, over 100 000.
+    let fine = base.replacen("dt = 0.001", "dt = 1e-5", 1);
+    std::fs::write(dir.path().join("fine.toml"), &fine).unwrap();
+    let out = cli(dir.path(), &["plan", "fine.toml", "--max-steps", "100000"]);
+    let err = check_contract(&out, dir.path(), "key `sim.dt`");
+    assert!(
+        err.contains("steps, over the budget of 100000 steps"),
+        "{err}"
+    );
+    assert!(err.contains(" s is 437"), "{err}");
+    let out = cli(dir.path(), &["list", "fine.toml"]);
+    assert_eq!(out.status.code(), Some(0));
+    // Raising the budget lets the tiny step through validation (`list` only:
+    // running it would take for ever).
+    let out = cli(
+        dir.path(),
+        &["list", "tiny.toml", "--max-steps", "10000000000000"],
+    );
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+/// A goal at 1e300 m: refused, with the plan duration readable (it printed
+/// 300 digits).
+#[test]
+fn huge_goal_prints_readable_numbers() {
+    let text = disk_scenario(&model("rolling_disk.urdf"), "", "").replacen(
+        "goal = [-0.4, 1.0",
+        "goal = [1e300, 1.0",
+        1,
+    );
+    let err = expect_input_error(&text, "key `goal`");
+    assert!(err.len() < 300, "{err}");
+    assert!(!err.contains("0000000000"), "{err}");
+}
+
+/// `--max-steps` is documented in `--help` of every command that validates.
+#[test]
+fn max_steps_is_documented() {
+    let dir = tempfile::tempdir().unwrap();
+    for cmd in ["run", "check", "baseline", "plan", "list"] {
+        let out = cli(dir.path(), &[cmd, "--help"]);
+        let help = String::from_utf8_lossy(&out.stdout);
+        assert!(help.contains("--max-steps <N>"), "{cmd}: {help}");
+        assert!(help.contains("Step budget"), "{cmd}: {help}");
+    }
+}

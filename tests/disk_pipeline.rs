@@ -136,3 +136,44 @@ fn logs_are_complete_and_readable() {
     assert!(s["sim"]["final_state"]["x"].is_number());
     assert!(s["wall_time_s"]["total"].as_f64().unwrap() > 0.0);
 }
+
+/// Issue 13 item 3: a broken threshold prints the value and the bound with
+/// enough significant digits to show the breach, however small or close.
+#[test]
+fn failure_messages_show_the_breach() {
+    let base = Scenario::load(&scenario("disk_paper.toml")).unwrap();
+    let first = run_prepared(
+        &anholonomy::runner::Prepared::new(base.clone()).unwrap(),
+        None,
+    );
+    let alpha = first.metric("tracking_alpha_deg_max").unwrap();
+    let pos = first.metric("sim_goal_position").unwrap();
+    let mut sc = base;
+    // A small value over a smaller bound (printed `0.000064 > 0.000001` before).
+    sc.thresholds
+        .insert("tracking_alpha_deg_max".into(), alpha / 10.0);
+    // A value a hair over its bound.
+    let bound = pos * (1.0 - 1e-7);
+    sc.thresholds.insert("sim_goal_position".into(), bound);
+    let o = run_prepared(&anholonomy::runner::Prepared::new(sc).unwrap(), None);
+    assert!(!o.passed);
+    for (name, value, limit) in [
+        ("tracking_alpha_deg_max", alpha, alpha / 10.0),
+        ("sim_goal_position", pos, bound),
+    ] {
+        let f = o
+            .failures
+            .iter()
+            .find(|f| f.starts_with(name))
+            .unwrap_or_else(|| panic!("{name} not in {:?}", o.failures));
+        let (v, b) = f
+            .strip_prefix(&format!("{name} = "))
+            .and_then(|r| r.split_once(" > "))
+            .unwrap_or_else(|| panic!("{f}"));
+        let (v, b): (f64, f64) = (v.parse().unwrap(), b.parse().unwrap());
+        assert!(v > b, "{f}: the printed value does not show the breach");
+        assert!(((v - value) / value).abs() < 1e-3, "{f} vs {value}");
+        assert_eq!(b, limit, "{f}: the bound is printed exactly");
+        assert!(!f.contains("0.000000"), "{f}");
+    }
+}

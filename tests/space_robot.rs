@@ -290,8 +290,10 @@ fn expect_cli_error(text: &str, needles: &[&str]) -> String {
 fn joint_limit_leaving_no_rectangle_is_a_clear_error() {
     // λ = 200°: the rectangle is 155° wide, |θ1| ≤ 50° leaves 100°: no
     // translation or cycle count fits.
+    // Kept to that choice (`alternatives = false`), the task is refused with
+    // every branch tried.
     let text = space_scenario(
-        "kind = \"stokes_space\"\nfixed_value_deg = 200.0\ntheta1_limit_deg = 50.0",
+        "kind = \"stokes_space\"\nfixed_side = \"lambda\"\nfixed_value_deg = 200.0\nalternatives = false\ntheta1_limit_deg = 50.0",
         "gravity = [0.0, 0.0, 0.0]",
     );
     let err = expect_cli_error(
@@ -299,6 +301,27 @@ fn joint_limit_leaving_no_rectangle_is_a_clear_error() {
         &["goal unreachable", "does not fit", "|θ1| ≤ 50.000°"],
     );
     assert!(err.contains("n = 3…12: width 155.000°"), "{err}");
+    // With the alternatives (the default) another rectangle fits and plans.
+    let text = space_scenario(
+        "kind = \"stokes_space\"\nfixed_side = \"lambda\"\nfixed_value_deg = 200.0\ntheta1_limit_deg = 50.0",
+        "gravity = [0.0, 0.0, 0.0]",
+    );
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(dir.path().join("s.toml"), &text).unwrap();
+    let out = cli(dir.path(), &["plan", "s.toml", "--json"]);
+    assert_eq!(
+        out.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let v: serde_json::Value = serde_json::from_slice(&out.stdout).unwrap();
+    let span = &v["details"]["theta1_span_deg"];
+    assert!(span[0].as_f64().unwrap() >= -50.0 - 1e-9 && span[1].as_f64().unwrap() <= 50.0 + 1e-9);
+    assert!(!v["details"]["choice"]
+        .as_str()
+        .unwrap()
+        .contains("(configured)"));
     // The goal itself outside the limit.
     let text = space_scenario(
         "kind = \"stokes_space\"\ntheta1_limit_deg = 30.0",

@@ -85,6 +85,12 @@ pub trait System: Send + Sync {
     fn overlays(&self, _start: &State, _goal: &State) -> Vec<Overlay> {
         Vec::new()
     }
+    /// Simulated time the planner itself integrates while planning, s, and the
+    /// scenario key that sets it (e.g. a recorded closed-loop run), so the step
+    /// budget can be checked before planning. `None`: planning integrates nothing.
+    fn planning_horizon(&self) -> Option<(f64, &'static str)> {
+        None
+    }
     /// Names of system-specific metrics (so thresholds can be checked up front).
     fn extra_metric_names(&self) -> Vec<String> {
         Vec::new()

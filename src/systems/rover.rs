@@ -171,6 +171,11 @@ impl System for Rover {
     fn default_max_rate(&self) -> Vec<f64> {
         vec![1.0, 2.0]
     }
+    fn planning_horizon(&self) -> Option<(f64, &'static str)> {
+        // The open-loop replay records an ideal closed-loop run while planning.
+        self.open_loop
+            .then_some((self.params.horizon, "planner.horizon"))
+    }
     fn plan(&self, start: &State, goal: &State, limits: &Limits) -> Result<Plan, PlanError> {
         let plan = rover_primitives::plan(&self.model, start, goal, &self.params, limits)?;
         if !self.open_loop {

@@ -188,9 +188,23 @@ impl System for Space {
             ),
             ("k (Eq. 20)", "−7.696e-4", "/k", 1.0, "", ""),
         ];
-        let fixed = p.fixed_value_deg;
-        match p.fixed_side {
-            FixedSide::Lambda if (fixed - 125.0).abs() < 1e-9 => spec.extend([
+        // The paper's rows for the rectangle the planner chose (auto included).
+        let chose = |side: &str, v: f64| {
+            let want = format!("{side} = {:.3}°", v);
+            plan.details["choice"]
+                .as_str()
+                .is_some_and(|c| c.starts_with(&want))
+        };
+        let side = match p.fixed_side {
+            FixedSide::Lambda => "λ",
+            FixedSide::Gamma => "γ",
+            FixedSide::Auto => "",
+        };
+        let fixed = p.fixed_deg().unwrap_or(f64::NAN);
+        let lambda = (side == "λ" && (fixed - 125.0).abs() < 1e-9) || chose("λ", 125.0);
+        let gamma = (side == "γ" && (fixed - 75.0).abs() < 1e-9) || chose("γ", 75.0);
+        match (lambda, gamma) {
+            (true, _) => spec.extend([
                 (
                     "γ for λ = 125° (3 cycles)",
                     "53.36",
@@ -208,7 +222,7 @@ impl System for Space {
                     "0.5967 is cos γ; γ = 0.931 rad",
                 ),
             ]),
-            FixedSide::Gamma if (fixed - 75.0).abs() < 1e-9 => spec.push((
+            (_, true) => spec.push((
                 "λ for γ = 75° (4 cycles)",
                 "76.084",
                 "/lambda_deg",

@@ -30,6 +30,12 @@ use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
+/// Default step budget: the most RK4 (and physics) steps one run may take,
+/// plan plus settle, at `sim.dt`. The longest shipped scenario takes 150 000
+/// (a 300 s rover horizon at 2 ms); each step keeps a few hundred bytes of
+/// samples, so 2 000 000 stays around a gigabyte. `--max-steps` raises it.
+pub const DEFAULT_MAX_STEPS: u64 = 2_000_000;
+
 /// A scenario that passed validation: system built, URDF loaded, planned.
 pub struct Prepared {
     /// The scenario.
@@ -42,19 +48,30 @@ pub struct Prepared {
     pub planned: Plan,
     /// Wall time of that planning, s.
     pub plan_wall_s: f64,
+    /// Step budget the scenario was validated against (sweep variants too).
+    pub max_steps: u64,
 }
 
 impl Prepared {
     /// Validate a loaded scenario: URDF, system, thresholds, sweep metrics,
     /// plan, physics at the start pose. Every failure is a user input error.
     pub fn new(scenario: Scenario) -> Result<Prepared, Error> {
-        let robot = urdf::load(&scenario.urdf)?;
-        Prepared::with_robot(scenario, robot)
+        Prepared::with_budget(scenario, DEFAULT_MAX_STEPS)
     }
 
-    /// Like [`Prepared::new`] with the URDF already loaded (sweep variants
-    /// scale its masses).
-    pub fn with_robot(scenario: Scenario, robot: urdf_rs::Robot) -> Result<Prepared, Error> {
+    /// Like [`Prepared::new`] with a step budget other than [`DEFAULT_MAX_STEPS`].
+    pub fn with_budget(scenario: Scenario, max_steps: u64) -> Result<Prepared, Error> {
+        let robot = urdf::load(&scenario.urdf)?;
+        Prepared::with_robot(scenario, robot, max_steps)
+    }
+
+    /// Like [`Prepared::with_budget`] with the URDF already loaded (sweep
+    /// variants scale its masses).
+    pub fn with_robot(
+        scenario: Scenario,
+        robot: urdf_rs::Robot,
+        max_steps: u64,
+    ) -> Result<Prepared, Error> {
         let system =
             build_system(&scenario.model, &scenario.planner).map_err(|m| scenario.error(m))?;
         let known = metric_names(system.as_ref());
@@ -93,17 +110,31 @@ impl Prepared {
         // The physics first: a URDF that disagrees with the model explains a
         // planner refusal better than the refusal does.
         build_physics(&scenario, system.as_ref(), &robot)?;
+        // The step budget, before anything integrates: what settling alone
+        // and the planner's own integration imply, then the whole run.
+        let budget = Budget {
+            sc: &scenario,
+            max_steps,
+        };
+        budget.check(scenario.sim.settle, "sim.settle", "settling")?;
+        if let Some((horizon, key)) = system.planning_horizon() {
+            budget.check(horizon, key, "the planner's recorded run")?;
+        }
         let t0 = Instant::now();
         let planned = make_plan(&scenario, system.as_ref())?;
         let plan_wall_s = t0.elapsed().as_secs_f64();
-        // A step budget (issue 13) belongs here: plan.duration, sim.dt and
-        // sim.settle are known, nothing has run.
+        budget.check(
+            planned.duration + scenario.sim.settle,
+            "sim.dt",
+            "the plan and settling",
+        )?;
         let prep = Prepared {
             scenario,
             system,
             robot,
             planned,
             plan_wall_s,
+            max_steps,
         };
         if let Some(sw) = &prep.scenario.sweep {
             // Variants differ only in friction, masses and σ: when variant 0
@@ -125,7 +156,7 @@ impl Prepared {
         let mut sc = self.scenario.clone();
         let mut robot = self.robot.clone();
         v.apply(&mut sc, &mut robot);
-        Prepared::with_robot(sc, robot)
+        Prepared::with_robot(sc, robot, self.max_steps)
     }
 
     /// The kinematic model.
@@ -155,6 +186,42 @@ impl Prepared {
     /// Build the physics counterpart at the start state.
     pub fn physics(&self) -> Result<Box<dyn PhysicsSystem>, Error> {
         build_physics(&self.scenario, self.system.as_ref(), &self.robot)
+    }
+}
+
+/// The step budget of one scenario: simulated time at `sim.dt` must not
+/// imply more than `max_steps` steps.
+struct Budget<'a> {
+    sc: &'a Scenario,
+    max_steps: u64,
+}
+
+impl Budget<'_> {
+    /// Refuse `seconds` of simulated time (`what`, set by `key`) over the budget.
+    fn check(&self, seconds: f64, key: &str, what: &str) -> Result<(), Error> {
+        use crate::numfmt::readable;
+        let dt = self.sc.sim.dt;
+        let n = seconds / dt;
+        // Whole steps, as the runs count them (a plan on the dt grid ends exactly).
+        let steps = if (n - n.round()).abs() < 1e-6 {
+            n.round()
+        } else {
+            n.ceil()
+        };
+        if steps.is_nan() || steps <= self.max_steps as f64 {
+            return Ok(());
+        }
+        let span = if key == "sim.dt" {
+            format!("{} s of {what}", readable(seconds))
+        } else {
+            format!("{what} of {} s", readable(seconds))
+        };
+        Err(self.sc.error(format!(
+            "key `{key}`: {span} at sim.dt = {} s is {} steps, over the budget of {} steps (raise it with --max-steps)",
+            readable(dt),
+            readable(steps),
+            readable(self.max_steps as f64)
+        )))
     }
 }
 
@@ -203,8 +270,8 @@ fn make_plan(sc: &Scenario, system: &dyn System) -> Result<Plan, Error> {
     let plan = system.plan(&start, &goal, &limits).map_err(plan_error)?;
     if !plan.duration.is_finite() || plan.duration > 1e6 {
         return Err(plan_error(PlanError::Unreachable(format!(
-            "plan duration {} s is not usable",
-            plan.duration
+            "plan duration {} s is not usable (at most 1e6 s)",
+            crate::numfmt::readable(plan.duration)
         ))));
     }
     Ok(plan)
@@ -241,6 +308,8 @@ pub struct Call<'a> {
     pub log_root: Option<&'a Path>,
     /// `--shard` was given: only sweep scenarios can be sharded.
     pub sharded: bool,
+    /// Step budget (`--max-steps`); `None` is [`DEFAULT_MAX_STEPS`].
+    pub max_steps: Option<u64>,
 }
 
 /// The validation pass over every scenario of a call: all errors, or every
@@ -304,7 +373,7 @@ pub fn prepare_each(paths: &[PathBuf], call: &Call<'_>) -> (Vec<Prepared>, Vec<E
                 continue;
             }
         }
-        match Prepared::new(sc) {
+        match Prepared::with_budget(sc, call.max_steps.unwrap_or(DEFAULT_MAX_STEPS)) {
             Ok(p) => preps.push(p),
             Err(e) => errors.push(e),
         }

@@ -137,6 +137,7 @@ pub fn no_line(file: &str) -> Shape {
 }
 
 mod files;
+mod runaway;
 mod tables;
 
 /// Every case.
@@ -144,5 +145,6 @@ pub fn corpus() -> Vec<Case> {
     let mut c = Corpus(Vec::new());
     tables::cases(&mut c);
     files::cases(&mut c);
+    runaway::cases(&mut c);
     c.0
 }
