@@ -566,7 +566,7 @@ pub fn cases(c: &mut Corpus) {
         (
             "sweep vary unknown distribution",
             "\"planner.k1\" = { gaussian = [1.0, 0.1] }",
-            "sweep.vary.\"planner.k1\"",
+            "sweep.vary.\"planner.k1\".gaussian",
         ),
         (
             "sweep vary value out of range",
