@@ -75,6 +75,9 @@ fn statistics(path: &Path) -> String {
     t[..cut].to_string()
 }
 
+/// An edit of a shard file's text, or none.
+type Edit<'a> = Option<&'a dyn Fn(String) -> String>;
+
 fn lines(p: &Path) -> Vec<String> {
     std::fs::read_to_string(p)
         .unwrap()
@@ -239,7 +242,7 @@ fn killed_resumed_and_merged_sweeps_equal_the_uninterrupted_one() {
     assert_eq!(statistics(&d.join("sh/s/sweep.json")), reference);
 
     // Bad shards: exit 2, one line naming the shard, nothing written.
-    let case = |name: &str, files: &[(usize, Option<&dyn Fn(String) -> String>)]| -> PathBuf {
+    let case = |name: &str, files: &[(usize, Edit)]| -> PathBuf {
         let c = d.join(name);
         std::fs::create_dir_all(&c).unwrap();
         for (k, (i, edit)) in files.iter().enumerate() {

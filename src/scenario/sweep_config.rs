@@ -166,7 +166,7 @@ impl SweepConfig {
                 "key `sweep.vary`: the grid has {g} points (at most 1000000)"
             ));
         }
-        if self.count % g != 0 {
+        if !self.count.is_multiple_of(g) {
             return Err(format!(
                 "key `sweep.count`: {} is not a multiple of the grid's {g} points",
                 self.count
