@@ -105,6 +105,23 @@ enum Cmd {
         #[arg(long, value_name = "N", default_value_t = anholonomy::validate::DEFAULT_MAX_STEPS)]
         max_steps: u64,
     },
+    /// Merge the shards of one sweep into the sweep.json an unsharded run writes.
+    ///
+    /// Reads the variants-shard-I-of-N.jsonl files written by `run --shard I/N`
+    /// (a directory stands for all of them in it), checks that every shard
+    /// 0..N-1 is there exactly once, complete, and of the same sweep (scenario
+    /// text, seed, count), and writes sweep.json beside the first shard (or
+    /// --out FILE). Statistics and per-variant records are identical to an
+    /// unsharded run's. Missing, duplicate, incomplete or mismatched shards
+    /// are bad input (exit 2, nothing written).
+    Merge {
+        /// Shard files, or directories holding them (e.g. logs/rover_sweep).
+        #[arg(required = true)]
+        paths: Vec<PathBuf>,
+        /// Where to write the merged sweep.json.
+        #[arg(long, value_name = "FILE")]
+        out: Option<PathBuf>,
+    },
 }
 
 #[derive(Args)]
@@ -122,10 +139,25 @@ struct RunArgs {
     #[arg(long)]
     quiet: bool,
     /// Sweep scenarios only: run the variants with index % N == I and write
-    /// LOGS/<scenario>/sweep-shard-I-of-N.json. Every scenario of the call
-    /// must have a [sweep] table (others are an error, exit 2).
+    /// LOGS/<scenario>/variants-shard-I-of-N.jsonl and sweep-shard-I-of-N.json
+    /// (combine them with `merge`). Every scenario of the call must have a
+    /// [sweep] table (others are an error, exit 2). Without --shard the shard
+    /// comes from the scheduler's environment when set: SLURM_ARRAY_TASK_ID
+    /// with SLURM_ARRAY_TASK_COUNT (or SLURM_ARRAY_TASK_MIN/MAX), or
+    /// JOB_COMPLETION_INDEX (Kubernetes Indexed Job) with --shards N or
+    /// ANHOLONOMY_SHARDS.
     #[arg(long, value_name = "I/N")]
     shard: Option<String>,
+    /// Number of shards for JOB_COMPLETION_INDEX (default: $ANHOLONOMY_SHARDS).
+    #[arg(long, value_name = "N")]
+    shards: Option<usize>,
+    /// Sweeps: continue LOGS/<scenario>/variants.jsonl (or the shard's file)
+    /// instead of starting over; variants already recorded are not run again.
+    /// The file must be of the same scenario text, seed, count and shard
+    /// (else exit 2, nothing written); a partial last line is dropped; no file
+    /// yet means a fresh start.
+    #[arg(long)]
+    resume: bool,
     /// Compare every metric with the baselines in DIR (DIR/<scenario>.json); `check` exits 1
     /// on a regression. All baselines are read before anything runs.
     #[arg(long, value_name = "DIR")]
@@ -207,14 +239,14 @@ fn print_table(rows: &[RunOutcome]) {
 }
 
 /// Options that only make sense together are checked before anything runs.
-fn check_options(args: &RunArgs, mode: Mode) -> Result<Option<PathBuf>, Vec<Error>> {
+fn check_options(args: &RunArgs, mode: Mode, sharded: bool) -> Result<Option<PathBuf>, Vec<Error>> {
     let bad = |opt: &str, m: &str| vec![Error::input(opt, m)];
     let updating = args.update_baseline || mode == Mode::WriteBaselines;
     let dir = args
         .baseline
         .clone()
         .or_else(|| updating.then(|| PathBuf::from("baselines")));
-    if args.shard.is_some() && dir.is_some() {
+    if sharded && dir.is_some() {
         return Err(bad(
             "--shard",
             "baselines need the whole sweep: do not combine --shard with --baseline/--update-baseline",
@@ -272,8 +304,21 @@ fn run_cmd(args: &RunArgs, mode: Mode) -> Result<u8, Vec<Error>> {
         Some(s) => {
             Some(anholonomy::sweep::Shard::parse(s).map_err(|m| vec![Error::input("--shard", m)])?)
         }
-        None => None,
+        None => match anholonomy::sweep::Shard::from_env(|k| std::env::var(k).ok(), args.shards) {
+            Ok(Some((s, from))) => {
+                eprintln!("{from}");
+                Some(s)
+            }
+            Ok(None) => None,
+            Err(m) => return Err(vec![Error::input("--shard", m)]),
+        },
     };
+    if args.resume && args.no_logs {
+        return Err(vec![Error::input(
+            "--resume",
+            "continues the sweep's variants.jsonl in the logs: drop --no-logs",
+        )]);
+    }
     let log_root = (!args.no_logs).then(|| args.logs.clone());
     let call = Call {
         log_root: log_root.as_deref(),
@@ -281,7 +326,7 @@ fn run_cmd(args: &RunArgs, mode: Mode) -> Result<u8, Vec<Error>> {
         max_steps: Some(args.max_steps),
     };
     let preps = prepare_all(&args.paths, &call)?;
-    let base_dir = check_options(args, mode)?;
+    let base_dir = check_options(args, mode, shard.is_some())?;
     let updating = args.update_baseline || mode == Mode::WriteBaselines;
     // Every baseline is read (and checked) before anything runs.
     let baselines: Vec<Option<Baseline>> = match (&base_dir, updating) {
@@ -302,6 +347,23 @@ fn run_cmd(args: &RunArgs, mode: Mode) -> Result<u8, Vec<Error>> {
         }
         _ => preps.iter().map(|_| None).collect(),
     };
+    // --resume: every records file is read and checked before anything runs.
+    let mut resumed = Vec::new();
+    if let (true, Some(root)) = (args.resume, &log_root) {
+        let mut errs = Vec::new();
+        for p in &preps {
+            match anholonomy::sweep::resumable(p, root, shard) {
+                Ok(s) => resumed.push(s),
+                Err(e) => {
+                    errs.push(e);
+                    resumed.push(None);
+                }
+            }
+        }
+        if !errs.is_empty() {
+            return Err(errs);
+        }
+    }
     let opts = RunOptions {
         log_root,
         progress: !args.quiet,
@@ -309,7 +371,7 @@ fn run_cmd(args: &RunArgs, mode: Mode) -> Result<u8, Vec<Error>> {
     let mut rows = Vec::new();
     let mut results: Vec<(usize, Outcome)> = Vec::new();
     // Independent scenarios run in parallel; results come back in input order.
-    let ran = anholonomy::suite::run_all(&preps, &opts, shard);
+    let ran = anholonomy::suite::run_all(&preps, &opts, shard, &resumed);
     for (i, (res, wall)) in ran.into_iter().enumerate() {
         match res {
             Ok(o) => {
@@ -530,6 +592,13 @@ fn list_cmd(paths: &[PathBuf], max_steps: u64) -> Result<u8, Vec<Error>> {
     }
 }
 
+fn merge_cmd(paths: &[PathBuf], out: Option<&Path>) -> Result<u8, Vec<Error>> {
+    let (sum, path) = anholonomy::sweep::merge::merge(paths, out)?;
+    anholonomy::suite::emit(&sum.table);
+    say!("merged: {}", path.display());
+    Ok(0)
+}
+
 fn main() -> ExitCode {
     let cli = Cli::parse();
     let res = match &cli.cmd {
@@ -543,6 +612,7 @@ fn main() -> ExitCode {
             max_steps,
         } => plan_cmd(file, *json, *max_steps),
         Cmd::List { paths, max_steps } => list_cmd(paths, *max_steps),
+        Cmd::Merge { paths, out } => merge_cmd(paths, out.as_deref()),
     };
     match res {
         Ok(code) => ExitCode::from(code),

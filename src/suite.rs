@@ -10,6 +10,7 @@
 
 use crate::error::Error;
 use crate::runner::{run, RunOptions, RunOutcome};
+use crate::sweep::records::Scan;
 use crate::sweep::{run_sweep_report, Shard};
 use crate::validate::Prepared;
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
@@ -19,11 +20,17 @@ use std::time::Instant;
 /// The result of one scenario and its wall time, s (JUnit reports it for failures too).
 pub type Ran = (Result<RunOutcome, Error>, f64);
 
-/// Run every prepared scenario (sweeps as sweeps, restricted to `shard`);
-/// one result per scenario, in input order.
-pub fn run_all(preps: &[Prepared], opts: &RunOptions, shard: Option<Shard>) -> Vec<Ran> {
+/// Run every prepared scenario (sweeps as sweeps, restricted to `shard`,
+/// continuing `resumed[i]` when given); one result per scenario, in input order.
+pub fn run_all(
+    preps: &[Prepared],
+    opts: &RunOptions,
+    shard: Option<Shard>,
+    resumed: &[Option<Scan>],
+) -> Vec<Ran> {
+    let resume = |i: usize| resumed.get(i).and_then(Option::as_ref);
     if preps.len() == 1 {
-        let (res, table, wall) = run_one_report(&preps[0], opts, shard);
+        let (res, table, wall) = run_one_report(&preps[0], opts, shard, resume(0));
         emit(&table);
         return vec![(res, wall)];
     }
@@ -39,7 +46,7 @@ pub fn run_all(preps: &[Prepared], opts: &RunOptions, shard: Option<Shard>) -> V
         .par_iter()
         .with_max_len(1)
         .map(|&i| {
-            let (res, table, wall) = run_one_report(&preps[i], &quiet, shard);
+            let (res, table, wall) = run_one_report(&preps[i], &quiet, shard, resume(i));
             bar.inc(1);
             (i, (res, wall), table)
         })
@@ -59,10 +66,11 @@ fn run_one_report(
     prep: &Prepared,
     opts: &RunOptions,
     shard: Option<Shard>,
+    resume: Option<&Scan>,
 ) -> (Result<RunOutcome, Error>, String, f64) {
     let t0 = Instant::now();
     let (res, table) = if prep.scenario.sweep.is_some() {
-        match run_sweep_report(prep, opts, shard) {
+        match run_sweep_report(prep, opts, shard, resume) {
             Ok((o, t)) => (Ok(o), t),
             Err(e) => (Err(e), String::new()),
         }
@@ -73,7 +81,7 @@ fn run_one_report(
 }
 
 /// Print text to stdout, ignoring a closed stdout (`| head`) like `say!`.
-pub(crate) fn emit(text: &str) {
+pub fn emit(text: &str) {
     use std::io::Write as _;
     let _ = write!(std::io::stdout().lock(), "{text}");
 }

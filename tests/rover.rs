@@ -138,7 +138,7 @@ fn small_sweep_reports_rate_and_distribution_and_shards_agree() {
     assert_eq!(results.len(), 6);
     let frictions: Vec<f64> = results
         .iter()
-        .map(|r| r["friction"].as_f64().unwrap())
+        .map(|r| r["params"]["sim.friction"].as_f64().unwrap())
         .collect();
     assert!(frictions.iter().all(|f| (0.5..=1.0).contains(f)));
     // Shard 1/2 reruns the odd indices with identical parameters and results.
@@ -153,7 +153,7 @@ fn small_sweep_reports_rate_and_distribution_and_shards_agree() {
     for r in sr {
         let i = r["index"].as_u64().unwrap() as usize;
         assert_eq!(i % 2, 1);
-        for k in ["seed", "friction", "mass_scale", "final_error", "steps"] {
+        for k in ["seed", "params", "mass_scale", "final_error", "steps"] {
             assert_eq!(r[k], results[i][k], "variant {i} key {k}");
         }
     }

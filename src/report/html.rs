@@ -512,11 +512,27 @@ fn sweep_figures(s: &Value) -> Result<String, String> {
         None,
     )?);
     b.push_str("</div><h2>Success against each randomised parameter</h2><div class=\"grid\">");
-    for (key, label) in [
-        ("friction", "friction coefficient"),
-        ("mass_scale", "mass scale"),
-    ] {
-        let vals: Vec<f64> = results.iter().map(|r| f(r, key)).collect();
+    // Every swept parameter: the [sweep.vary] keys (and the friction shorthand) under
+    // `params`, and the mass scale.
+    let mut keys: Vec<String> = results
+        .first()
+        .and_then(|r| r["params"].as_object())
+        .map(|m| m.keys().map(|k| format!("params/{k}")).collect())
+        .unwrap_or_default();
+    keys.push("mass_scale".into());
+    let param = |r: &Value, key: &str| match key.strip_prefix("params/") {
+        Some(k) => r["params"][k].as_f64().unwrap_or(f64::NAN),
+        None => f(r, key),
+    };
+    for key in &keys {
+        let label = match key.strip_prefix("params/") {
+            Some("sim.friction") => "friction coefficient (sim.friction)".to_string(),
+            Some(k) => k.to_string(),
+            None => "mass scale".to_string(),
+        };
+        let label = label.as_str();
+        let key = key.as_str();
+        let vals: Vec<f64> = results.iter().map(|r| param(r, key)).collect();
         let varied = vals.iter().any(|v| (v - vals[0]).abs() > 1e-12);
         if !varied {
             continue;
@@ -525,7 +541,7 @@ fn sweep_figures(s: &Value) -> Result<String, String> {
             .iter()
             .map(|r| {
                 (
-                    f(r, key),
+                    param(r, key),
                     f(r, "final_error"),
                     r["success"].as_bool() == Some(true),
                 )

@@ -44,10 +44,17 @@ impl KeyIndex {
 
     fn walk_table(&mut self, t: &DeTable<'_>, prefix: &str) {
         for (k, v) in t.iter() {
-            let path = if prefix.is_empty() {
-                k.get_ref().to_string()
+            // A key that is itself a path (`[sweep.vary]`'s `"planner.k1"`) keeps its quotes.
+            let name = k.get_ref().to_string();
+            let name = if name.contains(['.', '[', ']', ' ', '`']) {
+                format!("\"{name}\"")
             } else {
-                format!("{prefix}.{}", k.get_ref())
+                name
+            };
+            let path = if prefix.is_empty() {
+                name
+            } else {
+                format!("{prefix}.{name}")
             };
             self.entries.push(Entry {
                 path: path.clone(),

@@ -13,10 +13,12 @@
 
 mod config;
 pub mod doc;
+pub mod keypath;
 mod sweep_config;
 
 pub use config::{build_system, ModelConfig, PlannerConfig, PAIRS};
-pub use sweep_config::{sweep_metric_names, variant_seed, SweepConfig, Variant};
+pub use keypath::KeyPath;
+pub use sweep_config::{sweep_metric_names, variant_seed, vary_key, Dist, SweepConfig, Variant};
 
 use crate::error::Error;
 use crate::input::{read_text, SCENARIO_MAX_BYTES};
@@ -166,6 +168,9 @@ pub struct Scenario {
     /// Where each key is written, for errors found after parsing.
     #[serde(skip)]
     keys: Arc<KeyIndex>,
+    /// The file's text (sweep variants are parsed from it, resumed sweeps check its hash).
+    #[serde(skip)]
+    text: Arc<str>,
 }
 
 /// Longest scenario name, bytes (it becomes a directory name, with room for
@@ -273,9 +278,110 @@ impl Scenario {
         self.keys.line_of(key)
     }
 
+    /// The file's text as read.
+    pub fn text(&self) -> &str {
+        &self.text
+    }
+
     /// Validate scenario text (`path` is used for messages and relative paths).
     pub fn parse(path: &Path, text: &str) -> Result<Scenario, Error> {
-        let root = DeTable::parse(text).map_err(|e| KeyIndex::syntax_error(path, text, &e))?;
+        let sc = Self::parse_with(path, text, &[])?;
+        if let Some(sw) = &sc.sweep {
+            sc.check_vary(sw)?;
+        }
+        Ok(sc)
+    }
+
+    /// A sweep variant: the file with the variant's numbers written in (and
+    /// no `[sweep]`), parsed and checked like the file; the rover's σ and the
+    /// masses are the caller's ([`Variant::scale_masses`]).
+    pub fn variant(&self, v: &Variant) -> Result<Scenario, Error> {
+        let overrides: Vec<(KeyPath, f64)> = v
+            .params
+            .iter()
+            .map(|(k, x)| KeyPath::parse(k).map(|p| (p, *x)))
+            .collect::<Result<_, _>>()
+            .map_err(|m| self.error(m))?;
+        let mut sc = if overrides.is_empty() {
+            let mut sc = self.clone();
+            sc.sweep = None;
+            sc
+        } else {
+            Self::parse_with(&self.path, &self.text, &overrides)?
+        };
+        if let (Some(rate), ModelConfig::Rover(m)) = (v.sigma_rate, &mut sc.model) {
+            m.switching = crate::systems::rover::SwitchingConfig::Telegraph { seed: v.seed, rate };
+        }
+        Ok(sc)
+    }
+
+    /// `[sweep.vary]` against the file: each path must lead to a number (or
+    /// to a key the file leaves at its default), and every value the
+    /// distribution can produce at its ends must pass the file's own checks.
+    fn check_vary(&self, sw: &SweepConfig) -> Result<(), Error> {
+        let root = DeTable::parse(&self.text)
+            .map_err(|e| KeyIndex::syntax_error(&self.path, &self.text, &e))?;
+        for (path, dist) in &sw.vary {
+            let key = vary_key(path);
+            let err = |m: String| Error::Input {
+                path: self.path.clone(),
+                line: self.keys.line_of(&key),
+                message: format!("key `{key}`: {m}"),
+            };
+            let kp = KeyPath::parse(path).map_err(&err)?;
+            match keypath::find(root.get_ref(), &kp) {
+                keypath::Found::Number { integer } => {
+                    if integer && dist.continuous() {
+                        return Err(err(format!(
+                            "`{kp}` is an integer: sweep it with `values` or `grid`"
+                        )));
+                    }
+                }
+                keypath::Found::NotNumber(t) => {
+                    return Err(err(format!("`{kp}` is {t}, not a number")))
+                }
+                keypath::Found::Unreachable(why) => {
+                    return Err(err(format!("no such number in the file: {why}")))
+                }
+                keypath::Found::Absent => {}
+            }
+            for x in dist.probes() {
+                if let Err(e) = Self::parse_with(&self.path, &self.text, &[(kp.clone(), x)]) {
+                    let inner = match e {
+                        Error::Input { message, .. } => message,
+                        other => other.to_string(),
+                    };
+                    return Err(err(format!("with `{kp}` = {x}: {inner}")));
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// [`Scenario::parse`] with numbers written over the file's (a variant:
+    /// `[sweep]` is dropped; the `[sweep.vary]` paths are checked by `parse`).
+    fn parse_with(
+        path: &Path,
+        text: &str,
+        overrides: &[(KeyPath, f64)],
+    ) -> Result<Scenario, Error> {
+        let numbers: Vec<String> = overrides
+            .iter()
+            .map(|(_, x)| keypath::toml_number(*x))
+            .collect();
+        let mut root = DeTable::parse(text).map_err(|e| KeyIndex::syntax_error(path, text, &e))?;
+        if !overrides.is_empty() {
+            let t = root.get_mut();
+            // Inserted keys point at the [sweep] table that sets them.
+            let span = t.get("sweep").map(|s| s.span()).unwrap_or(0..0);
+            t.remove("sweep");
+            for ((kp, _), n) in overrides.iter().zip(&numbers) {
+                let v = DeValue::parse(n)
+                    .map_err(|e| Error::input(path, format!("key `{kp}`: {n}: {e}")))?
+                    .into_inner();
+                keypath::set(t, kp, v, span.clone()).map_err(|m| Error::input(path, m))?;
+            }
+        }
         let keys = KeyIndex::new(text, root.get_ref());
         keys.check_finite(path)?;
         let bad = |message: String| keys.error(path, message);
@@ -440,6 +546,7 @@ impl Scenario {
             sweep: file.sweep,
             regression: file.regression,
             keys: Arc::new(keys),
+            text: text.into(),
         })
     }
 }

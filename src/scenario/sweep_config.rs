@@ -1,10 +1,20 @@
 //! `[sweep]`: Monte Carlo variants of a scenario (run by [`crate::sweep`]).
+//!
+//! A variant is the scenario file with some numbers replaced: `[sweep.vary]`
+//! names any numeric key by its dotted path (`"sim.friction"`,
+//! `"planner.k1"`, `"start[2]"`) with a distribution, and the variant is
+//! parsed and range-checked like the file itself ([`super::Scenario::variant`]).
+//! `friction`, `mass_scale` and `sigma_rate` are the older shorthands:
+//! `friction = [lo, hi]` is `"sim.friction" = { uniform = [lo, hi] }` (drawn
+//! from the same stream as before, so old sweeps keep their variants),
+//! `mass_scale` scales the URDF's masses and inertias, `sigma_rate` gives the
+//! rover's ideal run a telegraph σ seeded per variant.
 
-use super::{ModelConfig, Scenario};
-use crate::systems::rover::SwitchingConfig;
+use super::keypath::KeyPath;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 
 /// `[sweep]`: Monte Carlo variants of the scenario.
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -15,12 +25,15 @@ pub struct SweepConfig {
     /// Base seed; variant i uses [`variant_seed`]`(seed, i)`.
     #[serde(default)]
     pub seed: u64,
-    /// Friction coefficient range [lo, hi] (uniform); default: the scenario's `sim.friction`.
+    /// Shorthand for `"sim.friction" = { uniform = [lo, hi] }`.
     pub friction: Option<[f64; 2]>,
     /// Range [lo, hi] of a factor applied to every link's mass and inertia (uniform).
     pub mass_scale: Option<[f64; 2]>,
     /// Rover only: the ideal run uses a telegraph σ with this rate (1/s) and the variant's seed.
     pub sigma_rate: Option<f64>,
+    /// Any numeric scenario key by dotted path (quoted: `"planner.k1" = { uniform = [0.6, 1.0] }`).
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub vary: BTreeMap<String, Dist>,
     /// Metric that decides success (`value ≤ success_max`).
     #[serde(default = "default_success_metric")]
     pub success_metric: String,
@@ -34,6 +47,63 @@ pub struct SweepConfig {
     pub min_success_rate: f64,
 }
 
+/// How a swept key's value is chosen for each variant.
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[serde(deny_unknown_fields, rename_all = "snake_case")]
+pub enum Dist {
+    /// `{ uniform = [lo, hi] }`.
+    Uniform([f64; 2]),
+    /// `{ normal = [mean, sigma] }`.
+    Normal([f64; 2]),
+    /// `{ values = [a, b, ...] }`: one of them at random.
+    Values(Vec<f64>),
+    /// `{ grid = [a, b, ...] }`: an axis of the Cartesian grid of every `grid` key.
+    Grid(Vec<f64>),
+}
+
+impl Dist {
+    /// Checks the parameters (message without the key).
+    fn check(&self) -> Result<(), String> {
+        let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
+        match self {
+            Dist::Uniform([lo, hi]) if !(finite(&[*lo, *hi]) && lo <= hi) => {
+                Err(format!("uniform [{lo}, {hi}]: need finite lo ≤ hi"))
+            }
+            Dist::Normal([m, s]) if !(finite(&[*m, *s]) && *s >= 0.0) => {
+                Err(format!("normal [{m}, {s}]: need a finite mean and σ ≥ 0"))
+            }
+            Dist::Values(v) | Dist::Grid(v) if v.is_empty() || !finite(v) => {
+                Err("needs at least one value, all finite".into())
+            }
+            _ => Ok(()),
+        }
+    }
+
+    /// Whether it can produce a non-integer (so an integer key cannot take it).
+    pub fn continuous(&self) -> bool {
+        matches!(self, Dist::Uniform(_) | Dist::Normal(_))
+    }
+
+    /// Values a variant can take that validation tries on the scenario: both
+    /// ends of a range, the mean, every listed value.
+    pub fn probes(&self) -> Vec<f64> {
+        match self {
+            Dist::Uniform([lo, hi]) => {
+                let mid = 0.5 * (lo + hi);
+                // A value off the integers, so an integer key is caught.
+                let off = if mid.fract() == 0.0 && hi > lo {
+                    mid + 0.5 * (hi - mid).min(0.5)
+                } else {
+                    mid
+                };
+                vec![*lo, *hi, off]
+            }
+            Dist::Normal([m, _]) => vec![*m],
+            Dist::Values(v) | Dist::Grid(v) => v.clone(),
+        }
+    }
+}
+
 fn default_success_metric() -> String {
     "sim_goal_position".into()
 }
@@ -42,8 +112,14 @@ fn default_time_metric() -> String {
     "sim_time_to_goal".into()
 }
 
+/// Key of the `[sweep.vary]` entry `path` as messages write it.
+pub fn vary_key(path: &str) -> String {
+    format!("sweep.vary.\"{path}\"")
+}
+
 impl SweepConfig {
-    /// Checks ranges and counts (messages name the key).
+    /// Checks ranges and counts (messages name the key). The key paths of
+    /// `vary` are checked against the file by [`super::Scenario::parse`].
     pub fn validate(&self) -> Result<(), String> {
         if self.count == 0 || self.count > 1_000_000 {
             return Err("key `sweep.count`: must be in 1..=1000000".into());
@@ -71,7 +147,43 @@ impl SweepConfig {
         if !(0.0..=1.0).contains(&self.min_success_rate) {
             return Err("key `sweep.min_success_rate`: must be in [0, 1]".into());
         }
+        for (path, dist) in &self.vary {
+            let key = vary_key(path);
+            let kp = KeyPath::parse(path).map_err(|m| format!("key `{key}`: {m}"))?;
+            dist.check().map_err(|m| format!("key `{key}`: {m}"))?;
+            if kp.to_string() == "sim.friction" && self.friction.is_some() {
+                return Err(format!(
+                    "key `{key}`: `sweep.friction` already sweeps sim.friction (keep one)"
+                ));
+            }
+            if kp.root() == "sweep" {
+                return Err(format!("key `{key}`: a sweep cannot vary its own table"));
+            }
+        }
+        let g = self.grid_size();
+        if g > 1_000_000 {
+            return Err(format!(
+                "key `sweep.vary`: the grid has {g} points (at most 1000000)"
+            ));
+        }
+        if !self.count.is_multiple_of(g) {
+            return Err(format!(
+                "key `sweep.count`: {} is not a multiple of the grid's {g} points",
+                self.count
+            ));
+        }
         Ok(())
+    }
+
+    /// Points of the Cartesian grid of the `grid` keys (1 without any).
+    pub fn grid_size(&self) -> usize {
+        self.vary
+            .values()
+            .map(|d| match d {
+                Dist::Grid(v) => v.len().max(1),
+                _ => 1,
+            })
+            .fold(1usize, |a, n| a.saturating_mul(n))
     }
 }
 
@@ -87,56 +199,87 @@ pub fn variant_seed(seed: u64, index: usize) -> u64 {
     z ^ (z >> 31)
 }
 
+/// ChaCha8 stream of one `[sweep.vary]` key (FNV-1a of its path; the shorthands use stream 0),
+/// so adding or removing a key leaves the values of the others unchanged.
+fn key_rng(seed: u64, path: &str) -> ChaCha8Rng {
+    let mut h: u64 = 0xcbf2_9ce4_8422_2325;
+    for b in path.bytes() {
+        h = (h ^ u64::from(b)).wrapping_mul(0x0000_0100_0000_01b3);
+    }
+    let mut rng = ChaCha8Rng::seed_from_u64(seed);
+    rng.set_stream(h | 1);
+    rng
+}
+
+/// A standard normal deviate (Box–Muller, one of the pair). Not `rand_distr`: it turns on
+/// num-traits' `libm` feature, which rebuilds nalgebra, Rapier and the Rerun SDK.
+fn standard_normal(r: &mut ChaCha8Rng) -> f64 {
+    // u1 in (0, 1], so the logarithm is finite.
+    let u1 = 1.0 - r.random::<f64>();
+    let u2 = r.random::<f64>();
+    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
+}
+
 /// The randomised parameters of one variant.
-#[derive(Debug, Clone, Serialize)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
 pub struct Variant {
     /// Index in 0..count.
     pub index: usize,
     /// Its seed.
     pub seed: u64,
-    /// Friction coefficient.
-    pub friction: f64,
     /// Mass and inertia factor.
     pub mass_scale: f64,
     /// Telegraph rate of the ideal run's σ, when swept.
     pub sigma_rate: Option<f64>,
+    /// Scenario key path → value written into the variant's file.
+    pub params: BTreeMap<String, f64>,
 }
 
 impl SweepConfig {
-    /// Draws variant `index` (base friction from the scenario).
-    pub fn variant(&self, base_friction: f64, index: usize) -> Variant {
-        let cfg = self;
-        let seed = variant_seed(cfg.seed, index);
+    /// Draws variant `index`.
+    pub fn variant(&self, index: usize) -> Variant {
+        let seed = variant_seed(self.seed, index);
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
-        let mut draw = |r: Option<[f64; 2]>, default: f64| match r {
+        let mut params = BTreeMap::new();
+        if let Some([lo, hi]) = self.friction {
+            params.insert("sim.friction".into(), lo + (hi - lo) * rng.random::<f64>());
+        }
+        let mass_scale = match self.mass_scale {
             Some([lo, hi]) => lo + (hi - lo) * rng.random::<f64>(),
-            None => default,
+            None => 1.0,
         };
-        let friction = draw(cfg.friction, base_friction);
-        let mass_scale = draw(cfg.mass_scale, 1.0);
+        // Grid coordinates: mixed radix of index % size, the last grid key fastest.
+        let mut rest = index % self.grid_size();
+        let mut coords = BTreeMap::new();
+        for (k, d) in self.vary.iter().rev() {
+            if let Dist::Grid(v) = d {
+                coords.insert(k.as_str(), rest % v.len());
+                rest /= v.len();
+            }
+        }
+        for (k, d) in &self.vary {
+            let mut r = key_rng(seed, k);
+            let x = match d {
+                Dist::Uniform([lo, hi]) => lo + (hi - lo) * r.random::<f64>(),
+                Dist::Normal([m, s]) => m + s * standard_normal(&mut r),
+                Dist::Values(v) => v[r.random_range(0..v.len())],
+                Dist::Grid(v) => v[coords[k.as_str()]],
+            };
+            params.insert(k.clone(), x);
+        }
         Variant {
             index,
             seed,
-            friction,
             mass_scale,
-            sigma_rate: cfg.sigma_rate,
+            sigma_rate: self.sigma_rate,
+            params,
         }
     }
 }
 
 impl Variant {
-    /// Apply the variant to a copy of the scenario and its URDF: friction,
-    /// every link's mass and inertia scaled, and (rover) the ideal run's σ.
-    /// The copy has no `[sweep]`.
-    pub fn apply(&self, sc: &mut Scenario, robot: &mut urdf_rs::Robot) {
-        sc.sweep = None;
-        sc.sim.friction = self.friction;
-        if let (Some(rate), ModelConfig::Rover(m)) = (self.sigma_rate, &mut sc.model) {
-            m.switching = SwitchingConfig::Telegraph {
-                seed: self.seed,
-                rate,
-            };
-        }
+    /// Scale every link's mass and inertia by `mass_scale`.
+    pub fn scale_masses(&self, robot: &mut urdf_rs::Robot) {
         for l in &mut robot.links {
             l.inertial.mass.value *= self.mass_scale;
             let i = &mut l.inertial.inertia;
@@ -162,4 +305,101 @@ pub fn sweep_metric_names() -> Vec<String> {
         }
     }
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn cfg(vary: &[(&str, Dist)]) -> SweepConfig {
+        SweepConfig {
+            count: 12,
+            seed: 9,
+            friction: Some([0.5, 1.0]),
+            mass_scale: Some([0.7, 1.3]),
+            sigma_rate: None,
+            vary: vary
+                .iter()
+                .map(|(k, d)| (k.to_string(), d.clone()))
+                .collect(),
+            success_metric: "m".into(),
+            success_max: 1.0,
+            time_metric: "t".into(),
+            min_success_rate: 0.0,
+        }
+    }
+
+    #[test]
+    fn shorthands_keep_their_stream_and_keys_are_independent() {
+        let a = cfg(&[]);
+        let b = cfg(&[
+            ("planner.k1", Dist::Uniform([1.0, 2.0])),
+            ("start[2]", Dist::Normal([90.0, 2.0])),
+        ]);
+        let c = cfg(&[("planner.k1", Dist::Uniform([1.0, 2.0]))]);
+        for i in 0..12 {
+            let (va, vb, vc) = (a.variant(i), b.variant(i), c.variant(i));
+            assert_eq!(va.params["sim.friction"], vb.params["sim.friction"]);
+            assert_eq!(va.mass_scale, vb.mass_scale);
+            assert_eq!(vb.params["planner.k1"], vc.params["planner.k1"]);
+            assert!((1.0..=2.0).contains(&vb.params["planner.k1"]));
+            assert_ne!(vb.params["start[2]"], 90.0);
+            assert_eq!(vb, b.variant(i), "a variant depends on (seed, index) only");
+        }
+        assert_ne!(b.variant(0).params, b.variant(1).params);
+    }
+
+    #[test]
+    fn grid_is_cartesian_and_count_must_be_a_multiple() {
+        let g = cfg(&[
+            ("a", Dist::Grid(vec![1.0, 2.0])),
+            ("b", Dist::Grid(vec![10.0, 20.0, 30.0])),
+        ]);
+        assert_eq!(g.grid_size(), 6);
+        let pts: Vec<(f64, f64)> = (0..6)
+            .map(|i| {
+                let v = g.variant(i);
+                (v.params["a"], v.params["b"])
+            })
+            .collect();
+        assert_eq!(
+            pts,
+            [
+                (1.0, 10.0),
+                (1.0, 20.0),
+                (1.0, 30.0),
+                (2.0, 10.0),
+                (2.0, 20.0),
+                (2.0, 30.0)
+            ]
+        );
+        assert_eq!(g.variant(7).params["b"], 20.0);
+        g.validate().unwrap();
+        let mut bad = g.clone();
+        bad.count = 7;
+        assert!(bad.validate().unwrap_err().contains("multiple"));
+    }
+
+    #[test]
+    fn bad_distributions_name_the_key() {
+        for (d, want) in [
+            (Dist::Uniform([2.0, 1.0]), "lo ≤ hi"),
+            (Dist::Normal([1.0, -0.1]), "σ ≥ 0"),
+            (Dist::Values(vec![]), "at least one"),
+        ] {
+            let e = cfg(&[("planner.k1", d)]).validate().unwrap_err();
+            assert!(
+                e.starts_with("key `sweep.vary.\"planner.k1\"`") && e.contains(want),
+                "{e}"
+            );
+        }
+        let e = cfg(&[("sim.friction", Dist::Values(vec![1.0]))])
+            .validate()
+            .unwrap_err();
+        assert!(e.contains("already sweeps"), "{e}");
+        let e = cfg(&[("a..b", Dist::Values(vec![1.0]))])
+            .validate()
+            .unwrap_err();
+        assert!(e.contains("not a key path"), "{e}");
+    }
 }

@@ -140,11 +140,17 @@ impl Prepared {
             // Variants differ only in friction, masses and σ: when variant 0
             // cannot even be set up (e.g. a mass scale the model refuses),
             // none can, and that is bad input.
-            let v = sw.variant(prep.scenario.sim.friction, 0);
+            let v = sw.variant(0);
             if let Err(e) = prep.variant(&v) {
+                let params: Vec<String> = v
+                    .params
+                    .iter()
+                    .map(|(k, x)| format!("{k} = {x:.4}"))
+                    .collect();
                 return Err(prep.scenario.error(format!(
-                    "key `sweep`: variant 0 (friction {:.4}, mass scale {:.4}) cannot run: {e}",
-                    v.friction, v.mass_scale
+                    "key `sweep`: variant 0 ({}mass scale {:.4}) cannot run: {e}",
+                    params.iter().map(|p| format!("{p}, ")).collect::<String>(),
+                    v.mass_scale
                 )));
             }
         }
@@ -153,9 +159,9 @@ impl Prepared {
 
     /// A sweep variant of this scenario, validated and planned like the scenario.
     pub fn variant(&self, v: &Variant) -> Result<Prepared, Error> {
-        let mut sc = self.scenario.clone();
+        let sc = self.scenario.variant(v)?;
         let mut robot = self.robot.clone();
-        v.apply(&mut sc, &mut robot);
+        v.scale_masses(&mut robot);
         Prepared::with_robot(sc, robot, self.max_steps)
     }
 

@@ -521,6 +521,82 @@ pub fn cases(c: &mut Corpus) {
             Some(key),
         );
     }
+    // [sweep.vary]: any numeric key by dotted path.
+    for (what, entry, key) in [
+        (
+            "sweep vary unknown key",
+            "\"sim.frictoin\" = { uniform = [0.5, 1.0] }",
+            "sweep.vary.\"sim.frictoin\"",
+        ),
+        (
+            "sweep vary unknown table",
+            "\"plannerr.k1\" = { uniform = [0.5, 1.0] }",
+            "sweep.vary.\"plannerr.k1\"",
+        ),
+        (
+            "sweep vary not a number",
+            "\"model.urdf\" = { values = [1.0] }",
+            "sweep.vary.\"model.urdf\"",
+        ),
+        (
+            "sweep vary element past the end",
+            "\"start[4]\" = { uniform = [0.0, 1.0] }",
+            "sweep.vary.\"start[4]\"",
+        ),
+        (
+            "sweep vary not a path",
+            "\"planner..k1\" = { uniform = [0.5, 1.0] }",
+            "sweep.vary.\"planner..k1\"",
+        ),
+        (
+            "sweep vary lo above hi",
+            "\"planner.k1\" = { uniform = [1.0, 0.5] }",
+            "sweep.vary.\"planner.k1\"",
+        ),
+        (
+            "sweep vary negative sigma",
+            "\"start[0]\" = { normal = [0.0, -0.1] }",
+            "sweep.vary.\"start[0]\"",
+        ),
+        (
+            "sweep vary empty list",
+            "\"planner.k2\" = { values = [] }",
+            "sweep.vary.\"planner.k2\"",
+        ),
+        (
+            "sweep vary unknown distribution",
+            "\"planner.k1\" = { gaussian = [1.0, 0.1] }",
+            "sweep.vary.\"planner.k1\".gaussian",
+        ),
+        (
+            "sweep vary value out of range",
+            "\"sim.dt\" = { values = [0.004, 0.5] }",
+            "sweep.vary.\"sim.dt\"",
+        ),
+        (
+            "sweep vary integer key continuous",
+            "\"sim.solver_iterations\" = { uniform = [1.0, 4.0] }",
+            "sweep.vary.\"sim.solver_iterations\"",
+        ),
+        (
+            "sweep vary friction twice",
+            "\"sim.friction\" = { values = [0.7] }",
+            "sweep.vary.\"sim.friction\"",
+        ),
+    ] {
+        c.sc(
+            what,
+            format!("{sw}\n[sweep.vary]\n{entry}\n"),
+            Some(entry),
+            Some(key),
+        );
+    }
+    c.sc(
+        "sweep count not a multiple of the grid",
+        format!("{sw}\n[sweep.vary]\n\"planner.k1\" = {{ grid = [0.7, 0.8, 0.9] }}\n"),
+        Some("count = 4"),
+        Some("sweep.count"),
+    );
     c.sc(
         "sweep success max missing",
         edit(&sw, "success_max = 0.1\n", ""),
