@@ -59,6 +59,8 @@ LOGS=$logs ANHOLONOMY=$bin bash deploy/slurm/sweep.sbatch "$scenario" 4
 while squeue -h | grep -q .; do sleep 1; done
 t1=$(date +%s)
 name=$("$bin" list "$scenario" | awk 'NR == 2 { print $1 }')
+# The jobs' stdout files (sweep.sbatch's --output) land in the submit directory.
+mv anholonomy-*.out "$work/" 2>/dev/null || true
 echo "array + merge finished in $((t1 - t0)) s; job states:"
 # No accounting database here: the controller's log has each job's exit.
 grep -h "_job_complete: .*WEXITSTATUS" "$work/slurmctld.log" | sed 's/.*_job_complete: /  /'
