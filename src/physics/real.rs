@@ -3,7 +3,8 @@
 //! against f32 Rapier (used to measure f32 against f64, see the README).
 #![allow(clippy::unnecessary_cast)] // the casts are no-ops in f64 builds only
 
-use super::rapier::math::{Pose as RPose, Real, Rotation, Vector};
+use super::rapier::math::{Matrix, Pose as RPose, Real, Rotation, Vector};
+use crate::model::spatial::Pose as SPose;
 use crate::record::Pose;
 
 /// Engine scalar → f64.
@@ -48,5 +49,44 @@ pub fn to_pose(p: &RPose) -> Pose {
     Pose {
         translation: arr(p.translation),
         rotation: quat(&p.rotation),
+    }
+}
+
+/// Model pose ([`crate::model::spatial::Pose`]) → engine pose.
+pub fn from_spatial(p: &SPose<f64>) -> RPose {
+    let q = p.quaternion();
+    RPose::from_parts(
+        vector(p.p[0], p.p[1], p.p[2]),
+        rotation(q[0], q[1], q[2], q[3]),
+    )
+}
+
+/// Engine pose → model pose.
+pub fn to_spatial(p: &RPose) -> SPose<f64> {
+    let m = Matrix::from_quat(p.rotation);
+    let cols = [m.x_axis, m.y_axis, m.z_axis];
+    SPose {
+        r: std::array::from_fn(|i| std::array::from_fn(|j| f(cols[j][i]))),
+        p: arr(p.translation),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn engine_and_model_poses_agree() {
+        let sp = SPose::<f64>::from_xyz_rpy([0.3, -1.2, 2.0], [0.4, -0.7, 2.5]);
+        let back = to_spatial(&from_spatial(&sp));
+        for i in 0..3 {
+            assert!((back.p[i] - sp.p[i]).abs() < 1e-12);
+            for j in 0..3 {
+                assert!(
+                    (back.r[i][j] - sp.r[i][j]).abs() < 1e-12,
+                    "{back:?} vs {sp:?}"
+                );
+            }
+        }
     }
 }

@@ -27,7 +27,7 @@ use crate::model::mobile_manipulator::{self as mm, CollisionShape, Link, MobileM
 use crate::model::{KinematicModel, State};
 use crate::physics::beam::BeamOptions;
 use crate::physics::mobile_manipulator::{
-    link_visuals, CarriedBeam, MobileManipulatorPhysics, ObstacleShape, Setup,
+    link_visuals, robot_link_name, CarriedBeam, MobileManipulatorPhysics, ObstacleShape, Setup,
 };
 use crate::physics::rapier::parry::bounding_volume::Aabb;
 use crate::physics::rapier::parry::shape::{Ball, ConvexPolyhedron, Cuboid, Cylinder, Shape};
@@ -315,12 +315,12 @@ impl Dilf {
 
     /// The beam as the physics holds it: the scene's grasps and FE beam.
     fn carried_beam(&self, scene: &Scene) -> Option<CarriedBeam> {
-        let c = scene.object.as_ref()?;
+        let (c, cfg) = (scene.object.as_ref()?, self.beam.as_ref()?);
         Some(CarriedBeam {
             beam: *c.fe.beam(),
             grasp: c.grasp,
             options: BeamOptions {
-                segments: self.beam.as_ref().map_or(10, |b| b.physics_segments),
+                segments: cfg.physics_segments,
                 ..BeamOptions::default()
             },
         })
@@ -513,16 +513,11 @@ impl System for Dilf {
             ));
         }
         for r in 1..=self.model.robots {
-            let prefix = if r == 1 {
-                String::new()
-            } else {
-                format!("r{r}_")
-            };
             for p in mm::default_parts() {
                 out.extend(wireframe(
                     &format!("ellipsoid_{}", p.name),
                     &p.shape,
-                    Some(&format!("{prefix}{}", p.link.urdf_name())),
+                    Some(&robot_link_name(r, p.link.urdf_name())),
                     [0.2, 0.75, 0.9, 1.0],
                 ));
             }
@@ -690,14 +685,6 @@ struct ClearanceProbe {
     links: Vec<(Link, Box<dyn Shape>, crate::model::spatial::Pose<f64>)>,
 }
 
-fn rapier_pose(p: &crate::model::spatial::Pose<f64>) -> crate::physics::rapier::math::Pose {
-    let q = p.quaternion();
-    crate::physics::rapier::math::Pose::from_parts(
-        rl::vector(p.p[0], p.p[1], p.p[2]),
-        rl::rotation(q[0], q[1], q[2], q[3]),
-    )
-}
-
 impl ClearanceProbe {
     fn new(obstacles: &[(String, Superellipsoid)]) -> Self {
         use crate::model::spatial::{rot_x, rot_y, Pose};
@@ -762,7 +749,7 @@ impl ClearanceProbe {
         let f = mm::frames::<f64>(q);
         let mut best = f64::INFINITY;
         for (link, shape, local) in &self.links {
-            let pose = rapier_pose(&f.link(*link).then(local));
+            let pose = rl::from_spatial(&f.link(*link).then(local));
             let aabb = shape.compute_aabb(&pose);
             for (hull, ob) in &self.obstacles {
                 let d = (aabb.mins - ob.maxs)

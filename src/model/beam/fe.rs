@@ -110,15 +110,20 @@ impl FeBeam {
         Pose::translation([self.beam.length, 0.0, 0.0])
     }
 
+    /// q_s = log((g⁰)⁻¹ · rel): the grasp-related deformation (node 2's
+    /// nodal displacement) of the end-2 pose `rel` in the end-0 frame.
+    pub fn grasp_deformation<T: Scalar>(&self, rel: &Pose<T>) -> [T; 6] {
+        // g⁰ is a pure translation along x.
+        se3_log(&Pose {
+            r: rel.r,
+            p: [rel.p[0] - self.beam.length, rel.p[1], rel.p[2]],
+        })
+    }
+
     /// q_f = (q_s, q_o) for the actual end-2 pose `rel` = g₀⁻¹ g₂ in the end-0
     /// frame and gravity `gravity_in_end0` (m/s²). Allocation-free.
     pub fn deformation<T: Scalar>(&self, rel: &Pose<T>, gravity_in_end0: [T; 3]) -> [T; 12] {
-        // (g⁰)⁻¹ rel: g⁰ is a pure translation along x.
-        let d = Pose {
-            r: rel.r,
-            p: [rel.p[0] - self.beam.length, rel.p[1], rel.p[2]],
-        };
-        let qs = se3_log(&d);
+        let qs = self.grasp_deformation(rel);
         let mut out = [k::<T>(0.0); 12];
         out[..6].copy_from_slice(&qs);
         for i in 0..6 {

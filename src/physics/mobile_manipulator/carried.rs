@@ -18,11 +18,8 @@
 //! chain) and not by where the robots went.
 
 use super::super::beam::{Attachment, BeamOptions, PhysicsBeam};
-use super::super::rapier::math::Matrix;
-use super::super::rapier::math::Pose as RPose;
 use super::super::rapier::prelude::*;
-use super::super::real::{f, to_pose};
-use super::to_rapier;
+use super::super::real::{f, from_spatial, to_pose, to_spatial};
 use crate::model::beam::se3_log;
 use crate::model::beam::{Beam, FeBeam};
 use crate::model::spatial::{self, Pose as SPose};
@@ -69,19 +66,11 @@ pub const PAIR_CHANNELS: [&str; 16] = [
 /// The beam in the world, held by two tools.
 pub(super) struct Held {
     beam: PhysicsBeam,
+    /// The segments' colliders.
+    colliders: Vec<ColliderHandle>,
     fe: FeBeam,
     grasp: [SPose<f64>; 2],
     tools: [RigidBodyHandle; 2],
-}
-
-/// An engine pose as the model's pose type.
-fn to_spatial(p: &RPose) -> SPose<f64> {
-    let m = Matrix::from_quat(p.rotation);
-    let cols = [m.x_axis, m.y_axis, m.z_axis];
-    SPose {
-        r: std::array::from_fn(|i| std::array::from_fn(|j| f(cols[j][i]))),
-        p: [f(p.translation.x), f(p.translation.y), f(p.translation.z)],
-    }
 }
 
 fn norm(v: Vector) -> f64 {
@@ -117,7 +106,7 @@ impl Held {
         // so the replay does not begin with the rod dropping into its sag.
         let q_f = fe_deformation(&fe, &spec.grasp, tools, world);
         let end0 = to_spatial(world.bodies[tools[0]].position()).then(&spec.grasp[0]);
-        let line = |s: Real| to_rapier(&end0.then(&fe.centerline(&q_f, f(s))));
+        let line = |s: Real| from_spatial(&end0.then(&fe.centerline(&q_f, f(s))));
         let opts = BeamOptions {
             grip_clearance: 0.0,
             ..spec.options
@@ -125,12 +114,18 @@ impl Held {
         let at = |k: usize| {
             Some(Attachment {
                 body: tools[k],
-                frame: to_rapier(&spec.grasp[k]),
+                frame: from_spatial(&spec.grasp[k]),
             })
         };
         let beam = PhysicsBeam::insert(world, &spec.beam, &opts, &line, [at(0), at(1)], groups)?;
+        let colliders = beam
+            .bodies()
+            .iter()
+            .flat_map(|b| world.bodies[*b].colliders().iter().copied())
+            .collect();
         Ok(Held {
             beam,
+            colliders,
             fe,
             grasp: spec.grasp,
             tools,
@@ -143,14 +138,8 @@ impl Held {
     }
 
     /// The segments' colliders.
-    pub(super) fn colliders<'a>(
-        &'a self,
-        world: &'a PhysicsWorld,
-    ) -> impl Iterator<Item = ColliderHandle> + 'a {
-        self.beam
-            .bodies()
-            .into_iter()
-            .flat_map(move |b| world.bodies[b].colliders().to_vec())
+    pub(super) fn colliders(&self) -> &[ColliderHandle] {
+        &self.colliders
     }
 
     /// Each segment's centre pose, x along it (the order of [`link_visuals`]).
@@ -168,10 +157,7 @@ impl Held {
         let inv = p0.inverse();
         let (rel1, rel2) = (inv.then(&p1), inv.then(&p2));
         let l = self.fe.beam().length;
-        let qs = se3_log(&SPose {
-            r: rel2.r,
-            p: [rel2.p[0] - l, rel2.p[1], rel2.p[2]],
-        });
+        let qs = self.fe.grasp_deformation(&rel2);
         let w1 = se3_log(&rel1);
         let mut out = [0.0; 12];
         out[..6].copy_from_slice(&qs);
@@ -205,6 +191,16 @@ impl Held {
     }
 }
 
+/// The logs' name of URDF link `link` of robot `r` (1-based): robot 1's
+/// links keep their names, robot r's get the prefix `r<r>_`.
+pub fn robot_link_name(r: usize, link: &str) -> String {
+    if r == 1 {
+        link.to_string()
+    } else {
+        format!("r{r}_{link}")
+    }
+}
+
 /// The links the logs draw for `robots` copies of a robot (robot 2's link
 /// names prefixed `r2_`) and the beam's segments (`beam_0` … `beam_N`,
 /// capsules along the segment): the order of the physics' link poses.
@@ -213,10 +209,10 @@ pub fn link_visuals(
     robots: usize,
     beam: Option<&CarriedBeam>,
 ) -> Vec<LinkVisual> {
-    let mut out = robot.clone();
-    for r in 2..=robots {
+    let mut out = Vec::with_capacity(robots * robot.len());
+    for r in 1..=robots {
         out.extend(robot.iter().map(|l| LinkVisual {
-            name: format!("r{r}_{}", l.name),
+            name: robot_link_name(r, &l.name),
             visuals: l.visuals.clone(),
         }));
     }
@@ -243,24 +239,4 @@ pub fn link_visuals(
         }));
     }
     out
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn engine_and_model_poses_agree() {
-        let sp = SPose::<f64>::from_xyz_rpy([0.3, -1.2, 2.0], [0.4, -0.7, 2.5]);
-        let back = to_spatial(&to_rapier(&sp));
-        for i in 0..3 {
-            assert!((back.p[i] - sp.p[i]).abs() < 1e-12);
-            for j in 0..3 {
-                assert!(
-                    (back.r[i][j] - sp.r[i][j]).abs() < 1e-12,
-                    "{back:?} vs {sp:?}"
-                );
-            }
-        }
-    }
 }

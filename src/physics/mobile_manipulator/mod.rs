@@ -32,12 +32,12 @@
 mod carried;
 mod urdf;
 
-pub use carried::{link_visuals, CarriedBeam};
+pub use carried::{link_visuals, robot_link_name, CarriedBeam};
 pub use urdf::urdf;
 
 use super::rapier::parry::bounding_volume::Aabb;
 use super::rapier::prelude::*;
-use super::real::{self as rl, f, rotation, vector};
+use super::real::{self as rl, f, vector};
 use super::settings::PhysicsSettings;
 use super::urdf::{RobotHandles, SimWorld};
 use super::{angles, PhysicsSystem};
@@ -46,7 +46,6 @@ use crate::model::mobile_manipulator::{
     self as mm, Link, DOF, HALF_TRACK, INPUTS, MOUNT, WHEEL_RADIUS,
 };
 use crate::model::puma560;
-use crate::model::spatial::Pose as SPose;
 use crate::model::{Input, State};
 use crate::record::Pose;
 use std::path::Path;
@@ -140,14 +139,6 @@ pub struct Setup<'a> {
     pub beam: Option<&'a CarriedBeam>,
 }
 
-fn to_rapier(p: &SPose<f64>) -> super::rapier::math::Pose {
-    let q = p.quaternion();
-    super::rapier::math::Pose::from_parts(
-        vector(p.p[0], p.p[1], p.p[2]),
-        rotation(q[0], q[1], q[2], q[3]),
-    )
-}
-
 /// Check the URDF's arm joints against the DH table the planner uses.
 fn check_urdf(robot: &urdf_rs::Robot) -> Result<(), String> {
     for (i, name) in ARM_JOINTS.iter().enumerate() {
@@ -195,7 +186,8 @@ impl MobileManipulatorPhysics {
         if setup.beam.is_some() != (k == 2) {
             return Err("mobile manipulator physics: a beam needs exactly two robots".into());
         }
-        let root = |r: usize| to_rapier(&mm::frames::<f64>(&start[DOF * r..DOF * (r + 1)]).base);
+        let root =
+            |r: usize| rl::from_spatial(&mm::frames::<f64>(&start[DOF * r..DOF * (r + 1)]).base);
         let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root(0));
         let mut handles = vec![sw.robot.clone()];
         if k == 2 {
@@ -309,73 +301,29 @@ impl MobileManipulatorPhysics {
     }
 
     /// Least distance between any robot or beam collider and any obstacle
-    /// (m), with an AABB pre-filter; 0 when touching or overlapping.
+    /// (m); 0 when touching or overlapping.
     pub fn min_clearance(&self) -> f64 {
         let cs = &self.sim.world.colliders;
-        let gap = |a: &Aabb, b: &Aabb| {
-            let d = (a.mins - b.maxs).max(b.mins - a.maxs).max(Vector::ZERO);
-            f(d.length())
-        };
-        // Robot AABBs once; pairs whose boxes are farther apart than the best
-        // distance so far cannot improve it.
-        let beam = self.beam.iter().flat_map(|b| b.colliders(&self.sim.world));
-        let robot: Vec<(ColliderHandle, Aabb)> = self
+        let beam = self.beam.iter().flat_map(|b| b.colliders().iter().copied());
+        let moving = self
             .robots
             .iter()
             .flat_map(|r| r.colliders.iter().copied())
-            .chain(beam)
-            .map(|c| (c, cs[c].compute_aabb()))
+            .chain(beam);
+        let obstacles: Vec<(ColliderHandle, Aabb)> = self
+            .obstacles
+            .iter()
+            .copied()
+            .zip(self.obstacle_aabbs.iter().copied())
             .collect();
-        let mut best = f64::INFINITY;
-        for (o, ob) in self.obstacles.iter().zip(&self.obstacle_aabbs) {
-            let oc = &cs[*o];
-            for (c, rb) in &robot {
-                if gap(rb, ob) >= best {
-                    continue;
-                }
-                let rc = &cs[*c];
-                if let Ok(d) = super::rapier::parry::query::distance(
-                    rc.position(),
-                    rc.shape(),
-                    oc.position(),
-                    oc.shape(),
-                ) {
-                    best = best.min(f(d.distance));
-                }
-            }
-        }
-        best
+        least_distance(cs, &with_aabbs(cs, moving), &obstacles)
     }
 
-    /// Least distance between the two robots' colliders (m; AABB pre-filter).
+    /// Least distance between the two robots' colliders (m).
     pub fn robot_robot_clearance(&self) -> f64 {
         let cs = &self.sim.world.colliders;
-        let boxes = |r: &RobotBodies| -> Vec<(ColliderHandle, Aabb)> {
-            r.colliders
-                .iter()
-                .map(|c| (*c, cs[*c].compute_aabb()))
-                .collect()
-        };
-        let (a, b) = (boxes(&self.robots[0]), boxes(&self.robots[1]));
-        let mut best = f64::INFINITY;
-        for (ca, ba) in &a {
-            for (cb, bb) in &b {
-                let gap = (ba.mins - bb.maxs).max(bb.mins - ba.maxs).max(Vector::ZERO);
-                if f(gap.length()) >= best {
-                    continue;
-                }
-                let (x, y) = (&cs[*ca], &cs[*cb]);
-                if let Ok(d) = super::rapier::parry::query::distance(
-                    x.position(),
-                    x.shape(),
-                    y.position(),
-                    y.shape(),
-                ) {
-                    best = best.min(f(d.distance));
-                }
-            }
-        }
-        best
+        let set = |r: &RobotBodies| with_aabbs(cs, r.colliders.iter().copied());
+        least_distance(cs, &set(&self.robots[0]), &set(&self.robots[1]))
     }
 
     /// Collider pairs in contact that are collisions, obstacles aside: robot
@@ -414,6 +362,42 @@ impl MobileManipulatorPhysics {
     }
 }
 
+/// Colliders with their current world AABBs.
+fn with_aabbs(
+    cs: &ColliderSet,
+    colliders: impl Iterator<Item = ColliderHandle>,
+) -> Vec<(ColliderHandle, Aabb)> {
+    colliders.map(|c| (c, cs[c].compute_aabb())).collect()
+}
+
+/// Least distance (m, parry queries) between any collider of `a` and any of
+/// `b`; pairs whose AABBs are farther apart than the best so far are skipped.
+fn least_distance(
+    cs: &ColliderSet,
+    a: &[(ColliderHandle, Aabb)],
+    b: &[(ColliderHandle, Aabb)],
+) -> f64 {
+    let mut best = f64::INFINITY;
+    for (ca, ba) in a {
+        for (cb, bb) in b {
+            let gap = (ba.mins - bb.maxs).max(bb.mins - ba.maxs).max(Vector::ZERO);
+            if f(gap.length()) >= best {
+                continue;
+            }
+            let (x, y) = (&cs[*ca], &cs[*cb]);
+            if let Ok(d) = super::rapier::parry::query::distance(
+                x.position(),
+                x.shape(),
+                y.position(),
+                y.shape(),
+            ) {
+                best = best.min(f(d.distance));
+            }
+        }
+    }
+    best
+}
+
 /// Look up one robot's bodies and joints, put its arm at the start angles
 /// (the URDF loads at q = 0) and free its casters.
 fn place_robot(sw: &mut SimWorld, h: &RobotHandles, q: &[f64]) -> Result<RobotBodies, String> {
@@ -434,10 +418,10 @@ fn place_robot(sw: &mut SimWorld, h: &RobotHandles, q: &[f64]) -> Result<RobotBo
         arm_joints[i] = h.require_joint(ARM_JOINTS[i])?;
     }
     for (body, pose) in arm.iter().zip(&frames.arm) {
-        sw.world.bodies[*body].set_position(to_rapier(pose), true);
+        sw.world.bodies[*body].set_position(rl::from_spatial(pose), true);
     }
     let tool = h.require_link("tool")?;
-    sw.world.bodies[tool].set_position(to_rapier(&frames.tool), true);
+    sw.world.bodies[tool].set_position(rl::from_spatial(&frames.tool), true);
     let mut rolling = Vec::new();
     for name in ["caster_front", "caster_rear"] {
         let b = h.require_link(name)?;
