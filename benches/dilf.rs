@@ -65,6 +65,7 @@ fn pair_field(c: &mut Criterion) {
             lambda: 1.0,
             kv: 3.0,
             goal_frame: Default::default(),
+            dipole: Default::default(),
             singularity: Default::default(),
             field_power: 1.75,
         },

@@ -165,6 +165,7 @@ fn open_field_task(start: [f64; 9], goal: [f64; 9]) -> (f64, f64, usize) {
             lambda: params.lambda,
             kv: params.kv_exponent,
             goal_frame: GoalFrame::Platform,
+            dipole: Default::default(),
             singularity: SingularityEnclosure::default(),
             field_power: params.field_power,
         },
@@ -386,4 +387,123 @@ fn the_pair_holds_the_beam_at_rest_as_the_fe_model_says() {
     let links = link_visuals(urdf::visuals(&robot), 2, Some(&spec));
     assert_eq!(sys.link_poses().len(), links.len());
     assert_eq!(links.len(), 2 * robot.links.len() + 11);
+}
+
+/// Table I as printed (`scenarios/dilf_paper.toml`, ideal runs only): with
+/// the dipoles' geometric mean in Eq. 15 (the default) the pair converges
+/// within the scenario's ε, ‖q_f‖∞ staying within q_F; with the product as
+/// printed V is bounded at the goal (not an inverse Lyapunov function) and
+/// the pair stalls metres short. Exact re-integration of the recorded
+/// inputs checks the harness's RK4 run.
+#[test]
+fn table_i_converges_with_the_geometric_mean_of_the_dipoles_only() {
+    use anholonomy::model::beam::{Beam, GFRP_ROD_10MM};
+    use anholonomy::planner::dilf::object::Carried;
+    use anholonomy::scenario::Scenario;
+    use anholonomy::validate::Prepared;
+    let path = scenario("dilf_paper.toml");
+    let text = std::fs::read_to_string(&path).unwrap();
+    let ideal = |text: &str| {
+        let prep = Prepared::new(Scenario::parse(&path, text).unwrap()).unwrap();
+        let (start, goal) = prep.start_goal();
+        let plan = prep.plan().unwrap();
+        let tr = simulate(prep.model(), &plan, &start, prep.scenario.sim.dt);
+        let mut q = start.as_slice().to_vec();
+        for k in 0..tr.t.len() - 1 {
+            let u = tr.u[k].as_slice();
+            for r in 0..2 {
+                exact_step(&mut q[r * DOF..], &u[r * 8..], tr.t[k + 1] - tr.t[k]);
+            }
+        }
+        let last = tr.last().as_slice().to_vec();
+        let gap = q.iter().zip(&last).map(|(a, b)| (a - b).abs());
+        assert!(gap.fold(0.0, f64::max) < 1e-6, "RK4 and exact runs differ");
+        let dist = (0..2)
+            .map(|r| (last[r * DOF] - goal[r * DOF]).hypot(last[r * DOF + 1] - goal[r * DOF + 1]))
+            .fold(0.0, f64::max);
+        (start, tr, dist)
+    };
+    let (start, tr, dist) = ideal(&text);
+    let end = *tr.t.last().unwrap();
+    assert!(
+        end < 149.0 && dist <= 0.02,
+        "ended at {end} s, {dist} m off"
+    );
+    let (material, section) = GFRP_ROD_10MM;
+    let beam = Beam {
+        material,
+        section,
+        length: 1.0,
+    };
+    let carried = Carried::at_rest(&beam, None, start.as_slice(), 4.0, 8, 0.02).unwrap();
+    let peak =
+        tr.q.iter()
+            .map(|q| carried.state(q.as_slice()).max_deformation())
+            .fold(0.0, f64::max);
+    // Well inside q_F = 4, yet the goal's grasps are 1.17 m farther apart.
+    assert!(peak > 1.0 && peak <= 4.0, "max ‖q_f‖∞ {peak}");
+    let printed = text.replace("dipole = \"geometric_mean\"", "dipole = \"printed\"");
+    assert_ne!(printed, text);
+    let (_, _, dist) = ideal(&printed);
+    assert!(
+        dist > 3.0,
+        "the printed product ended {dist} m from the goal"
+    );
+}
+
+/// Definition 1 (ii) of an inverse Lyapunov function, V → ∞ at the goal,
+/// for two robots approaching their goals along their dipole axes: true
+/// with the geometric mean, false for Eq. 15's printed product (bounded);
+/// for one robot both readings are the same function.
+#[test]
+fn v_tends_to_infinity_at_the_pairs_goal_with_the_geometric_mean() {
+    use anholonomy::planner::dilf::object::table_i_start;
+    use anholonomy::planner::dilf::potential::DipoleProduct;
+    let goal: Vec<f64> = {
+        let mut g = table_i_start();
+        g[1] -= 2.0;
+        g[10] -= 2.0;
+        g
+    };
+    let scene = |robots: usize, dipole: DipoleProduct| {
+        Scene::new(
+            robots,
+            anholonomy::model::mobile_manipulator::default_parts(),
+            Vec::new(),
+            goal[..DOF * robots].to_vec(),
+            PotentialParams {
+                lambda: 1.0,
+                kv: 3.0,
+                goal_frame: GoalFrame::Platform,
+                dipole,
+                singularity: SingularityEnclosure::default(),
+                field_power: 1.75,
+            },
+        )
+        .unwrap()
+    };
+    // Both platforms s metres behind their goals along the goal heading (−y).
+    let v = |s: &Scene, d: f64| {
+        let mut q = s.goal.clone();
+        for r in 0..s.robots {
+            q[r * DOF + 1] += d;
+        }
+        s.evaluate(&q, &mut s.warm()).unwrap().v
+    };
+    let mean = scene(2, DipoleProduct::GeometricMean);
+    let printed = scene(2, DipoleProduct::Printed);
+    let (m1, m2) = (v(&mean, 1.0), v(&mean, 0.001));
+    let (p1, p2) = (v(&printed, 1.0), v(&printed, 0.001));
+    assert!(
+        m2 > 100.0 * m1,
+        "geometric mean: V {m1} at 1 m, {m2} at 1 mm"
+    );
+    assert!(p2 < 2.0 * p1, "printed: V {p1} at 1 m, {p2} at 1 mm");
+    let (a, b) = (
+        scene(1, DipoleProduct::GeometricMean),
+        scene(1, DipoleProduct::Printed),
+    );
+    for d in [2.0, 0.3, 0.01] {
+        assert_eq!(v(&a, d), v(&b, d));
+    }
 }

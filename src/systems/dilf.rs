@@ -307,6 +307,7 @@ impl Dilf {
                 lambda: p.lambda,
                 kv: p.kv_exponent,
                 goal_frame: p.goal_frame,
+                dipole: p.dipole,
                 singularity: p.singularity,
                 field_power: p.field_power,
             },

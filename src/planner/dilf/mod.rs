@@ -23,7 +23,7 @@ use crate::model::{Input, State};
 use crate::plan::{Command, ControlLaw, Controller, Plan, PolicyFactory};
 use crate::planner::{check_param, PlanError};
 use control::{Branch, Gains};
-use potential::{GoalFrame, Scene, SingularityEnclosure, Warm};
+use potential::{DipoleProduct, GoalFrame, Scene, SingularityEnclosure, Warm};
 use serde::{Deserialize, Serialize};
 use std::sync::Arc;
 
@@ -108,6 +108,10 @@ pub struct DilfParams {
     /// Coordinates of the arm parts' goal points.
     #[serde(default)]
     pub goal_frame: GoalFrame,
+    /// How several robots' dipole factors combine in V (Eq. 15; see
+    /// [`DipoleProduct`]): `"geometric_mean"` (default) or `"printed"`.
+    #[serde(default)]
+    pub dipole: DipoleProduct,
     /// p of the field f = (Σ‖h2‖²)^p ∂V/∂q; Eq. 17 prints p = 2 (see the README).
     #[serde(default = "default_field_power")]
     pub field_power: f64,

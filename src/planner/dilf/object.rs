@@ -236,6 +236,7 @@ mod tests {
                 lambda: 1.0,
                 kv: 3.0,
                 goal_frame: GoalFrame::Platform,
+                dipole: Default::default(),
                 singularity: SingularityEnclosure::default(),
                 field_power: 2.0,
             },

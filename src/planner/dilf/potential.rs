@@ -60,6 +60,27 @@ pub enum GoalFrame {
     World,
 }
 
+/// How the robots' dipole factors γ_r combine in V (Eq. 15).
+///
+/// Eq. 15 prints Π_r γ_r over Σ_p ‖h2^p‖². For k = 1 that tends to infinity
+/// at the goal (γ/‖h‖² ~ 1/‖h‖ along the goal axis), as Definition 1 and
+/// Theorem 3 (ii) require of an inverse Lyapunov function. For k = 2 it does
+/// not: numerator and denominator are both of degree 2, so V stays bounded
+/// (→ 1/2 as both robots close in along their axes) and has no maximum at
+/// the goal; the pair stalls far from it (Table I: 5 m short). The
+/// geometric mean (Π_r γ_r)^{1/k} keeps Eq. 15 unchanged for one robot,
+/// keeps the dipole planes γ_r = 0 as V's zero sets (the 2k regions of
+/// Lemma 2), and restores degree −1, so V → ∞ at the goal for any k.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum DipoleProduct {
+    /// (Π_r γ_r)^{1/k} (default).
+    #[default]
+    GeometricMean,
+    /// Π_r γ_r as printed (identical for one robot).
+    Printed,
+}
+
 /// Singular sets of each arm (zeros of the three factors of det J, see
 /// [`puma560`]) enclosed in slabs |f_k| ≤ δ_k: generalized ellipsoids in the
 /// factor coordinates. δ = 0 disables a factor.
@@ -113,6 +134,8 @@ pub struct PotentialParams {
     pub kv: f64,
     /// Coordinates of the arm parts' goal points.
     pub goal_frame: GoalFrame,
+    /// How the dipole factors of several robots combine.
+    pub dipole: DipoleProduct,
     /// Singularity enclosures (Eq. 13).
     pub singularity: SingularityEnclosure,
     /// p in f = (Σ‖h2‖²)^p ∂V/∂q; Eq. 17 prints p = 2.
@@ -394,6 +417,12 @@ impl Scene {
         let v = if collided || overstrained || min_singular <= 0.0 {
             k(0.0)
         } else {
+            let gamma = match self.params.dipole {
+                DipoleProduct::GeometricMean if self.robots > 1 => {
+                    gamma.powf(1.0 / self.robots as f64)
+                }
+                _ => gamma,
+            };
             gamma * (ln_num * (1.0 / self.params.kv)).exp() / d
         };
         Ok(Evaluation {
@@ -547,6 +576,7 @@ pub(crate) mod tests {
                 lambda: 1.0,
                 kv: 3.0,
                 goal_frame,
+                dipole: Default::default(),
                 singularity: SingularityEnclosure::default(),
                 field_power: 2.0,
             },
