@@ -122,13 +122,7 @@ impl MetricSpec<'_> {
     /// All metric names this model produces (for validating thresholds up front).
     pub fn names(&self) -> Vec<String> {
         let mut out = Vec::new();
-        let mut coords: Vec<String> = (0..self.names.len())
-            .map(|i| self.coord_name(i).0)
-            .collect();
-        if self.position.is_some() {
-            coords.insert(0, "position".into());
-        }
-        for c in &coords {
+        for c in &self.coords() {
             for run in ["ideal_goal", "sim_goal"] {
                 out.push(format!("{run}_{c}"));
             }
@@ -137,6 +131,18 @@ impl MetricSpec<'_> {
             }
         }
         out
+    }
+
+    /// The coordinates metrics are named after: `position` (planar systems),
+    /// then every state coordinate (angles with `_deg`).
+    pub fn coords(&self) -> Vec<String> {
+        let mut coords: Vec<String> = (0..self.names.len())
+            .map(|i| self.coord_name(i).0)
+            .collect();
+        if self.position.is_some() {
+            coords.insert(0, "position".into());
+        }
+        coords
     }
 
     /// Metric values: goal errors of both runs and tracking statistics.

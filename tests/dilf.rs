@@ -507,3 +507,14 @@ fn v_tends_to_infinity_at_the_pairs_goal_with_the_geometric_mean() {
         assert_eq!(v(&a, d), v(&b, d));
     }
 }
+
+/// A misspelt metric: exit 2, naming the key and the metric meant.
+#[test]
+fn a_misspelt_metric_is_bad_input_naming_the_nearest_one() {
+    let text = format!(
+        "{}\n[thresholds]\nsim_body_contact = 0\n",
+        pair_text("max_deformation = 4.0")
+    );
+    bad(&text, "thresholds.sim_body_contact", "sim_body_contact =");
+    bad(&text, "sim_body_contacts", "sim_body_contact =");
+}

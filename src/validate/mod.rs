@@ -79,8 +79,8 @@ impl Prepared {
         for (table, k) in gates.chain(scenario.minimums.keys().map(|k| ("minimums", k))) {
             if !known.contains(k) {
                 return Err(scenario.error(format!(
-                    "key `{table}.{k}`: unknown metric; known: {}",
-                    known.join(", ")
+                    "key `{table}.{k}`: {}",
+                    unknown_metric(k, system.as_ref(), &[])
                 )));
             }
         }
@@ -91,20 +91,22 @@ impl Prepared {
             ] {
                 if !known.contains(m) {
                     return Err(scenario.error(format!(
-                        "key `sweep.{key}`: unknown metric `{m}`; known: {}",
-                        known.join(", ")
+                        "key `sweep.{key}`: {}",
+                        unknown_metric(m, system.as_ref(), &[])
                     )));
                 }
             }
         }
         let mut regressable = known.clone();
-        if scenario.sweep.is_some() {
-            regressable.extend(crate::scenario::sweep_metric_names());
-        }
+        let sweep_metrics = match scenario.sweep {
+            Some(_) => crate::scenario::sweep_metric_names(),
+            None => Vec::new(),
+        };
+        regressable.extend(sweep_metrics.iter().cloned());
         if let Some(k) = scenario.regression.unknown_metrics(&regressable).next() {
             return Err(scenario.error(format!(
-                "key `regression.metrics.{k}`: unknown metric; known: {}",
-                regressable.join(", ")
+                "key `regression.metrics.{k}`: {}",
+                unknown_metric(k, system.as_ref(), &sweep_metrics)
             )));
         }
         // The physics first: a URDF that disagrees with the model explains a
@@ -229,6 +231,35 @@ impl Budget<'_> {
             readable(self.max_steps as f64)
         )))
     }
+}
+
+/// "unknown metric `name`", the nearest known name if one is close, and the
+/// known names with the per-coordinate families written once (a 2-robot
+/// system has 130 names).
+fn unknown_metric(name: &str, system: &dyn System, more: &[String]) -> String {
+    let mut known = metric_names(system);
+    known.extend(more.iter().cloned());
+    let best = known
+        .iter()
+        .map(|k| (strsim::jaro_winkler(name, k), k))
+        .max_by(|a, b| a.0.total_cmp(&b.0));
+    let hint = match best {
+        Some((score, k)) if score >= 0.85 => format!(" (did you mean `{k}`?)"),
+        _ => String::new(),
+    };
+    let coords = metric_spec(system.model()).coords();
+    let mut extra = system.extra_metric_names();
+    extra.extend(more.iter().cloned());
+    let extra = if extra.is_empty() {
+        String::new()
+    } else {
+        format!("; {}", extra.join(", "))
+    };
+    format!(
+        "unknown metric `{name}`{hint}; known: ideal_goal_C, sim_goal_C, \
+         tracking_C_rms, tracking_C_max, tracking_C_final for C in {}{extra}",
+        coords.join(", ")
+    )
 }
 
 fn metric_names(system: &dyn System) -> Vec<String> {
