@@ -236,7 +236,7 @@ def main():
         with tempfile.TemporaryDirectory() as logs:
             for _ in range(args.repeats):
                 summary = harness_run(args.bin, scenario, logs)
-                harness.append(summary["sim_steps_per_second"])
+                harness.append(summary["wall_time_s"]["sim_steps_per_second"])
                 if not muj:
                     urdf = os.path.join(ROOT, "scenarios", summary["model"]["urdf"])
                     m = mujoco_model(system, summary, os.path.normpath(urdf), root)
