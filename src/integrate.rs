@@ -1,7 +1,7 @@
 //! Fixed-step RK4 integration of a kinematic model under a plan (the ideal run).
 
 use crate::model::{Input, KinematicModel, State};
-use crate::plan::Plan;
+use crate::plan::{jump_offset, Plan};
 
 /// A sampled run: states, the inputs applied and the label in force, at each time.
 #[derive(Debug, Clone, Default)]
@@ -53,6 +53,13 @@ pub fn step_count(duration: f64, dt: f64) -> usize {
     }
 }
 
+/// Whether `t` is (within round-off of) one of `jumps`.
+fn is_jump(jumps: &[f64], t: f64) -> bool {
+    jumps
+        .iter()
+        .any(|j| (j - t).abs() <= 1e-12 * t.abs().max(1.0))
+}
+
 /// Integrate `model` from `q0` under `plan` with step `dt`.
 ///
 /// Open-loop commands are evaluated at every RK4 stage (continuous u(t));
@@ -67,6 +74,9 @@ pub fn simulate(model: &dyn KinematicModel, plan: &Plan, q0: &State, dt: f64) ->
     let mut q = q0.clone();
     let mut held = ctl.command(0.0, &q);
     let mut next_sample = 0.0;
+    // Open-loop u(t) may jump at segment joins: no RK4 step straddles one
+    // (it is split there) and each piece reads u strictly on its own side.
+    let jumps = plan.jumps();
     for k in 0..n {
         let t = k as f64 * dt;
         let cmd = match hold {
@@ -77,6 +87,8 @@ pub fn simulate(model: &dyn KinematicModel, plan: &Plan, q0: &State, dt: f64) ->
                 }
                 held.clone()
             }
+            // The command applied from t on: the right limit at a jump.
+            None if is_jump(&jumps, t) => ctl.command(t + jump_offset(t), &q),
             None => ctl.command(t, &q),
         };
         out.t.push(t);
@@ -88,12 +100,41 @@ pub fn simulate(model: &dyn KinematicModel, plan: &Plan, q0: &State, dt: f64) ->
         }
         q = match hold {
             Some(_) => rk4_step(&mut |s, x| model.velocity(s, x, &cmd.u), t, &q, dt),
-            None => rk4_step(
+            None if jumps.is_empty() => rk4_step(
                 &mut |s, x| model.velocity(s, x, &ctl.command(s, x).u),
                 t,
                 &q,
                 dt,
             ),
+            None => {
+                let mut cuts = vec![t];
+                // Jumps on the grid itself are the pieces' ends already.
+                let inside = |j: f64| !is_jump(&[t, t + dt], j) && j > t && j < t + dt;
+                cuts.extend(jumps.iter().copied().filter(|&j| inside(j)));
+                cuts.push(t + dt);
+                let mut x = q;
+                for w in cuts.windows(2) {
+                    let (a, b) = (w[0], w[1]);
+                    let lo = if is_jump(&jumps, a) {
+                        a + jump_offset(a)
+                    } else {
+                        a
+                    };
+                    let hi = if is_jump(&jumps, b) {
+                        b - jump_offset(b)
+                    } else {
+                        b
+                    };
+                    let hi = hi.max(lo);
+                    x = rk4_step(
+                        &mut |s, y| model.velocity(s, y, &ctl.command(s.clamp(lo, hi), y).u),
+                        a,
+                        &x,
+                        b - a,
+                    );
+                }
+                x
+            }
         };
     }
     let t_end = n as f64 * dt;

@@ -106,10 +106,57 @@ impl Plan {
         }
     }
 
+    /// Times in (0, duration) where an open-loop u(t) jumps: segment joins
+    /// whose one-sided limits differ (relative 1e-9). Empty for feedback
+    /// laws (their holds are the sample grid itself).
+    pub fn jumps(&self) -> Vec<f64> {
+        let ControlLaw::OpenLoop(f) = &self.law else {
+            return Vec::new();
+        };
+        let mut out: Vec<f64> = Vec::new();
+        for s in &self.segments {
+            let b = s.start;
+            if b <= 0.0 || b >= self.duration || out.iter().any(|j| (j - b).abs() < 1e-12) {
+                continue;
+            }
+            let (l, r) = (f(b - jump_offset(b)).0, f(b + jump_offset(b)).0);
+            let scale = l.iter().chain(r.iter()).fold(1.0f64, |m, x| m.max(x.abs()));
+            if l.iter()
+                .zip(r.iter())
+                .any(|(a, c)| (a - c).abs() > 1e-9 * scale)
+            {
+                out.push(b);
+            }
+        }
+        out.sort_by(f64::total_cmp);
+        out
+    }
+
+    /// How `/plan/command` relates to the plan (for logs): continuous u(t)
+    /// sampled at the ideal grid (right limits at jumps) or a feedback
+    /// command held for `hold_period_s`, the jump times, and the planner's
+    /// details (e.g. the endogenous segments' Legendre coefficients).
+    pub fn command_info(&self) -> serde_json::Value {
+        match self.hold_period() {
+            Some(p) => serde_json::json!({
+                "kind": "held", "hold_period_s": p, "details": self.details,
+            }),
+            None => serde_json::json!({
+                "kind": "continuous", "jumps_s": self.jumps(), "details": self.details,
+            }),
+        }
+    }
+
     /// Name of a label index ("?" when out of range).
     pub fn label_name(&self, label: usize) -> &str {
         self.labels.get(label).map(String::as_str).unwrap_or("?")
     }
+}
+
+/// How far from a jump its one-sided limits are read, s: far below any
+/// step, far above round-off of t.
+pub fn jump_offset(t: f64) -> f64 {
+    1e-11 * t.abs().max(1.0)
 }
 
 /// Velocity profile along one straight segment: smoothstep ramps of length

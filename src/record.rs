@@ -161,4 +161,6 @@ pub struct RunRecord<'a> {
     pub links: &'a [LinkVisual],
     /// Scalar metrics (name → value), as in the summary.
     pub metrics: &'a [(String, f64)],
+    /// How the logged commands relate to the plan ([`crate::plan::Plan::command_info`]).
+    pub command: &'a serde_json::Value,
 }

@@ -223,6 +223,7 @@ fn write_logs(
     let (start, _) = prep.start_goal();
     let links = prep.system.links(&prep.robot, &start);
     let overlays = prep.system.overlays(&start, goal);
+    let command = plan.command_info();
     let rec = RunRecord {
         scenario: &prep.scenario.name,
         state_names: model.state_names(),
@@ -239,6 +240,7 @@ fn write_logs(
         comparison: cmp,
         links: &links,
         metrics: &outcome.metrics,
+        command: &command,
     };
     crate::log::mcap::write_mcap(&dir.join("run.mcap"), &rec).map_err(|e| e.to_string())?;
     crate::report::data::write(&dir.join("series.json"), &rec)?;

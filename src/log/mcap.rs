@@ -9,7 +9,7 @@
 //!
 //! | topic | encoding / schema | one message per | content |
 //! |---|---|---|---|
-//! | `/plan/command` | json / jsonschema `anholonomy.Command` | ideal sample | inputs applied from `t` on |
+//! | `/plan/command` | json / jsonschema `anholonomy.Command` | ideal sample | inputs applied from `t` on (right limit at a jump) |
 //! | `/ideal/state` | json / jsonschema `anholonomy.State` | ideal sample | ideal (RK4) state |
 //! | `/sim/state` | json / jsonschema `anholonomy.State` | sim sample | state read back from physics |
 //! | `/sim/channels` | json / jsonschema `anholonomy.SimChannels` | sim sample | extra physics measurements (slip, momentum, ...), when the system has any |
@@ -37,6 +37,10 @@
 //! * `anholonomy.metrics`: every metric, name → value (decimal string).
 //! * `anholonomy.run`: `scenario`, `state_names`, `input_names`, `labels`
 //!   (comma-separated), `ideal_samples`, `sim_samples`, `sim_steps`.
+//! * `anholonomy.plan`: `command` (`continuous`: samples of an open-loop
+//!   u(t); `held`: a feedback command held for `hold_period_s`), `jumps_s`
+//!   (JSON list of the instants where u jumps) and `details` (JSON, the
+//!   planner's record: enough to recompute u(t), e.g. Legendre coefficients).
 
 use std::borrow::Cow;
 use std::collections::BTreeMap;
@@ -132,6 +136,9 @@ fn write_file(tmp: &Path, rec: &RunRecord<'_>) -> Result<(), LogError> {
             .map_err(fg_err)?;
         handle
             .write_metadata("anholonomy.run", run_metadata(rec))
+            .map_err(fg_err)?;
+        handle
+            .write_metadata("anholonomy.plan", plan_metadata(rec))
             .map_err(fg_err)
     });
     // Always close (flushes and finishes the file) before reporting errors.
@@ -701,6 +708,22 @@ fn metrics_metadata(rec: &RunRecord<'_>) -> BTreeMap<String, String> {
         .iter()
         .map(|(k, v)| (k.clone(), v.to_string()))
         .collect()
+}
+
+/// How `/plan/command` relates to the plan, and the plan itself (JSON strings).
+fn plan_metadata(rec: &RunRecord<'_>) -> BTreeMap<String, String> {
+    let c = rec.command;
+    let mut m = BTreeMap::new();
+    m.insert(
+        "command".into(),
+        c["kind"].as_str().unwrap_or("continuous").to_string(),
+    );
+    for key in ["hold_period_s", "jumps_s", "details"] {
+        if !c[key].is_null() {
+            m.insert(key.into(), c[key].to_string());
+        }
+    }
+    m
 }
 
 fn run_metadata(rec: &RunRecord<'_>) -> BTreeMap<String, String> {

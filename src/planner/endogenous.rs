@@ -983,6 +983,9 @@ pub fn into_plan<const M: usize>(
             "final_error": r.final_error,
             "endpoint": r.endpoint,
             "constraints": r.constraints,
+            "rk4_steps": r.rk4_steps,
+            "start": s.start,
+            "duration": s.duration,
             "lambda": s.lambda,
         })).collect::<Vec<_>>(),
         "joins": joins,
@@ -995,17 +998,10 @@ pub fn into_plan<const M: usize>(
             return (Input::zeros(M), if t < 0.0 { 0 } else { n - 1 });
         }
         let t = t.clamp(0.0, duration);
+        // At a join u may jump (no continuity imposed); the ideal run splits
+        // its steps there and reads each side strictly inside its segment
+        // (`Plan::jumps`), so the value at the instant itself is never used.
         let (u, idx) = sol.eval(t, Order::Value);
-        // At a join u may jump (no continuity imposed): return the midpoint of
-        // the one-sided limits there, so an RK4 grid through the join sees
-        // errors of opposite sign in the steps before and after it, which
-        // cancel to first order (plain right-continuity costs ~dt/6·jump).
-        let k = (t / t_seg).round();
-        if k >= 1.0 && (k as usize) < n && (t - k * t_seg).abs() < 1e-9 {
-            let left = sol.segments[k as usize - 1].eval(t, Order::Value);
-            let mid = left.iter().zip(&u).map(|(a, b)| 0.5 * (a + b)).collect();
-            return (Input::from_vec(mid), idx);
-        }
         (Input::from_vec(u), idx)
     }));
     Plan {

@@ -158,6 +158,7 @@ impl Fixture {
             goal_heading: self.goal.get(2).copied(),
             overlays: &[],
             series: &[],
+            command: &serde_json::Value::Null,
         }
     }
 }
