@@ -235,6 +235,34 @@ fn sphere_error(plan: &Plan, a: f64, start: &State, goal: &State) -> (f64, f64) 
     ((y[0] - goal[0]).hypot(y[1] - goal[1]), angle)
 }
 
+/// A sphere planner on one task: plan (or a justified refusal), limits, and
+/// the independently integrated end within 1e-8 m and 1e-7 rad of the goal.
+fn sphere_task(
+    plan: &dyn Fn(&RollingSphere, &State, &State, &Limits) -> Result<Plan, PlanError>,
+    start: [f64; 5],
+    goal: [f64; 3],
+) -> Result<(), TestCaseError> {
+    let a = 1.0;
+    let deg = |v: f64| v.to_radians();
+    let start = st(&[
+        start[0],
+        start[1],
+        deg(start[2]),
+        deg(start[3]),
+        deg(start[4]),
+    ]);
+    let goal = st(&[goal[0], goal[1], 0.0, 0.0, deg(goal[2])]);
+    let lim = limits(vec![2.0, 2.0]);
+    let plan = match plan(&RollingSphere { a }, &start, &goal, &lim) {
+        Ok(p) => p,
+        Err(e) => return justified(&e),
+    };
+    within_limits(&plan, &lim)?;
+    let (dp, dr) = sphere_error(&plan, a, &start, &goal);
+    prop_assert!(dp < 1e-8 && dr < 1e-7, "position {dp}, orientation {dr}");
+    Ok(())
+}
+
 proptest! {
     #![proptest_config(ProptestConfig::with_cases(12))]
 
@@ -242,43 +270,21 @@ proptest! {
     /// with any final φ (the planners' task).
     #[test]
     fn sphere_geometric_plans_land_on_random_goals(
-        x in -4.0f64..4.0, y in -4.0f64..4.0,
-        al in -180.0f64..180.0, th in 0.0f64..180.0, ph in -180.0f64..180.0,
-        gx in -2.0f64..2.0, gy in -2.0f64..2.0, bf in -180.0f64..180.0,
+        s in (-4.0f64..4.0, -4.0f64..4.0, -180.0f64..180.0, 0.0f64..180.0, -180.0f64..180.0),
+        g in (-2.0f64..2.0, -2.0f64..2.0, -180.0f64..180.0),
     ) {
-        let a = 1.0;
-        let start = st(&[x, y, al.to_radians(), th.to_radians(), ph.to_radians()]);
-        let goal = st(&[gx, gy, 0.0, 0.0, bf.to_radians()]);
-        let lim = limits(vec![2.0, 2.0]);
         let p = sphere_geometric::SphereGeometricParams::default();
-        let plan = match sphere_geometric::plan(&RollingSphere { a }, &start, &goal, &p, &lim) {
-            Ok(p) => p,
-            Err(e) => return justified(&e),
-        };
-        within_limits(&plan, &lim)?;
-        let (dp, dr) = sphere_error(&plan, a, &start, &goal);
-        prop_assert!(dp < 1e-8 && dr < 1e-7, "position {dp}, orientation {dr}");
+        sphere_task(&|m, s, g, l| sphere_geometric::plan(m, s, g, &p, l), [s.0, s.1, s.2, s.3, s.4], [g.0, g.1, g.2])?;
     }
 
     /// The same tasks with the triangle planner.
     #[test]
     fn sphere_triangle_plans_land_on_random_goals(
-        x in -3.0f64..3.0, y in -3.0f64..3.0,
-        al in -180.0f64..180.0, th in 0.0f64..180.0, ph in -180.0f64..180.0,
-        gx in -2.0f64..2.0, gy in -2.0f64..2.0, bf in -180.0f64..180.0,
+        s in (-3.0f64..3.0, -3.0f64..3.0, -180.0f64..180.0, 0.0f64..180.0, -180.0f64..180.0),
+        g in (-2.0f64..2.0, -2.0f64..2.0, -180.0f64..180.0),
     ) {
-        let a = 1.0;
-        let start = st(&[x, y, al.to_radians(), th.to_radians(), ph.to_radians()]);
-        let goal = st(&[gx, gy, 0.0, 0.0, bf.to_radians()]);
-        let lim = limits(vec![2.0, 2.0]);
         let p = sphere_triangle::SphereTriangleParams::default();
-        let plan = match sphere_triangle::plan(&RollingSphere { a }, &start, &goal, &p, &lim) {
-            Ok(p) => p,
-            Err(e) => return justified(&e),
-        };
-        within_limits(&plan, &lim)?;
-        let (dp, dr) = sphere_error(&plan, a, &start, &goal);
-        prop_assert!(dp < 1e-8 && dr < 1e-7, "position {dp}, orientation {dr}");
+        sphere_task(&|m, s, g, l| sphere_triangle::plan(m, s, g, &p, l), [s.0, s.1, s.2, s.3, s.4], [g.0, g.1, g.2])?;
     }
 }
 
