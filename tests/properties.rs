@@ -235,10 +235,14 @@ fn sphere_error(plan: &Plan, a: f64, start: &State, goal: &State) -> (f64, f64) 
     ((y[0] - goal[0]).hypot(y[1] - goal[1]), angle)
 }
 
+/// A sphere planner with its parameters bound.
+type SpherePlanner<'a> =
+    dyn Fn(&RollingSphere, &State, &State, &Limits) -> Result<Plan, PlanError> + 'a;
+
 /// A sphere planner on one task: plan (or a justified refusal), limits, and
 /// the independently integrated end within 1e-8 m and 1e-7 rad of the goal.
 fn sphere_task(
-    plan: &dyn Fn(&RollingSphere, &State, &State, &Limits) -> Result<Plan, PlanError>,
+    plan: &SpherePlanner<'_>,
     start: [f64; 5],
     goal: [f64; 3],
 ) -> Result<(), TestCaseError> {
