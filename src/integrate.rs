@@ -53,6 +53,42 @@ pub fn step_count(duration: f64, dt: f64) -> usize {
     }
 }
 
+/// When a held feedback policy is sampled: sample j is due at j · period,
+/// computed by multiplication. (Accumulating `next += period` drifts by
+/// round-off over thousands of samples, and a sample that falls 1e-12 s
+/// late on the step grid is taken one whole step later: that hold lasts
+/// 24 ms instead of 20 ms, and the policy's own prediction of where its
+/// hold ends is off by 4 ms of motion.)
+#[derive(Debug, Clone)]
+pub struct SampleClock {
+    period: f64,
+    /// Slack for round-off of the step grid, s.
+    tol: f64,
+    next: u64,
+}
+
+impl SampleClock {
+    /// A clock sampling every `period` on a grid of step `dt`, first at 0.
+    pub fn new(period: f64, dt: f64) -> SampleClock {
+        SampleClock {
+            period,
+            tol: 1e-6 * dt,
+            next: 0,
+        }
+    }
+
+    /// Whether a sample is due at time `t` (then the next one is scheduled
+    /// after `t`).
+    pub fn due(&mut self, t: f64) -> bool {
+        if t + self.tol >= self.next as f64 * self.period {
+            self.next = ((t + self.tol) / self.period).floor() as u64 + 1;
+            true
+        } else {
+            false
+        }
+    }
+}
+
 /// Whether `t` is (within round-off of) one of `jumps`.
 fn is_jump(jumps: &[f64], t: f64) -> bool {
     jumps
@@ -73,17 +109,16 @@ pub fn simulate(model: &dyn KinematicModel, plan: &Plan, q0: &State, dt: f64) ->
     let mut out = Trajectory::default();
     let mut q = q0.clone();
     let mut held = ctl.command(0.0, &q);
-    let mut next_sample = 0.0;
+    let mut clock = hold.map(|p| SampleClock::new(p, dt));
     // Open-loop u(t) may jump at segment joins: no RK4 step straddles one
     // (it is split there) and each piece reads u strictly on its own side.
     let jumps = plan.jumps();
     for k in 0..n {
         let t = k as f64 * dt;
-        let cmd = match hold {
-            Some(p) => {
-                if t + 1e-12 >= next_sample {
+        let cmd = match &mut clock {
+            Some(clock) => {
+                if clock.due(t) {
                     held = ctl.command(t, &q);
-                    next_sample += p;
                 }
                 held.clone()
             }
@@ -144,4 +179,31 @@ pub fn simulate(model: &dyn KinematicModel, plan: &Plan, q0: &State, dt: f64) ->
     out.u.push(last.u);
     out.label.push(last.label);
     out
+}
+
+#[cfg(test)]
+mod tests {
+    use super::SampleClock;
+
+    /// Every hold spans the same number of steps over a long run (an
+    /// accumulated `next += period` let samples slip by a step after a few
+    /// thousand holds), and a period shorter than the step samples every step.
+    #[test]
+    fn the_sample_clock_does_not_drift() {
+        for (period, dt) in [(0.02, 0.004), (0.02, 0.002), (0.01, 0.001), (0.05, 0.002)] {
+            let per: usize = (period / dt as f64).round() as usize;
+            let mut clock = SampleClock::new(period, dt);
+            let mut last = None;
+            for k in 0..2_000_000usize {
+                if clock.due(k as f64 * dt) {
+                    if let Some(l) = last {
+                        assert_eq!(k - l, per, "period {period}, dt {dt}: hold at step {k}");
+                    }
+                    last = Some(k);
+                }
+            }
+        }
+        let mut fast = SampleClock::new(1e-4, 1e-3);
+        assert!((0..100).all(|k| fast.due(k as f64 * 1e-3)));
+    }
 }

@@ -114,7 +114,7 @@ pub fn replay_with(
         out.link_poses.reserve(n + 1);
     }
     let hold = plan.hold_period();
-    let mut next_sample = 0.0;
+    let mut clock = hold.map(|p| crate::integrate::SampleClock::new(p, dt));
     let q0 = sys.state();
     let mut held = ctl.command(0.0, &q0);
     let zero = Input::zeros(held.u.len());
@@ -136,11 +136,10 @@ pub fn replay_with(
         let q = out.traj.q.last().expect("the start state is recorded");
         let idle = k >= n_plan || finished;
         if !idle {
-            match hold {
-                Some(p) => {
-                    if t + 1e-12 >= next_sample {
+            match &mut clock {
+                Some(clock) => {
+                    if clock.due(t) {
                         held = ctl.command(t, q);
-                        next_sample += p;
                     }
                 }
                 None => held = ctl.command(t + 0.5 * dt, q),
