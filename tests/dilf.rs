@@ -325,6 +325,7 @@ fn the_pair_holds_the_beam_at_rest_as_the_fe_model_says() {
         start: &q,
         obstacles: &[],
         beam: Some(&spec),
+        arm: Default::default(),
     };
     let mut sys = MobileManipulatorPhysics::new(&robot, &path, &settings, &setup).unwrap();
     let names = sys.channel_names();
@@ -517,4 +518,99 @@ fn a_misspelt_metric_is_bad_input_naming_the_nearest_one() {
     );
     bad(&text, "thresholds.sim_body_contact", "sim_body_contact =");
     bad(&text, "sim_body_contacts", "sim_body_contact =");
+}
+
+/// Table I cannot be carried by any rigid object. With the tool frames T1,
+/// T2 and any grasp offsets O1, O2, a rigid object needs O1⁻¹ (T1⁻¹T2) O2
+/// equal at start and goal, i.e. T1⁻¹T2 itself equal. For two identical
+/// robots side by side with the same heading and arms whose first joint is
+/// vertical, T1⁻¹T2 = A1⁻¹ · Tr(Rz(−q¹₁) (0, D)) · Rz(q²₁ − q¹₁) · A2 (A: the
+/// rest of each arm, D: the platforms' lateral distance): Table I swaps the
+/// shoulder angles (90°, −60°) → (60°, −90°) and widens D from 3 to 4 m, so
+/// the relative translation changes by (4 sin 60° − 3, 4 cos 60°), 2.053 m,
+/// for any such arm whose tool origin does not move with joints 5 and 6;
+/// robot 2's q5 (−45° → −30°) only adds a 15° relative rotation. Checked on
+/// the model's own kinematics and on random arms written here.
+#[test]
+fn table_i_cannot_carry_a_rigid_object() {
+    use anholonomy::model::mobile_manipulator::frames;
+    use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
+    use rand::{Rng, SeedableRng};
+    use std::f64::consts::PI;
+    let closed = ((4.0 * (PI / 3.0).sin() - 3.0).powi(2) + (4.0 * (PI / 3.0).cos()).powi(2)).sqrt();
+    assert!((closed - 2.053).abs() < 5e-4);
+    let start = table_i(false);
+    let goal = table_i(true);
+    let iso = |p: &anholonomy::model::spatial::Pose<f64>| {
+        let m = nalgebra::Matrix3::from_fn(|i, j| p.r[i][j]);
+        Isometry3::from_parts(
+            Translation3::new(p.p[0], p.p[1], p.p[2]),
+            UnitQuaternion::from_matrix(&m),
+        )
+    };
+    let rel = |q: &[f64]| iso(&frames(&q[..DOF]).tool).inverse() * iso(&frames(&q[DOF..]).tool);
+    let (a, b) = (rel(&start), rel(&goal));
+    let dt = (a.translation.vector - b.translation.vector).norm();
+    assert!((dt - closed).abs() < 1e-9, "model: {dt} vs {closed}");
+    let rot = a.rotation.angle_to(&b.rotation).to_degrees();
+    assert!(
+        (rot - 15.0).abs() < 1e-9,
+        "relative rotation changes by {rot}°"
+    );
+    // Random arms: standard DH rows 1–4 random, rows 5–6 pure rotations
+    // (the tool origin at the wrist centre), a random mount on the platform.
+    let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(404);
+    for _ in 0..20 {
+        let rows: Vec<[f64; 3]> = (0..6)
+            .map(|i| {
+                let len = if i < 4 { 0.6 } else { 0.0 };
+                [
+                    rng.random_range(0.0..=len),
+                    rng.random_range(0.0..=len),
+                    rng.random_range(-PI..PI),
+                ]
+            })
+            .collect();
+        let mount = Vector3::new(
+            rng.random_range(-0.5..0.5),
+            rng.random_range(-0.5..0.5),
+            rng.random_range(0.2..1.5),
+        );
+        let tool = |q: &[f64]| {
+            let mut m = Isometry3::new(Vector3::new(q[0], q[1], 0.0), Vector3::z() * q[2])
+                * Translation3::from(mount);
+            for (row, qi) in rows.iter().zip(&q[3..9]) {
+                m = m
+                    * UnitQuaternion::from_axis_angle(&Vector3::z_axis(), *qi)
+                    * Translation3::new(row[0], 0.0, row[1])
+                    * UnitQuaternion::from_axis_angle(&Vector3::x_axis(), row[2]);
+            }
+            m
+        };
+        let rel = |q: &[f64]| tool(&q[..DOF]).inverse() * tool(&q[DOF..]);
+        let dt = (rel(&start).translation.vector - rel(&goal).translation.vector).norm();
+        assert!((dt - closed).abs() < 1e-9, "random arm: {dt} vs {closed}");
+    }
+}
+
+/// Table I (rad), the initial (`goal = false`) or desired configuration.
+fn table_i(goal: bool) -> Vec<f64> {
+    use std::f64::consts::PI;
+    let arm = |q1: f64, q5: f64| [q1, -PI / 2.0, 2.0 * PI / 3.0, 0.0, q5, 0.0];
+    let (p1, p2, a1, a2) = if goal {
+        (
+            [0.0, -2.0, 0.0],
+            [0.0, 2.0, 0.0],
+            arm(PI / 3.0, -PI / 6.0),
+            arm(-PI / 2.0, -PI / 6.0),
+        )
+    } else {
+        (
+            [-11.0, 3.0, -PI / 2.0],
+            [-8.0, 3.0, -PI / 2.0],
+            arm(PI / 2.0, -PI / 6.0),
+            arm(-PI / 3.0, -PI / 4.0),
+        )
+    };
+    [&p1[..], &a1, &p2, &a2].concat()
 }

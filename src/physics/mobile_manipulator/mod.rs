@@ -126,6 +126,28 @@ pub struct MobileManipulatorPhysics {
     max_torque: f64,
     dt: f64,
     last_u: Input,
+    arm_servo: ArmServo,
+}
+
+/// How the arm joints execute their rate commands.
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum ArmServo {
+    /// Stiff position servos: the commanded rate plus a pull with time
+    /// constant [`SERVO_TIME`] towards the integral of the commanded rates,
+    /// torque-limited at `[sim] motor_max_torque` (default).
+    #[default]
+    Stiff,
+    /// Joint-space impedance with gravity compensation, as cooperative
+    /// manipulators holding one object are run: τ = g(q) + K (q_ref − q) +
+    /// D (u − q̇), g(q) the arm's own gravity load (the carried object's
+    /// is not compensated). A kinematic inconsistency between the robots then
+    /// bends the arms by ~force/K instead of loading the object.
+    Impedance {
+        /// K per joint, N m/rad.
+        stiffness: [f64; 6],
+        /// D per joint, N m s/rad.
+        damping: [f64; 6],
+    },
 }
 
 /// What the world holds besides the ground.
@@ -137,6 +159,8 @@ pub struct Setup<'a> {
     pub obstacles: &'a [ObstacleShape],
     /// The beam two robots carry.
     pub beam: Option<&'a CarriedBeam>,
+    /// The arms' joint servos.
+    pub arm: ArmServo,
 }
 
 /// Check the URDF's arm joints against the DH table the planner uses.
@@ -265,7 +289,23 @@ impl MobileManipulatorPhysics {
             max_torque: sim.motor_max_torque,
             dt: sim.dt,
             last_u: Input::zeros(INPUTS * k),
+            arm_servo: setup.arm,
         };
+        if let ArmServo::Impedance { .. } = setup.arm {
+            for r in 0..me.robots.len() {
+                for a in 0..6 {
+                    if let Some(jt) = me
+                        .sim
+                        .world
+                        .impulse_joints
+                        .get_mut(me.robots[r].arm_joints[a], false)
+                    {
+                        jt.data
+                            .set_motor_model(JointAxis::AngX, MotorModel::ForceBased);
+                    }
+                }
+            }
+        }
         me.apply(&Input::zeros(INPUTS * k));
         me.refresh_clearances();
         Ok(me)
@@ -481,7 +521,7 @@ impl PhysicsSystem for MobileManipulatorPhysics {
             self.sim.drive_joint(r.wheel_joints[0], left, gain, tmax);
             self.sim.drive_joint(r.wheel_joints[1], right, gain, tmax);
             for a in 0..6 {
-                // A joint servo: the commanded rate plus a stiff pull towards the
+                // A joint servo: the commanded rate plus a pull towards the
                 // integral of the commanded rates (the reference at the end of this
                 // step), as a real arm's position servos execute velocity commands.
                 // A bare velocity motor lets the arm sag under gravity (joint 3
@@ -489,6 +529,10 @@ impl PhysicsSystem for MobileManipulatorPhysics {
                 // whose gains vanish at the goal, cannot undo.
                 let rate = u[j + 2 + a];
                 let target = angles::wrap(r.q_ref[a] + rate * self.dt);
+                let (stiff, damp) = match self.arm_servo {
+                    ArmServo::Stiff => (gain / SERVO_TIME, gain),
+                    ArmServo::Impedance { stiffness, damping } => (stiffness[a], damping[a]),
+                };
                 if let Some(jt) = self
                     .sim
                     .world
@@ -500,14 +544,17 @@ impl PhysicsSystem for MobileManipulatorPhysics {
                             JointAxis::AngX,
                             rl::r(target),
                             rl::r(rate),
-                            rl::r(gain / SERVO_TIME),
-                            rl::r(gain),
+                            rl::r(stiff),
+                            rl::r(damp),
                         )
                         .set_motor_max_force(JointAxis::AngX, rl::r(tmax));
                 }
             }
         }
         self.last_u = u.clone();
+        if let ArmServo::Impedance { .. } = self.arm_servo {
+            self.compensate_gravity();
+        }
     }
 
     fn step(&mut self) {
@@ -631,6 +678,44 @@ impl MobileManipulatorPhysics {
             lateral: f(v_axle.dot(side)),
             speed: f(v_axle.dot(heading)),
             turn_rate: f(base.angvel().z),
+        }
+    }
+
+    /// Gravity compensation of the impedance servos: each arm joint gets
+    /// the torque that holds the links beyond it against gravity, applied as
+    /// an equal and opposite pair on its two bodies (set anew every step:
+    /// Rapier keeps user torques until reset).
+    fn compensate_gravity(&mut self) {
+        let g = self.sim.world.gravity;
+        let bodies = &mut self.sim.world.bodies;
+        for r in &self.robots {
+            let chain: Vec<RigidBodyHandle> = r.arm.iter().copied().chain([r.tool]).collect();
+            // Mass and first moment of the links beyond each joint, tool first.
+            let mut torque = [Vector::ZERO; 6];
+            let (mut m, mut mc) = (0.0, Vector::ZERO);
+            for k in (0..chain.len()).rev() {
+                let b = &bodies[chain[k]];
+                m += b.mass();
+                mc += b.center_of_mass() * b.mass();
+                if k < 6 {
+                    let (p, z) = (b.translation(), *b.rotation() * Vector::Z);
+                    // Gravity's moment about the joint axis, negated.
+                    let about = (mc - p * m).cross(g);
+                    torque[k] = -z * about.dot(z);
+                }
+            }
+            for k in 0..6 {
+                let parent = if k == 0 { r.base } else { r.arm[k - 1] };
+                bodies[chain[k]].reset_torques(false);
+                if k == 0 {
+                    bodies[parent].reset_torques(false);
+                }
+            }
+            for k in 0..6 {
+                let parent = if k == 0 { r.base } else { r.arm[k - 1] };
+                bodies[chain[k]].add_torque(torque[k], true);
+                bodies[parent].add_torque(-torque[k], true);
+            }
         }
     }
 

@@ -14,6 +14,7 @@
 
 pub mod contact;
 pub mod control;
+pub mod guard;
 pub mod object;
 pub mod point_world;
 pub mod potential;
@@ -121,6 +122,15 @@ pub struct DilfParams {
     /// Convergence test.
     #[serde(default)]
     pub tolerance: Tolerance,
+    /// The hold guard ([`guard`]): scale each held input down until the
+    /// predicted end of the hold keeps every barrier at half its value or
+    /// more (ours: Eq. 18 is a continuous-time law, sampled here).
+    #[serde(default = "default_hold_guard")]
+    pub hold_guard: bool,
+}
+
+fn default_hold_guard() -> bool {
+    true
 }
 
 fn default_lambda() -> f64 {
@@ -229,9 +239,10 @@ impl DilfParams {
 }
 
 /// Label indices of the plan: one per combination of the robots' Eq. 18b
-/// branches, then these.
+/// branches, the same combinations with the input scaled down by the hold
+/// guard, then these.
 fn labels(robots: usize) -> Vec<String> {
-    let mut out: Vec<String> = (0..3usize.pow(robots as u32))
+    let combos: Vec<String> = (0..3usize.pow(robots as u32))
         .map(|code| {
             (0..robots)
                 .map(|r| Branch::name(code / 3usize.pow(r as u32) % 3))
@@ -239,6 +250,8 @@ fn labels(robots: usize) -> Vec<String> {
                 .join("/")
         })
         .collect();
+    let mut out = combos.clone();
+    out.extend(combos.iter().map(|c| format!("{c} (guarded)")));
     out.extend(["converged", "collision", "singular", "solver failure"].map(String::from));
     out
 }
@@ -247,12 +260,19 @@ struct Policy {
     scene: Arc<Scene>,
     gains: Gains,
     tolerance: Tolerance,
+    /// Hold period, s, and whether the hold guard acts.
+    period: f64,
+    hold_guard: bool,
 }
 
 struct DilfController {
     policy: Arc<Policy>,
     warm: Warm,
-    labels: usize,
+    /// Warm starts of the guard's evaluations at predicted states.
+    guard_warm: Warm,
+    /// Number of branch combinations (3^k): the guarded ones follow, then
+    /// "converged" at 2 · combos.
+    combos: usize,
 }
 
 impl Controller for DilfController {
@@ -265,25 +285,36 @@ impl Controller for DilfController {
             done: true,
         };
         let q = q.as_slice();
+        let done = 2 * self.combos;
         if p.tolerance.reached(q, &p.scene.goal) {
-            return stop(self.labels);
+            return stop(done);
         }
         let (e, f) = match p.scene.field(q, &mut self.warm) {
             Ok(x) => x,
-            Err(_) => return stop(self.labels + 3),
+            Err(_) => return stop(done + 3),
         };
         if e.min_beta <= 0.0 {
-            return stop(self.labels + 1);
+            return stop(done + 1);
         }
         if e.min_singular <= 0.0 {
-            return stop(self.labels + 2);
+            return stop(done + 2);
         }
-        let (u, branches) = control::control(q, &f, &p.scene.goal, &p.gains);
-        let label = branches
+        let (mut u, branches) = control::control(q, &f, &p.scene.goal, &p.gains);
+        let mut label = branches
             .iter()
             .enumerate()
             .map(|(r, b)| b.index() * 3usize.pow(r as u32))
             .sum();
+        if p.hold_guard {
+            let now = guard::Barriers {
+                beta: e.min_beta,
+                singular: e.min_singular,
+                admissible: guard::admissible_margin(&p.scene, q),
+            };
+            if guard::guard(&p.scene, q, &now, &mut u, p.period, &mut self.guard_warm) > 0 {
+                label += self.combos;
+            }
+        }
         Command {
             u: Input::from_vec(u),
             label,
@@ -299,7 +330,8 @@ impl PolicyFactory for Factory {
         Box::new(DilfController {
             policy: self.0.clone(),
             warm: self.0.scene.warm(),
-            labels: 3usize.pow(self.0.scene.robots as u32),
+            guard_warm: self.0.scene.warm(),
+            combos: 3usize.pow(self.0.scene.robots as u32),
         })
     }
 }
@@ -330,9 +362,13 @@ pub fn check_configuration(scene: &Scene, q: &[f64], what: &str) -> Result<(), P
         ));
     }
     if let (true, Some(o)) = (e.overstrained, &scene.object) {
+        let stretch = o.max_stretch.map_or(String::new(), |eps| {
+            let q_f = o.state::<f64>(q).q_f;
+            format!(", stretch {:.4} m against max_stretch = {eps}", q_f[0])
+        });
         return Err(bad(format!(
             "deforms the beam beyond its bound: a node leaves the ball ‖q_fi‖ ≤ q_F = {} \
-             (‖q_f‖∞ = {:.3}, grasp points {:.3} m apart, beam {:.3} m)",
+             or the stretch bound (‖q_f‖∞ = {:.3}{stretch}, grasp points {:.3} m apart, beam {:.3} m)",
             o.q_max,
             e.max_deformation,
             object::grasp_distance(q),
@@ -366,6 +402,8 @@ pub fn plan(scene: Arc<Scene>, start: &State, params: &DilfParams) -> Result<Pla
         scene,
         gains: params.gains(),
         tolerance: params.tolerance,
+        period: params.period,
+        hold_guard: params.hold_guard,
     };
     Ok(Plan {
         labels,

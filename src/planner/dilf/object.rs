@@ -38,6 +38,9 @@ pub struct Carried {
     pub segments: usize,
     /// Cross semi-axes of the beam's ellipsoids, m (the rod's radius plus a margin).
     pub radius: f64,
+    /// Bound on the grasps' axial deformation |q_f[0]| (stretch or
+    /// shortening along the beam), m, if any (ours, see [`Carried::with_max_stretch`]).
+    pub max_stretch: Option<f64>,
 }
 
 /// The beam at one configuration.
@@ -111,7 +114,34 @@ impl Carried {
             q_max,
             segments: segments.max(1),
             radius,
+            max_stretch: None,
         })
+    }
+
+    /// Bound the axial component of q_s, |q_f[0]| ≤ `eps` (m), besides Eq.
+    /// 5. Eq. 5 bounds every component alike, in m and rad, but a solid rod
+    /// is ~10⁵ times stiffer in stretch than in bending: a few millimetres
+    /// of stretch are kilonewtons, which a real pair of grippers does not
+    /// hold, while Eq. 5's q_F lets the plan stretch the beam's model by
+    /// decimetres. The bound enters b_f as one more factor 1 − (q_f[0]/ε)²
+    /// (zero at the bound), like the nodes' balls.
+    pub fn with_max_stretch(mut self, eps: Option<f64>) -> Carried {
+        self.max_stretch = eps;
+        self
+    }
+
+    /// The least admissibility margin of q_f: per node 1 − ‖q_fi‖²/q_F²
+    /// (Eq. 12's balls, normalised), and 1 − (q_f[0]/ε)² under a stretch
+    /// bound. ≤ 0: outside the admissible set.
+    pub fn margin(&self, q_f: &[f64; 12]) -> f64 {
+        let balls = q_f
+            .chunks(6)
+            .map(|node| 1.0 - node.iter().map(|x| x * x).sum::<f64>() / (self.q_max * self.q_max))
+            .fold(f64::INFINITY, f64::min);
+        match self.max_stretch {
+            Some(eps) => balls.min(1.0 - (q_f[0] / eps).powi(2)),
+            None => balls,
+        }
     }
 
     /// End-0 pose and q_f at q (both robots), generic for exact derivatives.
@@ -136,6 +166,14 @@ impl Carried {
                 s += *x * *x;
             }
             let b = k::<T>(1.0) - s * (1.0 / (self.q_max * self.q_max));
+            if b.re() <= 0.0 {
+                return None;
+            }
+            out += b.ln();
+        }
+        if let Some(eps) = self.max_stretch {
+            let u = q_f[0] * (1.0 / eps);
+            let b = k::<T>(1.0) - u * u;
             if b.re() <= 0.0 {
                 return None;
             }

@@ -264,6 +264,7 @@ impl Scene {
         let n = self.parts.len();
         let beam = self.object.as_ref().map_or(0, |o| o.segments);
         self.robots * n * (self.obstacles.len() + (self.robots - 1) * n + beam)
+            + beam * self.obstacles.len()
     }
 
     /// A fresh warm-start cache.
@@ -393,6 +394,27 @@ impl Scene {
                 }
             }
         }
+        // The beam as a body (§III-B: its ellipsoids are modelled like the
+        // manipulator's): each segment against each static obstacle enters
+        // V as a factor b̃ = β/(1+β), so V vanishes when the beam touches a
+        // wall, as it does for the robots' parts. (The robots' parts against
+        // the beam are above, in their own workspace copies.)
+        if let Some((segs, _, _)) = &beam {
+            for seg in segs {
+                let seg_re = seg.re();
+                for o in &self.obstacles {
+                    let sol = self.solve(&seg_re, &o.shape, &mut warm.0[slot])?;
+                    slot += 1;
+                    min_beta = min_beta.min(sol.value);
+                    collided |= sol.value <= 0.0;
+                    if !collided {
+                        // Envelope theorem: the obstacle is fixed, the segment moves.
+                        let b = seg.value(spatial::lift(sol.x)) * sol.mu + sol.value;
+                        ln_num += (b / (b + 1.0)).ln();
+                    }
+                }
+            }
+        }
         let mut min_singular = f64::INFINITY;
         for r in 0..self.robots {
             for (_, s) in self
@@ -516,6 +538,21 @@ impl Scene {
                             format!("robot {} part `{}`", o + 1, other.name),
                             &placed[o * n + j],
                         )?;
+                    }
+                }
+            }
+        }
+        if let Some(obj) = &self.object {
+            let st = obj.state::<f64>(q);
+            for (j, seg) in obj.ellipsoids(&st).iter().enumerate() {
+                for o in &self.obstacles {
+                    let c = contact::solve(seg, &o.shape, None)?;
+                    if best.as_ref().is_none_or(|b| c.value < b.beta) {
+                        best = Some(Closest {
+                            part: format!("the beam's segment {} of {}", j + 1, obj.segments),
+                            obstacle: format!("obstacle `{}`", o.name),
+                            beta: c.value,
+                        });
                     }
                 }
             }

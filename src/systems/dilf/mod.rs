@@ -20,19 +20,21 @@
 //! (least √det(JᵀJ) = |det J| of any arm at the policy samples, m³: the
 //! singularity-avoidance claim), `slip_lateral_max`, `joint_rate_error_max`.
 
+mod config;
+mod overlay;
+
+pub use config::{ArmServoConfig, BeamConfig, MobileManipulatorConfig, ObstacleConfig};
+
 use super::System;
 use crate::integrate::Trajectory;
 use crate::model::ellipsoid::Superellipsoid;
-use crate::model::mobile_manipulator::{self as mm, CollisionShape, Link, MobileManipulator};
+use crate::model::mobile_manipulator::{self as mm, MobileManipulator};
 use crate::model::{KinematicModel, State};
 use crate::physics::beam::BeamOptions;
 use crate::physics::mobile_manipulator::{
-    link_visuals, robot_link_name, CarriedBeam, MobileManipulatorPhysics, ObstacleShape, Setup,
+    link_visuals, robot_link_name, ArmServo, CarriedBeam, MobileManipulatorPhysics, ObstacleShape,
+    Setup,
 };
-use crate::physics::rapier::parry::bounding_volume::Aabb;
-use crate::physics::rapier::parry::shape::{Ball, ConvexPolyhedron, Cuboid, Cylinder, Shape};
-use crate::physics::rapier::prelude::Vector;
-use crate::physics::real as rl;
 use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
@@ -42,168 +44,13 @@ use crate::planner::dilf::potential::{Obstacle, PotentialParams, Scene};
 use crate::planner::dilf::{self, DilfParams};
 use crate::planner::PlanError;
 use crate::record::{Comparison, LinkVisual, Overlay, Series, SimTrajectory};
-use serde::{Deserialize, Serialize};
-use std::path::{Path, PathBuf};
+use overlay::{wireframe, ClearanceProbe};
+use std::path::Path;
 use std::sync::Arc;
-
-/// One obstacle as written in the scenario.
-#[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct ObstacleConfig {
-    /// Name (unique; used in messages and logs).
-    pub name: String,
-    /// Centre, m.
-    pub center: [f64; 3],
-    /// Semi-axes a, b, c, m (> 0).
-    pub semi_axes: [f64; 3],
-    /// Exponent n ≥ ½ (1: ellipsoid; large: box-like).
-    #[serde(default = "one")]
-    pub exponent: f64,
-    /// Orientation, URDF roll-pitch-yaw in degrees.
-    #[serde(default)]
-    pub rpy_deg: [f64; 3],
-}
-
-fn one() -> f64 {
-    1.0
-}
-
-impl ObstacleConfig {
-    /// The shape (angles in radians).
-    pub fn shape(&self) -> Superellipsoid {
-        Superellipsoid {
-            center: self.center,
-            semi_axes: self.semi_axes,
-            exponent: self.exponent,
-            rpy: self.rpy_deg.map(f64::to_radians),
-        }
-    }
-}
-
-/// `[model.beam]`: the deformable beam two robots carry (seed 004 §II, §VI).
-/// Defaults: a 10 mm pultruded GFRP rod ([`crate::model::beam::GFRP_ROD_10MM`]).
-#[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct BeamConfig {
-    /// Young's modulus E, Pa.
-    #[serde(default = "default_e")]
-    pub youngs_modulus: f64,
-    /// Shear modulus G, Pa.
-    #[serde(default = "default_g")]
-    pub shear_modulus: f64,
-    /// Density, kg/m³.
-    #[serde(default = "default_rho")]
-    pub density: f64,
-    /// Outer diameter of the solid round section, m.
-    #[serde(default = "default_diameter")]
-    pub diameter: f64,
-    /// Rest length between the grasps, m; default: their distance at the start
-    /// (the beam is straight there). Given, it must match that distance.
-    pub length: Option<f64>,
-    /// q_F of Eq. 5, the bound on ‖q_f‖∞ (m and rad, SI reading of the paper's units).
-    pub max_deformation: f64,
-    /// Ellipsoids along the beam (obstacles of the robot parts).
-    #[serde(default = "default_segments")]
-    pub segments: usize,
-    /// Their cross semi-axes, m (the rod's radius plus a margin).
-    #[serde(default = "default_beam_radius")]
-    pub radius: f64,
-    /// Compliant joints of the physics beam's chain (even, 2..=40; N + 1
-    /// rigid segments, see `physics::beam`).
-    #[serde(default = "default_physics_segments")]
-    pub physics_segments: usize,
-}
-
-fn default_physics_segments() -> usize {
-    BeamOptions::default().segments
-}
-
-fn default_e() -> f64 {
-    crate::model::beam::GFRP_ROD_10MM.0.youngs_modulus
-}
-fn default_g() -> f64 {
-    crate::model::beam::GFRP_ROD_10MM.0.shear_modulus
-}
-fn default_rho() -> f64 {
-    crate::model::beam::GFRP_ROD_10MM.0.density
-}
-fn default_diameter() -> f64 {
-    crate::model::beam::GFRP_ROD_10MM.1.outer_diameter
-}
-fn default_segments() -> usize {
-    8
-}
-fn default_beam_radius() -> f64 {
-    0.02
-}
-
-impl BeamConfig {
-    /// The beam (rest length filled in later) or the offending key.
-    fn beam(&self) -> Result<crate::model::beam::Beam, String> {
-        use crate::model::beam::{Beam, Material, Section};
-        let b = Beam {
-            material: Material {
-                youngs_modulus: self.youngs_modulus,
-                shear_modulus: self.shear_modulus,
-                density: self.density,
-            },
-            section: Section {
-                outer_diameter: self.diameter,
-                inner_diameter: 0.0,
-            },
-            length: self.length.unwrap_or(1.0),
-        };
-        let pos = |v: f64| v.is_finite() && v > 0.0;
-        for (key, v) in [
-            ("youngs_modulus", self.youngs_modulus),
-            ("shear_modulus", self.shear_modulus),
-            ("density", self.density),
-            ("diameter", self.diameter),
-            ("radius", self.radius),
-            ("max_deformation", self.max_deformation),
-        ] {
-            if !pos(v) {
-                return Err(format!("key `model.beam.{key}`: must be > 0, got {v}"));
-            }
-        }
-        if let Some(l) = self.length.filter(|l| !pos(*l)) {
-            return Err(format!("key `model.beam.length`: must be > 0, got {l}"));
-        }
-        if !(1..=64).contains(&self.segments) {
-            return Err("key `model.beam.segments`: must be in 1..=64".into());
-        }
-        let n = self.physics_segments;
-        if !((2..=40).contains(&n) && n.is_multiple_of(2)) {
-            return Err(format!(
-                "key `model.beam.physics_segments`: must be even and in 2..=40, got {n}"
-            ));
-        }
-        Ok(b)
-    }
-}
-
-/// `[model] kind = "mobile_manipulator"`.
-#[derive(Debug, Clone, Deserialize, Serialize)]
-#[serde(deny_unknown_fields)]
-pub struct MobileManipulatorConfig {
-    /// URDF file (one robot), relative to the scenario file.
-    pub urdf: PathBuf,
-    /// Number of robots (1, or 2 carrying `[model.beam]`).
-    #[serde(default = "one_robot")]
-    pub robots: usize,
-    /// The beam two robots carry (required with `robots = 2`).
-    pub beam: Option<BeamConfig>,
-    /// Obstacles.
-    #[serde(default)]
-    pub obstacles: Vec<ObstacleConfig>,
-}
-
-fn one_robot() -> usize {
-    1
-}
 
 struct Dilf {
     model: MobileManipulator,
+    arm: ArmServo,
     beam: Option<BeamConfig>,
     params: DilfParams,
     obstacles: Vec<(String, Superellipsoid)>,
@@ -228,6 +75,7 @@ pub fn build(
     if let Some(b) = &cfg.beam {
         b.beam()?;
     }
+    let arm = cfg.arm_servo.servo()?;
     let mut obstacles = Vec::new();
     for (i, o) in cfg.obstacles.iter().enumerate() {
         let shape = o.shape();
@@ -257,6 +105,7 @@ pub fn build(
     let params = params.clone();
     Ok(Box::new(Dilf {
         model: MobileManipulator { robots: cfg.robots },
+        arm,
         beam: cfg.beam.clone(),
         params,
         probe: ClearanceProbe::new(&obstacles),
@@ -287,7 +136,7 @@ impl Dilf {
             };
             format!("key `{key}`: {e}")
         })?;
-        Ok(scene.with_object(carried))
+        Ok(scene.with_object(carried.with_max_stretch(b.max_stretch)))
     }
 
     fn scene_without_beam(&self, goal: &State) -> Result<Scene, String> {
@@ -482,6 +331,7 @@ impl System for Dilf {
             start,
             obstacles: &obstacles,
             beam: beam.as_ref(),
+            arm: self.arm,
         };
         Ok(Box::new(MobileManipulatorPhysics::new(
             robot, urdf_dir, sim, &setup,
@@ -569,7 +419,11 @@ impl System for Dilf {
         );
         let mut clear = Series::new("clearance/ideal".into());
         for k in self.policy_samples(ideal) {
-            clear.push(ideal.t[k], self.probe.clearance(ideal.q[k].as_slice()));
+            clear.push(
+                ideal.t[k],
+                self.probe
+                    .clearance(ideal.q[k].as_slice(), scene.object.as_ref()),
+            );
         }
         let ideal_clear = clear.values.iter().copied().fold(f64::INFINITY, f64::min);
         let chan = |n: &str| sim.channel(n).unwrap_or(&[]);
@@ -642,135 +496,4 @@ impl System for Dilf {
             vec![a_ideal.v, a_sim.v, a_ideal.beta, a_sim.beta, clear],
         )
     }
-}
-
-/// Three principal rings and two latitude rings of a shape, as overlays.
-fn wireframe(name: &str, s: &Superellipsoid, link: Option<&str>, rgba: [f32; 4]) -> Vec<Overlay> {
-    let placed = s.at_rest();
-    let e = 1.0 / s.exponent;
-    let sp = |c: f64| c.signum() * c.abs().powf(e);
-    let ring = |f: &dyn Fn(f64) -> [f64; 3]| -> Vec<[f64; 3]> {
-        (0..=48)
-            .map(|i| placed.to_world(f(std::f64::consts::TAU * i as f64 / 48.0)))
-            .collect()
-    };
-    let [a, b, c] = s.semi_axes;
-    let mut rings: Vec<Vec<[f64; 3]>> = vec![
-        ring(&|t| [a * sp(t.cos()), b * sp(t.sin()), 0.0]),
-        ring(&|t| [a * sp(t.cos()), 0.0, c * sp(t.sin())]),
-        ring(&|t| [0.0, b * sp(t.cos()), c * sp(t.sin())]),
-    ];
-    for lat in [-0.6f64, 0.6] {
-        let (cl, sl) = (sp(lat.cos()), sp(lat.sin()));
-        rings.push(ring(&|t| {
-            [a * cl * sp(t.cos()), b * cl * sp(t.sin()), c * sl]
-        }));
-    }
-    rings
-        .into_iter()
-        .enumerate()
-        .map(|(k, points)| Overlay {
-            name: format!("{name}_{k}"),
-            points,
-            link: link.map(String::from),
-            rgba,
-        })
-        .collect()
-}
-
-/// Distances between the robot's URDF collision shapes (placed by forward
-/// kinematics) and the obstacle colliders (the same convex hulls the physics
-/// uses), for the ideal run.
-struct ClearanceProbe {
-    obstacles: Vec<(ConvexPolyhedron, Aabb)>,
-    links: Vec<(Link, Box<dyn Shape>, crate::model::spatial::Pose<f64>)>,
-}
-
-impl ClearanceProbe {
-    fn new(obstacles: &[(String, Superellipsoid)]) -> Self {
-        use crate::model::spatial::{rot_x, rot_y, Pose};
-        let obstacles = obstacles
-            .iter()
-            .filter_map(|(_, s)| {
-                let (v, _) = s.mesh(16, 32);
-                let pts: Vec<Vector> = v.iter().map(|p| rl::vector(p[0], p[1], p[2])).collect();
-                let hull = ConvexPolyhedron::from_convex_hull(&pts)?;
-                let aabb = hull.local_aabb();
-                Some((hull, aabb))
-            })
-            .collect();
-        let links = mm::collision_shapes()
-            .into_iter()
-            .map(|(link, shape)| -> (Link, Box<dyn Shape>, Pose<f64>) {
-                match shape {
-                    CollisionShape::Cuboid { center, half } => (
-                        link,
-                        Box::new(Cuboid::new(rl::vector(half[0], half[1], half[2]))),
-                        Pose::translation(center),
-                    ),
-                    CollisionShape::Sphere { center, radius } => (
-                        link,
-                        Box::new(Ball::new(rl::r(radius))),
-                        Pose::translation(center),
-                    ),
-                    CollisionShape::Cylinder {
-                        center,
-                        axis,
-                        radius,
-                        half_length,
-                    } => {
-                        // parry cylinders run along their local y axis.
-                        let r = if axis[0].abs() > 0.5 {
-                            rot_z_f(-std::f64::consts::FRAC_PI_2)
-                        } else if axis[2].abs() > 0.5 {
-                            rot_x(std::f64::consts::FRAC_PI_2)
-                        } else {
-                            rot_y(0.0)
-                        };
-                        (
-                            link,
-                            Box::new(Cylinder::new(rl::r(half_length), rl::r(radius))),
-                            Pose { r, p: center },
-                        )
-                    }
-                }
-            })
-            .collect();
-        ClearanceProbe { obstacles, links }
-    }
-
-    /// Least distance at configuration q (every robot), m.
-    fn clearance(&self, q: &[f64]) -> f64 {
-        q.chunks(mm::DOF)
-            .map(|r| self.clearance_one(r))
-            .fold(f64::INFINITY, f64::min)
-    }
-
-    fn clearance_one(&self, q: &[f64]) -> f64 {
-        let f = mm::frames::<f64>(q);
-        let mut best = f64::INFINITY;
-        for (link, shape, local) in &self.links {
-            let pose = rl::from_spatial(&f.link(*link).then(local));
-            let aabb = shape.compute_aabb(&pose);
-            for (hull, ob) in &self.obstacles {
-                let d = (aabb.mins - ob.maxs)
-                    .max(ob.mins - aabb.maxs)
-                    .max(Vector::ZERO);
-                if rl::f(d.length()) >= best {
-                    continue;
-                }
-                let id = crate::physics::rapier::math::Pose::IDENTITY;
-                if let Ok(d) =
-                    crate::physics::rapier::parry::query::distance(&pose, shape.as_ref(), &id, hull)
-                {
-                    best = best.min(rl::f(d.distance));
-                }
-            }
-        }
-        best
-    }
-}
-
-fn rot_z_f(a: f64) -> crate::model::spatial::M3<f64> {
-    crate::model::spatial::rot_z(a)
 }
