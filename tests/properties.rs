@@ -10,6 +10,8 @@
 //! The disk and the sphere are integrated from their own equations written
 //! here, not through the crate's models.
 
+mod common;
+
 use anholonomy::model::disk::RollingDisk;
 use anholonomy::model::rolling_sphere::{euler_to_rotation, RollingSphere};
 use anholonomy::model::space_manipulator::SpaceManipulator;
@@ -252,7 +254,7 @@ fn disk_plan_with_a_step_across_a_ramp_end() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(24))]
+    #![proptest_config(common::prop_config::config(24))]
 
     /// The rolling disk (seed 000), both algorithms.
     #[test]
@@ -328,7 +330,7 @@ fn sphere_task(
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(12))]
+    #![proptest_config(common::prop_config::config(12))]
 
     /// The rolling sphere (seed 003), geometric planner, to an upright goal
     /// with any final φ (the planners' task).
@@ -391,7 +393,7 @@ fn endogenous_fast_controls_are_checked_on_a_finer_grid() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(16))]
+    #![proptest_config(common::prop_config::config(16))]
 
     /// The endogenous planner (seeds 000/001) on random tasks. It stops at
     /// 1e-8 rad on a grid it has checked against one twice as fine;
