@@ -647,6 +647,7 @@ mod tests {
     }
 
     proptest! {
+        #![proptest_config(crate::prop_config::config(256))]
         /// Against an independent formulation: the verdict from the signed
         /// relative change and the direction.
         #[test]

@@ -23,6 +23,8 @@ pub mod physics;
 pub mod plan;
 pub mod planner;
 pub mod progress;
+#[cfg(test)]
+mod prop_config;
 pub mod record;
 pub mod report;
 pub mod runner;

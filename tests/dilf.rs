@@ -195,7 +195,7 @@ fn open_field_task(start: [f64; 9], goal: [f64; 9]) -> (f64, f64, usize) {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+    #![proptest_config(common::prop_config::config(24))]
 
     /// Random starts and goals in the open: the ideal closed loop converges
     /// within the tolerance, and integrating its recorded inputs exactly

@@ -10,6 +10,8 @@
 //! The disk and the sphere are integrated from their own equations written
 //! here, not through the crate's models.
 
+mod common;
+
 use anholonomy::model::disk::RollingDisk;
 use anholonomy::model::rolling_sphere::{euler_to_rotation, RollingSphere};
 use anholonomy::model::space_manipulator::SpaceManipulator;
@@ -112,17 +114,44 @@ fn command(plan: &Plan) -> impl Fn(f64) -> Input + '_ {
 }
 
 /// Integrate y' = rhs(y, u(t)) over the whole plan, one Dormand–Prince run
-/// per piece between joins; u is evaluated strictly inside each piece, so
+/// per piece between knots; u is evaluated strictly inside each piece, so
 /// a command that jumps at a join is taken from the piece it belongs to.
-fn integrate(plan: &Plan, rhs: &dyn Fn(&[f64], &Input) -> Vec<f64>, mut y: Vec<f64>) -> Vec<f64> {
+///
+/// Knots are the plan's joins, where u may jump, and brackets around the
+/// places inside each leg where u is continuous but not smooth: every leg
+/// is timed by [`Limits::profile`], quintic smoothstep ramps of length
+/// ramp · d / raw at both ends (d the leg's duration, raw ∈ (d − step, d]
+/// its duration before rounding up to the step), and u''' jumps where a ramp
+/// meets the cruise. A Dormand–Prince step across such a point has an O(h⁴)
+/// error that its embedded estimate can miss: in
+/// `disk_plan_with_a_step_across_a_ramp_end` one accepted 13 ms step was
+/// 3.5e-8 off in θ while its estimate read 2.2e-12. Bracketed, such a step
+/// is shorter than 2 · ramp · step / (d − step) (1e-3 s here), where that
+/// error is below 2e-12 (u''' jumps by at most 60 · max rate / ramp³).
+/// Knots are only hints: a wrong one costs accuracy, it cannot hide an
+/// error.
+fn integrate(
+    plan: &Plan,
+    lim: &Limits,
+    rhs: &dyn Fn(&[f64], &Input) -> Vec<f64>,
+    mut y: Vec<f64>,
+) -> Vec<f64> {
     let u = command(plan);
-    let mut knots: Vec<f64> = plan
-        .segments
-        .iter()
-        .flat_map(|s| [s.start, s.end])
-        .chain([0.0, plan.duration])
-        .filter(|t| (0.0..=plan.duration).contains(t))
-        .collect();
+    let mut knots: Vec<f64> = vec![0.0, plan.duration];
+    for s in &plan.segments {
+        knots.extend([s.start, s.end]);
+        let d = s.end - s.start;
+        if d > lim.step {
+            for r in [lim.ramp * d / (d + lim.step), lim.ramp * d / (d - lim.step)] {
+                knots.extend(
+                    [s.start + r, s.end - r]
+                        .into_iter()
+                        .filter(|t| *t > s.start && *t < s.end),
+                );
+            }
+        }
+    }
+    knots.retain(|t| (0.0..=plan.duration).contains(t));
     knots.sort_by(f64::total_cmp);
     knots.dedup_by(|a, b| (*a - *b).abs() < 1e-12);
     for w in knots.windows(2) {
@@ -172,8 +201,60 @@ fn st(v: &[f64]) -> State {
     State::from_vec(v.to_vec())
 }
 
+/// The disk planner (seed 000) with either algorithm on one task: `None`
+/// for a justified refusal, else the largest coordinate error of the
+/// independently integrated plan (m for x, y; rad for θ, α).
+fn disk_error(s: [f64; 4], g: [f64; 4], free: bool) -> Result<Option<f64>, TestCaseError> {
+    let r = 0.5;
+    let disk = RollingDisk { r };
+    let params = stokes_disk::StokesDiskParams {
+        algorithm: if free {
+            stokes_disk::Algorithm::SingularityFree
+        } else {
+            stokes_disk::Algorithm::SingularityAvoiding
+        },
+        ..Default::default()
+    };
+    let lim = limits(vec![4.0, 2.0]);
+    let plan = match stokes_disk::plan(&disk, &st(&s), &st(&g), &params, &lim) {
+        Ok(p) => p,
+        Err(e) => return justified(&e).map(|_| None),
+    };
+    within_limits(&plan, &lim)?;
+    // x' = r sin α θ', y' = r cos α θ' (α from +y towards +x), θ' , α'.
+    let rhs = |q: &[f64], u: &Input| vec![r * q[3].sin() * u[0], r * q[3].cos() * u[0], u[0], u[1]];
+    let q = integrate(&plan, &lim, &rhs, s.to_vec());
+    Ok(Some(
+        (0..4).map(|i| (q[i] - g[i]).abs()).fold(0.0, f64::max),
+    ))
+}
+
+/// The task CI once failed on (1.3e-8 m in x, 3.5e-8 rad in θ): not the
+/// planner, whose plan lands within 1e-11 when integrated between its exact
+/// ramp ends, but this file's integrator, then split only at the joins. One step of 13 ms
+/// started 3.3 ms before the cruise of "loop x: PQ" met its down ramp
+/// (where u''' jumps); its error was 3.5e-8 in θ, its embedded estimate
+/// 2.2e-12, and it was accepted.
+#[test]
+fn disk_plan_with_a_step_across_a_ramp_end() {
+    let s = [
+        0.2984547286497703,
+        -1.0702154532105754,
+        1.800000169915383,
+        -1.4233106456454354,
+    ];
+    let g = [
+        2.858383891797132,
+        1.318415641727352,
+        1.6451469916640955,
+        0.8039210122473632,
+    ];
+    let e = disk_error(s, g, true).unwrap().expect("planned");
+    assert!(e < 1e-10, "lands {e} from the goal");
+}
+
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(24))]
+    #![proptest_config(common::prop_config::config(24))]
 
     /// The rolling disk (seed 000), both algorithms.
     #[test]
@@ -182,34 +263,15 @@ proptest! {
         g in prop::array::uniform4(-3.0f64..3.0),
         free in any::<bool>(),
     ) {
-        let r = 0.5;
-        let disk = RollingDisk { r };
-        let params = stokes_disk::StokesDiskParams {
-            algorithm: if free {
-                stokes_disk::Algorithm::SingularityFree
-            } else {
-                stokes_disk::Algorithm::SingularityAvoiding
-            },
-            ..Default::default()
-        };
-        let lim = limits(vec![4.0, 2.0]);
-        let plan = match stokes_disk::plan(&disk, &st(&s), &st(&g), &params, &lim) {
-            Ok(p) => p,
-            Err(e) => return justified(&e),
-        };
-        within_limits(&plan, &lim)?;
-        // x' = r sin α θ', y' = r cos α θ' (α from +y towards +x), θ' , α'.
-        let rhs = |q: &[f64], u: &Input| vec![r * q[3].sin() * u[0], r * q[3].cos() * u[0], u[0], u[1]];
-        let q = integrate(&plan, &rhs, s.to_vec());
-        for i in 0..4 {
-            prop_assert!((q[i] - g[i]).abs() < 1e-8, "coord {i}: {} vs {}", q[i], g[i]);
+        if let Some(e) = disk_error(s, g, free)? {
+            prop_assert!(e < 1e-8, "lands {e} from the goal");
         }
     }
 }
 
 /// The sphere's final (position error, rotation angle to the goal), from
 /// ẋ = a ω_y, ẏ = −a ω_x, Ṙ = [ω]× R integrated on the rotation matrix.
-fn sphere_error(plan: &Plan, a: f64, start: &State, goal: &State) -> (f64, f64) {
+fn sphere_error(plan: &Plan, lim: &Limits, a: f64, start: &State, goal: &State) -> (f64, f64) {
     let r0 = euler_to_rotation(start[2], start[3], start[4]);
     let mut y = vec![start[0], start[1]];
     y.extend(r0.matrix().iter());
@@ -220,7 +282,7 @@ fn sphere_error(plan: &Plan, a: f64, start: &State, goal: &State) -> (f64, f64) 
         d.extend((w.cross_matrix() * r).iter());
         d
     };
-    let y = integrate(plan, &rhs, y);
+    let y = integrate(plan, lim, &rhs, y);
     let r = Matrix3::from_column_slice(&y[2..11]);
     let rg = euler_to_rotation(goal[2], goal[3], goal[4]);
     let rel = rg.matrix().transpose() * r;
@@ -262,13 +324,13 @@ fn sphere_task(
         Err(e) => return justified(&e),
     };
     within_limits(&plan, &lim)?;
-    let (dp, dr) = sphere_error(&plan, a, &start, &goal);
+    let (dp, dr) = sphere_error(&plan, &lim, a, &start, &goal);
     prop_assert!(dp < 1e-8 && dr < 1e-7, "position {dp}, orientation {dr}");
     Ok(())
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(12))]
+    #![proptest_config(common::prop_config::config(12))]
 
     /// The rolling sphere (seed 003), geometric planner, to an upright goal
     /// with any final φ (the planners' task).
@@ -312,7 +374,7 @@ fn endogenous_error(s: [f64; 3], v: [f64; 3], g: [f64; 3]) -> Result<Option<f64>
     };
     within_limits(&plan, &lim)?;
     let rhs = |q: &[f64], u: &Input| m.velocity(0.0, &st(q), u).as_slice().to_vec();
-    let q = integrate(&plan, &rhs, rad(s).as_slice().to_vec());
+    let q = integrate(&plan, &lim, &rhs, rad(s).as_slice().to_vec());
     let goal = rad(g);
     Ok(Some(
         (0..3).map(|i| (q[i] - goal[i]).abs()).fold(0.0, f64::max),
@@ -330,8 +392,25 @@ fn endogenous_fast_controls_are_checked_on_a_finer_grid() {
     assert!(e < 1e-7, "lands {e} rad from the goal");
 }
 
+/// Found with `PROPTEST_RNG_SEED=1 PROPTEST_CASES=2000` (case 1510): the
+/// planner panics with "entered unreachable code: the loop returns at it ==
+/// max_iterations" (src/planner/endogenous.rs): the endpoint meets the
+/// tolerance on its grid at the last iteration, the finer grid disagrees,
+/// and the grid refinement's `continue` leaves the loop. Ignored until the
+/// planner refuses (or refines on) there.
+#[test]
+#[ignore = "endogenous planner panics when its grid is refined at the iteration cap"]
+fn endogenous_refinement_at_the_iteration_cap() {
+    let s = [-0.2596745930497413, -9.06095208002427, 0.5669005010089121];
+    let v = [-19.77435146664092, -24.370281141061586, -25.024953507469874];
+    let g = [9.443537317152924, 13.239053228945892, -6.7535649820470605];
+    if let Some(e) = endogenous_error(s, v, g).unwrap() {
+        assert!(e < 1e-7, "lands {e} rad from the goal");
+    }
+}
+
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(16))]
+    #![proptest_config(common::prop_config::config(16))]
 
     /// The endogenous planner (seeds 000/001) on random tasks. It stops at
     /// 1e-8 rad on a grid it has checked against one twice as fine;

@@ -404,7 +404,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(64))]
+        #![proptest_config(crate::prop_config::config(64))]
         /// Each model annihilates its own constraint set (the seed: "g_a and g_3 annihilate Ω1,
         /// g_b and g_3 annihilate Ω2"), in five coordinates and reduced to four.
         #[test]
@@ -449,7 +449,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(32))]
+        #![proptest_config(crate::prop_config::config(32))]
         /// g_a = g_b at ψ = 0 (no switching uncertainty when driving straight).
         #[test]
         fn models_agree_when_straight(th in -4.0..4.0f64, l in 0.1..1.0f64, r in 0.1..1.0f64) {

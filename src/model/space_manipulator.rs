@@ -396,7 +396,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(64))]
+        #![proptest_config(crate::prop_config::config(64))]
 
         /// Seed 000's θ0' (Eq. 13-14) equals seed 001's Eq. 29 (p = 0) for the same robot.
         #[test]

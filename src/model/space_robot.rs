@@ -332,7 +332,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(64))]
+        #![proptest_config(crate::prop_config::config(64))]
         /// The multibody zero-angular-momentum rate equals Eq. 13 everywhere,
         /// which validates the geometry documented at the top of this module.
         #[test]

@@ -536,7 +536,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(48))]
+        #![proptest_config(crate::prop_config::config(48))]
 
         /// Bodies, inertials, collisions and joints of random chains match an independent
         /// forward-kinematics computation (nalgebra, URDF conventions).

@@ -915,7 +915,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(48))]
+        #![proptest_config(crate::prop_config::config(48))]
         /// Any pose meeting the tightened rule ends within ε after P3 (bound ≈ 0.56 ε).
         #[test]
         fn tightened_stop_rule_guarantees_epsilon(
@@ -934,7 +934,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(12))]
+        #![proptest_config(crate::prop_config::config(12))]
         /// Lemma 4.1 (completeness): random start/goal pairs within 6 m are reached under a
         /// random telegraph σ.
         #[test]

@@ -761,7 +761,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(12))]
+        #![proptest_config(crate::prop_config::config(12))]
         #[test]
         fn random_starts_reach_goal(
             x in -4.0..4.0f64, y in -4.0..4.0f64,

@@ -1071,7 +1071,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(12))]
+        #![proptest_config(crate::prop_config::config(12))]
         #[test]
         fn random_starts_reach_goal(
             x in -3.0..3.0f64, y in -3.0..3.0f64,

@@ -627,7 +627,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(64))]
+        #![proptest_config(crate::prop_config::config(64))]
         #[test]
         fn random_tasks_reach_the_goal(s in config(), g in config(), free in any::<bool>()) {
             let p = StokesDiskParams {

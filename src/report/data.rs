@@ -265,6 +265,7 @@ mod tests {
     use proptest::prelude::*;
 
     proptest! {
+        #![proptest_config(crate::prop_config::config(256))]
         /// Decimation keeps the extremes of every bucket, hence of the whole series,
         /// and the end points; indices are increasing.
         #[test]

@@ -1,6 +1,9 @@
 //! Helpers shared by the integration tests (included with `mod common;`).
 #![allow(dead_code)]
 
+#[path = "../../src/prop_config.rs"]
+pub mod prop_config;
+
 use anholonomy::runner::{run, Prepared, RunOptions, RunOutcome};
 use anholonomy::scenario::Scenario;
 use std::path::{Path, PathBuf};

@@ -413,7 +413,7 @@ fn invalid_beam_is_refused() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(48))]
+    #![proptest_config(crate::prop_config::config(48))]
 
     #[test]
     fn stiffness_is_symmetric_psd_with_six_rigid_modes(beam in beam_strategy()) {

@@ -176,7 +176,7 @@ mod tests {
     }
 
     proptest! {
-        #![proptest_config(ProptestConfig::with_cases(256))]
+        #![proptest_config(crate::prop_config::config(256))]
 
         /// exp against nalgebra's matrix exponential of the 4×4 twist
         /// matrix, and log(exp ξ) = ξ.

@@ -446,7 +446,7 @@ fn repeatable_cycle_returns_vehicle() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(32))]
+    #![proptest_config(crate::prop_config::config(32))]
     /// Random tasks: the legs' exact line integrals land on the goal θ0.
     #[test]
     fn random_tasks_reach_goal(
@@ -667,7 +667,7 @@ fn search_picks_the_cheapest() {
 }
 
 proptest! {
-    #![proptest_config(ProptestConfig::with_cases(32))]
+    #![proptest_config(crate::prop_config::config(32))]
     /// Issue 13 item 5: random tasks with the default search. A plan is
     /// returned or the refusal names its reason; the plan's legs, integrated
     /// independently of the harness's RK4 (exact line integrals, Gauss-Legendre),
