@@ -36,7 +36,9 @@ pub struct Timings {
     pub ideal: f64,
     /// Physics replay.
     pub physics: f64,
-    /// Comparison and log writing.
+    /// Comparison, metrics and the system's analysis (e.g. V along both runs).
+    pub analysis: f64,
+    /// Log writing.
     pub logs: f64,
     /// Everything.
     pub total: f64,
@@ -150,6 +152,8 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
             failures.push(format!("{k} = {v} < {floor}"));
         }
     }
+    timings.analysis = t0.elapsed().as_secs_f64();
+    let t0 = Instant::now();
     let mut outcome = RunOutcome {
         name: sc.name.clone(),
         planner: sc.planner.kind().into(),
