@@ -309,7 +309,8 @@ impl Default for EndogenousParams {
 /// How one segment's iteration went.
 #[derive(Debug, Clone, serde::Serialize)]
 pub struct SegmentReport {
-    /// Iterations (Jacobian updates) performed.
+    /// Iterations performed: Jacobian updates, plus one per grid refinement
+    /// (the re-evaluation of the end-point map on the finer grid).
     pub iterations: usize,
     /// ‖e‖ before the first update, rad.
     pub initial_error: f64,
@@ -635,7 +636,14 @@ fn solve_segment<const N: usize, const M: usize, S: EndogenousSystem<N, M>>(
     let mut best_it = 0;
     let mut initial = f64::NAN;
     let mut history = Vec::new();
-    for it in 0..=set.max_iterations {
+    // A `loop`, not `for it in 0..=max_iterations`: every pass either
+    // returns or goes on to the next evaluation at the bottom, and both ways
+    // on (a Jacobian step, a grid refinement) check the cap first, so the
+    // loop cannot run out without an answer. (The `for` form had a refinement
+    // at the last iteration leave the loop and reach an `unreachable!()`:
+    // found by the property tests, `endogenous_refinement_at_the_iteration_cap`.)
+    let mut it = 0;
+    loop {
         let q_end = integ.run(sys, q0, lambda.as_slice(), Some(&mut jac));
         let e = q_end - target;
         let norm = e.norm();
@@ -688,10 +696,26 @@ fn solve_segment<const N: usize, const M: usize, S: EndogenousSystem<N, M>>(
                     ),
                 ));
             }
+            if it == set.max_iterations {
+                return Err(no_conv(
+                    label,
+                    format!(
+                        "iteration cap {it} reached while refining the integration grid: on {steps} RK4 steps \
+                         the endpoint meets {:.1e} rad, on {} it is {e_fine:.3e} rad off and needs further \
+                         iterations (the controls are too fast for the grid: shorten the task, lengthen \
+                         segment_time or raise max_iterations)",
+                        set.tolerance,
+                        2 * steps
+                    ),
+                ));
+            }
+            // Refine and iterate on from the current λ; the re-evaluation on
+            // the finer grid is the next iteration.
             steps *= 2;
             integ = Integrator::<N, M>::new(duration, steps, terms);
             best = f64::INFINITY;
             best_it = it;
+            it += 1;
             continue;
         }
         if it == set.max_iterations {
@@ -726,8 +750,8 @@ fn solve_segment<const N: usize, const M: usize, S: EndogenousSystem<N, M>>(
         let rhs = DVector::from_column_slice(e.as_slice()) * -step;
         let nu = pinv_solve(&(&jac * &z), &rhs, set.rcond);
         lambda += &z * nu;
+        it += 1;
     }
-    unreachable!("the loop returns at it == max_iterations")
 }
 
 fn invalid(name: &str, reason: impl Into<String>) -> PlanError {
@@ -1571,6 +1595,49 @@ mod tests {
             Err(PlanError::NoConvergence(why)) => assert!(why.contains("iteration cap"), "{why}"),
             other => panic!("expected NoConvergence, got {:?}", other.map(|p| p.details)),
         }
+    }
+
+    /// A grid refinement at the last allowed iteration is refused with the
+    /// reason (it once fell out of the iteration loop into `unreachable!()`);
+    /// one iteration more lets the refined grid finish, as without a cap.
+    #[test]
+    fn grid_refinement_at_the_iteration_cap_is_refused() {
+        let model = SpaceManipulator::default();
+        // 4 RK4 steps over 20 s: the coarse grid's picture of the endpoint
+        // is wrong, so its first convergence needs a refinement.
+        let params = EndogenousParams {
+            rk4_steps: 4,
+            ..Default::default()
+        };
+        let free = solve::<3, 2, _>(&model, &q0(), &[yf()], &params).unwrap();
+        let rep = &free.reports[0];
+        assert!(rep.rk4_steps > 4, "no refinement: {}", rep.rk4_steps);
+        // The first iteration whose error met the tolerance on the 4-step grid.
+        let first = rep
+            .error_history
+            .iter()
+            .position(|&e| e <= params.tolerance)
+            .unwrap();
+        assert!(first < rep.iterations);
+        let capped = EndogenousParams {
+            max_iterations: first,
+            ..params.clone()
+        };
+        match solve::<3, 2, _>(&model, &q0(), &[yf()], &capped) {
+            Err(PlanError::NoConvergence(why)) => {
+                assert!(
+                    why.contains("iteration cap") && why.contains("refining"),
+                    "{why}"
+                )
+            }
+            other => panic!("expected NoConvergence, got {:?}", other.map(|s| s.reports)),
+        }
+        let enough = EndogenousParams {
+            max_iterations: rep.iterations,
+            ..params
+        };
+        let sol = solve::<3, 2, _>(&model, &q0(), &[yf()], &enough).unwrap();
+        assert_eq!(sol.segments[0].lambda, free.segments[0].lambda);
     }
 
     #[test]
