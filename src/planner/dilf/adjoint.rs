@@ -17,14 +17,16 @@
 //! * the forces on a robot's links become wrenches (F, M about the world
 //!   origin), and joint j (axis z_j through p_j) gets z_j · (M − p_j × F)
 //!   of everything it moves; the platform's x, y, θ likewise;
-//! * the beam: its ellipsoids and b_f in 12-wide dual numbers over small rigid
-//!   motions of the two tool frames, contracted with the segments' adjoints
-//!   into wrenches on the tools.
+//! * the beam: its segments move rigidly with robot 1's tool (a wrench) and
+//!   deform with q_f; ∂/∂q_f of the segments' adjoint-weighted poses and of
+//!   b_f in dual numbers over q_f, chained through q_f's derivatives over
+//!   rigid motions of both tool frames ([`beam_wrenches`]).
 //!
 //! The generic dual-number evaluation stays as the reference; tests compare
 //! the two at random configurations.
 
 use super::contact::{Contact, ContactError};
+use super::object::{BeamState, Carried};
 use super::point_world::{switch_exponent, switch_log};
 use super::potential::{placed_generic, DipoleProduct, Evaluation, GoalFrame, Scene, Warm};
 use crate::model::ellipsoid::PlacedEllipsoid;
@@ -111,7 +113,6 @@ pub struct Scratch {
     frames: Vec<RobotFrames<f64>>,
     placed: Vec<PlacedEllipsoid<f64>>,
     segs: Vec<PlacedEllipsoid<f64>>,
-    segs_d: Vec<PlacedEllipsoid<D12>>,
     pairs: Vec<Pair>,
     ln_b: Vec<f64>,
     parts: Vec<PartStage>,
@@ -204,6 +205,66 @@ fn moved_frame(p: &Pose<f64>, off: usize) -> Pose<D12> {
     }
 }
 
+/// Wrenches (force, moment about the origin) on the two robots' tool frames
+/// from the beam segments' adjoints and ∂V/∂ln b_f (`ln_bar`). The segments
+/// are end0 ∘ (their frame in end 0, a function of q_f): they move rigidly
+/// with end 0, i.e. with robot 1's tool, and deform with q_f, which depends
+/// on both tools. The first part is a plain wrench; the second is ∂/∂q_f in
+/// dual numbers over q_f, chained through q_f's derivatives over rigid
+/// motions of the tools (12-wide, but only the FE map, not the segments).
+fn beam_wrenches(
+    o: &Carried,
+    st: &BeamState<f64>,
+    tools: [&Pose<f64>; 2],
+    segs: &[PlacedEllipsoid<f64>],
+    seg_bar: &[(V3<f64>, M3<f64>)],
+    ln_bar: f64,
+) -> [(V3<f64>, V3<f64>); 2] {
+    let q_f: [D12; 12] = std::array::from_fn(|i| D12::from_re(st.q_f[i]).derivative(i));
+    let mut a = [0.0; 12];
+    if let Some(l) = o.ln_admissible(&q_f) {
+        add_eps(&mut a, &l, ln_bar);
+    }
+    let r0 = &st.end0.r;
+    let (mut f, mut m) = ([0.0; 3], [0.0; 3]);
+    for (j, (e, (cb, rb))) in segs.iter().zip(seg_bar).enumerate() {
+        // Rigid: ⟨R̄, [ω]× R⟩ = ω · vee(R̄Rᵀ − RR̄ᵀ).
+        let mm: M3<f64> =
+            std::array::from_fn(|i| std::array::from_fn(|l| spatial::dot(rb[i], e.rot[l])));
+        let tau = [
+            mm[2][1] - mm[1][2],
+            mm[0][2] - mm[2][0],
+            mm[1][0] - mm[0][1],
+        ];
+        f = spatial::add(f, *cb);
+        m = spatial::add(m, spatial::add(spatial::cross(e.center, *cb), tau));
+        // Deformation: the adjoints in end-0 coordinates, R₀ᵀ c̄ and R₀ᵀ R̄.
+        let frame = o.segment_frame(&q_f, j);
+        let cl = spatial::mul_mtv(r0, *cb);
+        for (x, w) in frame.p.iter().zip(cl) {
+            add_eps(&mut a, x, w);
+        }
+        for (i, row) in frame.r.iter().enumerate() {
+            for (l, x) in row.iter().enumerate() {
+                let w = (0..3).map(|n| r0[n][i] * rb[n][l]).sum::<f64>();
+                add_eps(&mut a, x, w);
+            }
+        }
+    }
+    let moved_st = o.state_from_tools(&moved_frame(tools[0], 0), &moved_frame(tools[1], 6));
+    let mut g = [0.0; 12];
+    for (x, w) in moved_st.q_f.iter().zip(a) {
+        add_eps(&mut g, x, w);
+    }
+    [
+        (
+            spatial::add(f, [g[0], g[1], g[2]]),
+            spatial::add(m, [g[3], g[4], g[5]]),
+        ),
+        ([g[6], g[7], g[8]], [g[9], g[10], g[11]]),
+    ]
+}
+
 /// d(Rz(θ)ᵀ v)/dθ with (s, c) = (sin θ, cos θ).
 fn d_rot_z_t(s: f64, c: f64, v: V3<f64>) -> V3<f64> {
     [-s * v[0] + c * v[1], -c * v[0] - s * v[1], 0.0]
@@ -231,24 +292,12 @@ impl Scene {
             );
             s.frames.push(f);
         }
-        // The beam in f64 (values as Scene::evaluate's: dual numbers divide
-        // by multiplying with the reciprocal, which differs in the last bit)
-        // and with derivatives over rigid motions of the tool frames.
+        // The beam (its derivatives come in the reverse pass).
         s.segs.clear();
-        s.segs_d.clear();
         let beam = self.object.as_ref().map(|o| {
-            let (t1, t2) = (&s.frames[0].tool, &s.frames[1].tool);
-            let st = o.state_from_tools(t1, t2);
-            let st_d = o.state_from_tools(&moved_frame(t1, 0), &moved_frame(t2, 6));
-            for j in 0..o.segments {
-                s.segs.push(o.segment(&st, j));
-                s.segs_d.push(o.segment(&st_d, j));
-            }
-            let ln_bf = o.ln_admissible(&st.q_f);
-            (
-                ln_bf.map(|l| (l, o.ln_admissible(&st_d.q_f))),
-                st.max_deformation(),
-            )
+            let st = o.state_from_tools(&s.frames[0].tool, &s.frames[1].tool);
+            s.segs.extend((0..o.segments).map(|j| o.segment(&st, j)));
+            (o.ln_admissible(&st.q_f), st.max_deformation(), st)
         });
 
         // Forward: Scene::evaluate in f64, keeping what the reverse pass needs.
@@ -381,12 +430,12 @@ impl Scene {
             }
             s.singular.push(g);
         }
-        let (max_deformation, ln_bf) = match beam {
-            Some((ln_bf, m)) => (m, Some(ln_bf)),
-            None => (0.0, None),
+        let (max_deformation, ln_bf, beam) = match beam {
+            Some((ln_bf, m, st)) => (m, Some(ln_bf), Some(st)),
+            None => (0.0, None, None),
         };
         let overstrained = matches!(ln_bf, Some(None));
-        if let Some(Some((l, _))) = &ln_bf {
+        if let Some(Some(l)) = ln_bf {
             ln_num += l;
         }
         let evaluation = |v: f64| Evaluation {
@@ -505,25 +554,13 @@ impl Scene {
                 grad[DOF * r + 2] += spatial::dot(h_bar, d_rot_z_t(sn, cs, spatial::sub(st.c, b)));
             }
         }
-        // The beam: segment adjoints and b_f through the tool frames' motions.
-        if let Some(Some((_, l))) = &ln_bf {
-            let mut g = [0.0; 12];
-            if let Some(l) = l {
-                add_eps(&mut g, l, ln_bar);
-            }
-            for (e, (cb, rb)) in s.segs_d.iter().zip(&s.seg_bar) {
-                for ((c, row), (cw, row_w)) in e.center.iter().zip(&e.rot).zip(cb.iter().zip(rb)) {
-                    add_eps(&mut g, c, *cw);
-                    for (x, w) in row.iter().zip(row_w) {
-                        add_eps(&mut g, x, *w);
-                    }
-                }
-            }
-            for r in 0..k.min(2) {
-                let w = &mut s.wrench[r][6];
-                let o = 6 * r;
-                w.0 = spatial::add(w.0, [g[o], g[o + 1], g[o + 2]]);
-                w.1 = spatial::add(w.1, [g[o + 3], g[o + 4], g[o + 5]]);
+        if let (Some(o), Some(st)) = (&self.object, &beam) {
+            let tools = [&s.frames[0].tool, &s.frames[1].tool];
+            let w = beam_wrenches(o, st, tools, &s.segs, &s.seg_bar, ln_bar);
+            for (r, (f, m)) in w.into_iter().enumerate() {
+                let t = &mut s.wrench[r][6];
+                t.0 = spatial::add(t.0, f);
+                t.1 = spatial::add(t.1, m);
             }
         }
         // Wrenches → joints (each moves everything at its depth and beyond).

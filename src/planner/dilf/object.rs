@@ -162,14 +162,19 @@ impl Carried {
     pub fn segment<T: Scalar>(&self, st: &BeamState<T>, j: usize) -> PlacedEllipsoid<T> {
         let l = self.fe.beam().length;
         let n = self.segments;
-        let s = (j as f64 + 0.5) * l / n as f64;
-        let f = st.end0.then(&self.fe.centerline(&st.q_f, s));
+        let f = st.end0.then(&self.segment_frame(&st.q_f, j));
         PlacedEllipsoid {
             center: f.p,
             rot: f.r,
             semi: [0.5 * l / n as f64, self.radius, self.radius],
             n: 1.0,
         }
+    }
+
+    /// Segment `j`'s frame in the end-0 frame (its world pose is end0 ∘ this).
+    pub fn segment_frame<T: Scalar>(&self, q_f: &[T; 12], j: usize) -> Pose<T> {
+        let s = (j as f64 + 0.5) * self.fe.beam().length / self.segments as f64;
+        self.fe.centerline(q_f, s)
     }
 
     /// Whether robot `r`'s part `part` carries segment `seg`: robot r's arm,
