@@ -183,20 +183,20 @@ fn newton_on_sphere(
     let mut settled = None;
     for it in 1..=80 {
         let (fy, gx, hx) = at_y;
-        // ∇_y F = Mᵀ ∇f, ∇²_y F = Mᵀ ∇²f M.
+        // ∇_y F = Mᵀ ∇f, ∇²_y F = Mᵀ ∇²f M (the latter only if not converged).
         let g = spatial::mul_mtv(m, gx);
-        let hm: [[f64; 3]; 3] = std::array::from_fn(|i| {
-            std::array::from_fn(|j| (0..3).map(|k| hx[i][k] * m[k][j]).sum())
-        });
-        let h: [[f64; 3]; 3] = std::array::from_fn(|i| {
-            std::array::from_fn(|j| (0..3).map(|k| m[k][i] * hm[k][j]).sum())
-        });
         let lam = spatial::dot(y, g);
         let gt = spatial::sub(g, spatial::scale(y, lam));
         let gnorm = spatial::norm(g).max(f64::MIN_POSITIVE);
         if spatial::norm(gt) <= 1e-13 * gnorm {
             return Some((y, lam, it));
         }
+        let hm: [[f64; 3]; 3] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| (0..3).map(|k| hx[i][k] * m[k][j]).sum())
+        });
+        let h: [[f64; 3]; 3] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| (0..3).map(|k| m[k][i] * hm[k][j]).sum())
+        });
         // Orthonormal tangent basis.
         let a = if y[0].abs() < 0.6 {
             [1.0, 0.0, 0.0]
