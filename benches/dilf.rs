@@ -7,17 +7,26 @@
 use anholonomy::integrate::simulate;
 use anholonomy::runner::{run, RunOptions};
 mod common;
+use anholonomy::scenario::{ModelConfig, PlannerConfig};
 use common::prepared;
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
 
+/// The policy (V, ∂V/∂q, Eq. 18 and the hold guard) on the states of the
+/// scenario's ideal run: the single robot at the door, and the pair with the
+/// beam at the door and the table (7 obstacles, 18 DOF).
 fn policy(c: &mut Criterion) {
-    let prep = prepared("dilf_single_door");
+    policy_of(c, "dilf_single_door", "dilf_door_policy");
+    policy_of(c, "dilf_paper", "dilf_paper_policy");
+}
+
+fn policy_of(c: &mut Criterion, scenario: &str, group: &str) {
+    let prep = prepared(scenario);
     let (start, _) = prep.start_goal();
     let plan = prep.plan().expect("plan");
     // States the policy meets along the ideal run (every 20 ms).
     let ideal = simulate(prep.model(), &plan, &start, prep.scenario.sim.dt);
     let states: Vec<_> = ideal.q.iter().step_by(10).cloned().collect();
-    let mut g = c.benchmark_group("dilf_door_policy");
+    let mut g = c.benchmark_group(group);
     // A fresh controller: every part–obstacle solve starts cold.
     g.bench_function("cold_at_start", |b| {
         b.iter_batched(
@@ -88,6 +97,40 @@ fn pair_field(c: &mut Criterion) {
         b.iter(|| {
             k = (k + 1) % states.len();
             scene.field(&states[k], &mut warm).expect("field")
+        })
+    });
+    // dilf_paper: the door's six wall segments and the table (7 obstacles,
+    // 126 part–obstacle pairs, 14 beam-segment ones), on its ideal run's
+    // states every 0.2 s, one warm cache as the controller keeps it.
+    let prep = prepared("dilf_paper");
+    let (start, goal) = prep.start_goal();
+    let (ModelConfig::MobileManipulator(cfg), PlannerConfig::Dilf(params)) =
+        (&prep.scenario.model, &prep.scenario.planner)
+    else {
+        panic!("dilf_paper is a mobile-manipulator scenario");
+    };
+    let scene =
+        anholonomy::systems::dilf::task_scene(cfg, params, start.as_slice(), &goal).expect("scene");
+    let plan = prep.plan().expect("plan");
+    let ideal = simulate(prep.model(), &plan, &start, prep.scenario.sim.dt);
+    let states: Vec<Vec<f64>> = ideal
+        .q
+        .iter()
+        .step_by(100)
+        .map(|q| q.as_slice().to_vec())
+        .collect();
+    let (mut warm, mut k) = (scene.warm(), 0);
+    g.bench_function("v_and_gradient_dilf_paper", |b| {
+        b.iter(|| {
+            k = (k + 1) % states.len();
+            scene.field(&states[k], &mut warm).expect("field")
+        })
+    });
+    let (mut warm, mut k) = (scene.warm(), 0);
+    g.bench_function("v_and_gradient_dilf_paper_dual_numbers", |b| {
+        b.iter(|| {
+            k = (k + 1) % states.len();
+            scene.field_dual(&states[k], &mut warm).expect("field")
         })
     });
     g.finish();

@@ -46,6 +46,10 @@ pub fn pow2n<T: Scalar>(u: T, n: f64) -> T {
         let e2 = KINK_EPS * KINK_EPS;
         return (u * u + e2).powf(n) - e2.powf(n);
     }
+    if n == 1.0 {
+        // The common case (every robot part), without the generic power.
+        return u * u;
+    }
     let two_n = 2.0 * n;
     if two_n.fract() == 0.0 && two_n <= 64.0 {
         if (two_n as i32) % 2 == 0 {
@@ -228,6 +232,28 @@ impl PlacedEllipsoid<f64> {
         spatial::add(spatial::mul_mv(&self.rot, local), self.center)
     }
 
+    /// ∇b(x) in world coordinates: the exact derivative of [`PlacedEllipsoid::value`]
+    /// (kink rounded over [`KINK_EPS`] below n = 1), without the Hessian.
+    pub fn grad(&self, x: [f64; 3]) -> [f64; 3] {
+        let u = self.local(x);
+        let n = self.n;
+        let du: [f64; 3] = std::array::from_fn(|k| {
+            let u2 = u[k] * u[k];
+            // d/du |u|^{2n} = 2n u |u|^{2n−2} (rounded: 2n u (u² + ε²)^{n−1}).
+            let p = if n < 1.0 {
+                (u2 + KINK_EPS * KINK_EPS).powf(n - 1.0)
+            } else if n == 1.0 {
+                1.0
+            } else if n.fract() == 0.0 {
+                u2.powi(n as i32 - 1)
+            } else {
+                u2.powf(n - 1.0)
+            };
+            2.0 * n * u[k] * p / self.semi[k]
+        });
+        spatial::mul_mv(&self.rot, du)
+    }
+
     /// b(x), its gradient and Hessian in world coordinates.
     pub fn value_grad_hess(&self, x: [f64; 3]) -> (f64, [f64; 3], [[f64; 3]; 3]) {
         self.value_grad_hess_rounded(x, KINK_EPS)
@@ -343,6 +369,20 @@ mod tests {
                         (fd - h[i][j]).abs() < 1e-5 * (1.0 + h[i][j].abs()),
                         "n {n} h{i}{j}"
                     );
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn grad_matches_value_grad_hess() {
+        for n in [0.5, 0.75, 1.0, 1.5, 3.0, 4.5] {
+            let p = shape(n).at_rest();
+            for x in [[0.9, -0.6, 0.8], [0.5, -1.0, 2.0], [-0.4, 0.1, 0.3]] {
+                let (_, g, _) = p.value_grad_hess(x);
+                let h = p.grad(x);
+                for i in 0..3 {
+                    assert!((h[i] - g[i]).abs() <= 1e-13 * (1.0 + g[i].abs()), "n {n}");
                 }
             }
         }

@@ -101,16 +101,22 @@ pub fn solve(
             y: y_o,
         });
     }
-    let radial = part.local(obstacle.radial_projection(part.center));
-    let mut starts: Vec<[f64; 3]> = Vec::with_capacity(4);
-    if let Some(w) = warm.filter(|w| spatial::norm(*w) > 0.5) {
-        starts.push(normalize(w));
-    }
-    if spatial::norm(radial) > 1e-12 {
-        starts.push(normalize(radial));
-    }
-    starts.push(normalize(y_o));
-    starts.push(spatial::scale(normalize(radial), -1.0));
+    // Starts in order: the warm start, then (only if that fails: warm starts
+    // usually succeed) the radial projection of the obstacle's centre, the
+    // direction to it and the radial start's antipode.
+    let warm = warm.filter(|w| spatial::norm(*w) > 0.5).map(normalize);
+    let fallback = || {
+        let radial = part.local(obstacle.radial_projection(part.center));
+        let first = (spatial::norm(radial) > 1e-12).then(|| normalize(radial));
+        [
+            first,
+            Some(normalize(y_o)),
+            Some(spatial::scale(normalize(radial), -1.0)),
+        ]
+    };
+    let starts = warm
+        .into_iter()
+        .chain(std::iter::once_with(fallback).flatten().flatten());
     // Below n = 1 the obstacle's edges are creases that Newton cannot follow
     // (the iterate zig-zags across them): round them strongly first and
     // sharpen in stages, each stage starting where the last ended.
@@ -166,30 +172,31 @@ fn newton_on_sphere(
     to_x: &impl Fn([f64; 3]) -> [f64; 3],
     y0: [f64; 3],
 ) -> Option<([f64; 3], f64, usize)> {
-    let f = |y: [f64; 3]| vgh(to_x(y)).0;
+    // Each point is evaluated once: the accepted line-search point's
+    // gradient and Hessian serve the next iteration.
     let mut y = y0;
-    let mut fy = f(y);
+    let mut at_y = vgh(to_x(y));
     // The last iterate that is a minimiser to round-off (positive definite
     // Riemannian Hessian, tangent gradient ≤ 1e-7 of ∇F): where round-off in
     // ∇F keeps the strict tests below from ever passing (a 2 cm-thin beam
     // segment against a sphere stalled at 7.6e-9), it is the answer.
     let mut settled = None;
     for it in 1..=80 {
-        let (_, gx, hx) = vgh(to_x(y));
-        // ∇_y F = Mᵀ ∇f, ∇²_y F = Mᵀ ∇²f M.
+        let (fy, gx, hx) = at_y;
+        // ∇_y F = Mᵀ ∇f, ∇²_y F = Mᵀ ∇²f M (the latter only if not converged).
         let g = spatial::mul_mtv(m, gx);
-        let hm: [[f64; 3]; 3] = std::array::from_fn(|i| {
-            std::array::from_fn(|j| (0..3).map(|k| hx[i][k] * m[k][j]).sum())
-        });
-        let h: [[f64; 3]; 3] = std::array::from_fn(|i| {
-            std::array::from_fn(|j| (0..3).map(|k| m[k][i] * hm[k][j]).sum())
-        });
         let lam = spatial::dot(y, g);
         let gt = spatial::sub(g, spatial::scale(y, lam));
         let gnorm = spatial::norm(g).max(f64::MIN_POSITIVE);
         if spatial::norm(gt) <= 1e-13 * gnorm {
             return Some((y, lam, it));
         }
+        let hm: [[f64; 3]; 3] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| (0..3).map(|k| hx[i][k] * m[k][j]).sum())
+        });
+        let h: [[f64; 3]; 3] = std::array::from_fn(|i| {
+            std::array::from_fn(|j| (0..3).map(|k| m[k][i] * hm[k][j]).sum())
+        });
         // Orthonormal tangent basis.
         let a = if y[0].abs() < 0.6 {
             [1.0, 0.0, 0.0]
@@ -242,10 +249,10 @@ fn newton_on_sphere(
         let mut alpha = 1.0;
         loop {
             let yn = normalize(spatial::add(y, spatial::scale(step, alpha)));
-            let fn_ = f(yn);
-            if fn_ <= fy + 1e-4 * alpha * slope + slack {
+            let at_yn = vgh(to_x(yn));
+            if at_yn.0 <= fy + 1e-4 * alpha * slope + slack {
                 y = yn;
-                fy = fn_;
+                at_y = at_yn;
                 break;
             }
             alpha *= 0.5;

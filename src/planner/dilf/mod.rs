@@ -6,12 +6,14 @@
 //!   minimisation, with envelope-theorem derivatives);
 //! * [`point_world`]: H0, T, the switches, H1 and H2 as printed (Eqs. 6–9);
 //! * [`potential`]: V (Eq. 15) and f (Eq. 17), exact gradients by dual numbers;
+//! * [`adjoint`]: the same gradient by hand-written adjoints (the fast path);
 //! * [`control`]: Eq. 18.
 //!
 //! The planner's output is a feedback policy ([`crate::plan::ControlLaw::Feedback`]):
 //! the harness evaluates it on the ideal state and, in physics, on the
 //! simulated state.
 
+pub mod adjoint;
 pub mod contact;
 pub mod control;
 pub mod guard;

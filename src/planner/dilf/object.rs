@@ -146,8 +146,16 @@ impl Carried {
 
     /// End-0 pose and q_f at q (both robots), generic for exact derivatives.
     pub fn state<T: Scalar>(&self, q: &[T]) -> BeamState<T> {
-        let g0 = mm::frames(&q[..DOF]).tool.then_const(&self.grasp[0]);
-        let g2 = mm::frames(&q[DOF..2 * DOF]).tool.then_const(&self.grasp[1]);
+        self.state_from_tools(
+            &mm::frames(&q[..DOF]).tool,
+            &mm::frames(&q[DOF..2 * DOF]).tool,
+        )
+    }
+
+    /// As [`Carried::state`], from the two robots' tool frames (world).
+    pub fn state_from_tools<T: Scalar>(&self, tool1: &Pose<T>, tool2: &Pose<T>) -> BeamState<T> {
+        let g0 = tool1.then_const(&self.grasp[0]);
+        let g2 = tool2.then_const(&self.grasp[1]);
         let rel = g0.inverse().then(&g2);
         let g = spatial::mul_mtv(&g0.r, spatial::lift(GRAVITY));
         BeamState {
@@ -185,20 +193,26 @@ impl Carried {
     /// The beam's ellipsoids (world), segment j centred at s = (j + ½) L / N
     /// on the deformed centreline, its long axis along the tangent.
     pub fn ellipsoids<T: Scalar>(&self, st: &BeamState<T>) -> Vec<PlacedEllipsoid<T>> {
+        (0..self.segments).map(|j| self.segment(st, j)).collect()
+    }
+
+    /// Segment `j` of [`Carried::ellipsoids`].
+    pub fn segment<T: Scalar>(&self, st: &BeamState<T>, j: usize) -> PlacedEllipsoid<T> {
         let l = self.fe.beam().length;
         let n = self.segments;
-        (0..n)
-            .map(|j| {
-                let s = (j as f64 + 0.5) * l / n as f64;
-                let f = st.end0.then(&self.fe.centerline(&st.q_f, s));
-                PlacedEllipsoid {
-                    center: f.p,
-                    rot: f.r,
-                    semi: [0.5 * l / n as f64, self.radius, self.radius],
-                    n: 1.0,
-                }
-            })
-            .collect()
+        let f = st.end0.then(&self.segment_frame(&st.q_f, j));
+        PlacedEllipsoid {
+            center: f.p,
+            rot: f.r,
+            semi: [0.5 * l / n as f64, self.radius, self.radius],
+            n: 1.0,
+        }
+    }
+
+    /// Segment `j`'s frame in the end-0 frame (its world pose is end0 ∘ this).
+    pub fn segment_frame<T: Scalar>(&self, q_f: &[T; 12], j: usize) -> Pose<T> {
+        let s = (j as f64 + 0.5) * self.fe.beam().length / self.segments as f64;
+        self.fe.centerline(q_f, s)
     }
 
     /// Whether robot `r`'s part `part` carries segment `seg`: robot r's arm,
@@ -240,7 +254,7 @@ pub fn grasp_distance(q: &[f64]) -> f64 {
 }
 
 #[cfg(test)]
-mod tests {
+pub(crate) mod tests {
     use super::*;
     use crate::model::beam::GFRP_ROD_10MM;
     use crate::planner::dilf::potential::tests::assert_field_is_scaled_gradient;
@@ -264,7 +278,7 @@ mod tests {
         Carried::at_rest(&beam(), None, q, q_max, 8, 0.02).unwrap()
     }
 
-    fn scene(q0: &[f64], goal: Vec<f64>, q_max: f64) -> Scene {
+    pub(crate) fn scene(q0: &[f64], goal: Vec<f64>, q_max: f64) -> Scene {
         Scene::new(
             2,
             mm::default_parts(),
@@ -283,7 +297,7 @@ mod tests {
         .with_object(carried(q0, q_max))
     }
 
-    fn perturbed(q: &[f64], rng: &mut ChaCha8Rng, size: f64) -> Vec<f64> {
+    pub(crate) fn perturbed(q: &[f64], rng: &mut ChaCha8Rng, size: f64) -> Vec<f64> {
         q.iter()
             .map(|x| x + rng.random_range(-size..size))
             .collect()

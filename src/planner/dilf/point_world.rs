@@ -104,17 +104,25 @@ pub fn h2(h1: [f64; 3], b: &[f64], h_o: &[[f64; 3]], lambda: f64) -> [f64; 3] {
 pub fn switches_log<T: Scalar>(ln_h: T, ln_b: &[T], ln_lambda: f64) -> Vec<T> {
     let total: T = ln_b.iter().copied().sum();
     ln_b.iter()
-        .map(|&lb| {
-            let r = lb + lb - total - ln_h + ln_lambda;
-            // Logistic, written to stay finite for large |r|.
-            if r.re() > 0.0 {
-                let e = (-r).exp();
-                e / (e + 1.0)
-            } else {
-                (r.exp() + 1.0).recip()
-            }
-        })
+        .map(|&lb| switch_log(switch_exponent(ln_h, lb, total, ln_lambda)))
         .collect()
+}
+
+/// r_j of [`switches_log`] from ln b̃_j and `total` = Σ_i ln b̃_i.
+#[inline]
+pub fn switch_exponent<T: Scalar>(ln_h: T, lb: T, total: T, ln_lambda: f64) -> T {
+    lb + lb - total - ln_h + ln_lambda
+}
+
+/// σ = 1 / (1 + exp(r)), written to stay finite for large |r|.
+#[inline]
+pub fn switch_log<T: Scalar>(r: T) -> T {
+    if r.re() > 0.0 {
+        let e = (-r).exp();
+        e / (e + 1.0)
+    } else {
+        (r.exp() + 1.0).recip()
+    }
 }
 
 #[cfg(test)]

@@ -32,10 +32,13 @@
 //! and bounds it by 1, and the switches use the bounded b̃.
 //!
 //! Derivatives: the whole evaluation is generic over the scalar; with forward
-//! dual numbers (`num_dual::DualSVec64<N>`, N = 9k) one pass gives V and ∂V/∂q.
-//! The inner minimisations contribute exactly through the envelope theorem
-//! ([`super::contact::Contact::beta`]).
+//! dual numbers (`num_dual::DualSVec64<N>`, N = 9k) one pass gives V and ∂V/∂q
+//! ([`Scene::field_dual`], the reference). The inner minimisations contribute
+//! exactly through the envelope theorem ([`super::contact::Contact::beta`]).
+//! [`Scene::field`] computes the same gradient in reverse, by hand
+//! ([`super::adjoint`]), several times faster.
 
+use super::adjoint::Scratch;
 use super::contact::{self, Contact, ContactError};
 use super::object::Carried;
 use super::point_world::switches_log;
@@ -112,16 +115,23 @@ impl SingularityEnclosure {
 
     /// Obstacle functions s_k = (f_k/δ_k)² − 1 of the enabled factors (< 0 inside).
     pub fn values<T: Scalar>(&self, arm: &[T]) -> Vec<(usize, T)> {
-        let f = puma560::singularity_factors(arm);
-        self.deltas()
-            .iter()
+        self.value_array(arm)
+            .into_iter()
             .enumerate()
-            .filter(|(_, d)| **d > 0.0)
-            .map(|(i, d)| {
-                let u = f[i] * (1.0 / d);
-                (i, u * u - 1.0)
-            })
+            .filter_map(|(i, s)| s.map(|s| (i, s)))
             .collect()
+    }
+
+    /// As [`SingularityEnclosure::values`], `None` for a disabled factor (allocation-free).
+    pub fn value_array<T: Scalar>(&self, arm: &[T]) -> [Option<T>; 3] {
+        let f = puma560::singularity_factors(arm);
+        let d = self.deltas();
+        std::array::from_fn(|i| {
+            (d[i] > 0.0).then(|| {
+                let u = f[i] * (1.0 / d[i]);
+                u * u - 1.0
+            })
+        })
     }
 }
 
@@ -168,12 +178,16 @@ pub struct Scene {
     /// through b_f and its ellipsoids are obstacles of every part.
     pub object: Option<Carried>,
     /// Per (robot, part): the goal point in the part's goal coordinates.
-    goal_points: Vec<[f64; 3]>,
+    pub(super) goal_points: Vec<[f64; 3]>,
 }
 
-/// Warm starts of the inner solves, one slot per (part, obstacle) pair.
+/// Warm starts of the inner solves, one slot per (part, obstacle) pair, and
+/// the buffers of [`Scene::field`] (reused: no allocations per call).
 #[derive(Debug, Clone, Default)]
-pub struct Warm(Vec<Option<[f64; 3]>>);
+pub struct Warm {
+    pub(super) slots: Vec<Option<[f64; 3]>>,
+    pub(super) scratch: Scratch,
+}
 
 /// V at one configuration.
 #[derive(Debug, Clone, Copy)]
@@ -269,7 +283,10 @@ impl Scene {
 
     /// A fresh warm-start cache.
     pub fn warm(&self) -> Warm {
-        Warm(vec![None; self.pair_count()])
+        Warm {
+            slots: vec![None; self.pair_count()],
+            scratch: Scratch::default(),
+        }
     }
 
     /// Placed parts of every robot at q, robot-major.
@@ -333,7 +350,7 @@ impl Scene {
                 // the part carries derivatives), then the other robots' parts.
                 let mut seen: Vec<(T, V3<T>)> = Vec::with_capacity(self.obstacles.len() + n);
                 for o in &self.obstacles {
-                    let sol = self.solve(&part_re, &o.shape, &mut warm.0[slot])?;
+                    let sol = self.solve(&part_re, &o.shape, &mut warm.slots[slot])?;
                     slot += 1;
                     min_beta = min_beta.min(sol.value);
                     collided |= sol.value <= 0.0;
@@ -345,7 +362,7 @@ impl Scene {
                     .flat_map(|o| (0..n).map(move |j| o * n + j))
                 {
                     let o = &placed[j];
-                    let sol = self.solve(&part_re, &o.re(), &mut warm.0[slot])?;
+                    let sol = self.solve(&part_re, &o.re(), &mut warm.slots[slot])?;
                     slot += 1;
                     min_beta = min_beta.min(sol.value);
                     collided |= sol.value <= 0.0;
@@ -361,7 +378,7 @@ impl Scene {
                         // Roles swapped: the minimum of the part's function over the
                         // thin segment. Zero at contact like the other order, and far
                         // better conditioned than a 2 cm-thin obstacle function.
-                        let sol = self.solve(&o.re(), &part_re, &mut warm.0[s_slot])?;
+                        let sol = self.solve(&o.re(), &part_re, &mut warm.slots[s_slot])?;
                         min_beta = min_beta.min(sol.value);
                         collided |= sol.value <= 0.0;
                         seen.push((sol.beta(o, part), spatial::sub(c, o.center)));
@@ -403,7 +420,7 @@ impl Scene {
             for seg in segs {
                 let seg_re = seg.re();
                 for o in &self.obstacles {
-                    let sol = self.solve(&seg_re, &o.shape, &mut warm.0[slot])?;
+                    let sol = self.solve(&seg_re, &o.shape, &mut warm.slots[slot])?;
                     slot += 1;
                     min_beta = min_beta.min(sol.value);
                     collided |= sol.value <= 0.0;
@@ -457,7 +474,7 @@ impl Scene {
         })
     }
 
-    fn solve(
+    pub(super) fn solve(
         &self,
         part: &PlacedEllipsoid<f64>,
         obstacle: &PlacedEllipsoid<f64>,
@@ -468,8 +485,10 @@ impl Scene {
         Ok(c)
     }
 
-    /// V, D and the field f = D² ∂V/∂q (Eq. 17) at q.
-    pub fn field(
+    /// As [`Scene::field`], by one evaluation in forward dual numbers (9k
+    /// derivatives everywhere): slower, kept as the reference the fast path
+    /// is tested against.
+    pub fn field_dual(
         &self,
         q: &[f64],
         warm: &mut Warm,

@@ -62,6 +62,21 @@ pub fn build(
     cfg: &MobileManipulatorConfig,
     params: &DilfParams,
 ) -> Result<Box<dyn System>, String> {
+    Ok(Box::new(dilf(cfg, params)?))
+}
+
+/// The potential's scene of a task (obstacles, goal, the beam grasped at
+/// `start`), as the planner sees it: for benchmarks and tools.
+pub fn task_scene(
+    cfg: &MobileManipulatorConfig,
+    params: &DilfParams,
+    start: &[f64],
+    goal: &State,
+) -> Result<Scene, String> {
+    dilf(cfg, params)?.scene(start, goal)
+}
+
+fn dilf(cfg: &MobileManipulatorConfig, params: &DilfParams) -> Result<Dilf, String> {
     match (cfg.robots, &cfg.beam) {
         (1, None) | (2, Some(_)) => {}
         (1, Some(_)) => {
@@ -103,14 +118,14 @@ pub fn build(
         return Err(format!("key `planner.{name}`: {reason}"));
     }
     let params = params.clone();
-    Ok(Box::new(Dilf {
+    Ok(Dilf {
         model: MobileManipulator { robots: cfg.robots },
         arm,
         beam: cfg.beam.clone(),
         params,
         probe: ClearanceProbe::new(&obstacles),
         obstacles,
-    }))
+    })
 }
 
 impl Dilf {
