@@ -66,6 +66,9 @@ pub struct RoverPhysics {
     theta: f64,
     /// Last applied input (the envelope check compares against it).
     last_u: Input,
+    /// Model coordinates (x, y, θ, ψ) read back after the last step (the replay
+    /// and the channels both read them every step).
+    q: State,
 }
 
 impl RoverPhysics {
@@ -146,9 +149,18 @@ impl RoverPhysics {
             front,
             theta: start[2],
             last_u: Input::zeros(2),
+            q: State::zeros(4),
         };
+        me.read_back();
         me.apply(&Input::zeros(2));
         Ok(me)
+    }
+
+    /// Update the model coordinates from the bodies.
+    fn read_back(&mut self) {
+        let c = self.sim.world.bodies[self.chassis].translation();
+        let (x, y, psi) = (f(c.x), f(c.y), self.steer_angle());
+        self.q.copy_from_slice(&[x, y, self.theta, psi]);
     }
 
     fn steer_angle(&self) -> f64 {
@@ -179,21 +191,25 @@ impl RoverPhysics {
 
 impl PhysicsSystem for RoverPhysics {
     fn state(&self) -> State {
-        let c = self.sim.world.bodies[self.chassis].translation();
-        State::from_vec(vec![f(c.x), f(c.y), self.theta, self.steer_angle()])
+        self.q.clone()
     }
 
     fn apply(&mut self, u: &Input) {
         self.sim
             .drive(&mut self.front, u[0] / self.geom.wheel_radius);
         self.sim.drive(&mut self.steer, u[1]);
-        self.last_u = u.clone();
+        if self.last_u.len() == u.len() {
+            self.last_u.copy_from(u);
+        } else {
+            self.last_u = u.clone();
+        }
     }
 
     fn step(&mut self) {
         self.sim.world.step();
         let yaw = angles::yaw(self.sim.world.bodies[self.chassis].rotation());
         self.theta = angles::unwrap(self.theta, yaw);
+        self.read_back();
     }
 
     fn link_poses(&self) -> Vec<Pose> {
@@ -219,12 +235,7 @@ impl PhysicsSystem for RoverPhysics {
             out.push(lon);
             out.push(lat);
         }
-        let fit = envelope(
-            &self.geom,
-            &self.state(),
-            &self.last_u,
-            &self.body_velocity(),
-        );
+        let fit = envelope(&self.geom, &self.q, &self.last_u, &self.body_velocity());
         out.push(fit.distance);
         out.push(fit.sigma.unwrap_or(f64::NAN));
         out
