@@ -229,6 +229,8 @@ def main():
     if not os.path.exists(args.bin):
         sys.exit(f"{args.bin} not found: run `cargo build --release` first (or pass --bin)")
     print(f"MuJoCo {mujoco.__version__}, {args.repeats} alternating runs each, medians")
+    # Both rates are wall-clock rates: on a shared machine they say little without the load.
+    print("load average (1, 5, 15 min): %.2f %.2f %.2f" % os.getloadavg())
     header = f"{'system':<26} {'scenario':<22} {'steps':>7} {'harness/s':>10} {'MuJoCo/s':>10} {'ratio':>6}"
     print(header)
     for system, scenario, root in SYSTEMS:
@@ -246,6 +248,7 @@ def main():
                 muj.append(mujoco_rate(m, controls, steps, start))
         h, k = statistics.median(harness), statistics.median(muj)
         print(f"{system:<26} {scenario:<22} {steps:>7} {h:>10.0f} {k:>10.0f} {h / k:>6.2f}")
+    print("load average at the end: %.2f %.2f %.2f" % os.getloadavg())
 
 
 if __name__ == "__main__":
