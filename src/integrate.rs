@@ -191,7 +191,7 @@ mod tests {
     #[test]
     fn the_sample_clock_does_not_drift() {
         for (period, dt) in [(0.02, 0.004), (0.02, 0.002), (0.01, 0.001), (0.05, 0.002)] {
-            let per: usize = (period / dt as f64).round() as usize;
+            let per: usize = f64::round(period / dt) as usize;
             let mut clock = SampleClock::new(period, dt);
             let mut last = None;
             for k in 0..2_000_000usize {
