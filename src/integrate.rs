@@ -190,8 +190,8 @@ mod tests {
     /// thousand holds), and a period shorter than the step samples every step.
     #[test]
     fn the_sample_clock_does_not_drift() {
-        for (period, dt) in [(0.02_f64, 0.004_f64), (0.02, 0.002), (0.01, 0.001), (0.05, 0.002)] {
-            let per: usize = (period / dt).round() as usize;
+        for (period, dt) in [(0.02, 0.004), (0.02, 0.002), (0.01, 0.001), (0.05, 0.002)] {
+            let per: usize = f64::round(period / dt) as usize;
             let mut clock = SampleClock::new(period, dt);
             let mut last = None;
             for k in 0..2_000_000usize {
