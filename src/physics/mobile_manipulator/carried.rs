@@ -38,17 +38,19 @@ pub struct CarriedBeam {
 
 /// Channels of a pair (after the single robot's): `robot_clearance` (m),
 /// `body_contacts` (robot–robot, beam–platform, beam–ground and non-wheel
-/// ground contacts), robot 2's `slip_lateral_2` and `joint_rate_error_2`,
+/// ground contacts), robot 2's `slip_lateral_2`, `joint_rate_error_2` and
+/// `tilt_2_deg`,
 /// then ‖q_f‖∞ of the physics beam (`beam_deformation`) and of the FE model
 /// at the simulated grasps (`fe_deformation`), the middle node's translation
 /// q_o[0..3] in the end-0 frame from both (`beam_mid_*`, `fe_mid_*`, m; the
 /// paper's Fig. 17 quantity), and the wrench magnitudes each gripper exerts
 /// on the beam (`grasp1_force` N, `grasp1_torque` N m, `grasp2_*`).
-pub const PAIR_CHANNELS: [&str; 16] = [
+pub const PAIR_CHANNELS: [&str; 17] = [
     "robot_clearance",
     "body_contacts",
     "slip_lateral_2",
     "joint_rate_error_2",
+    "tilt_2_deg",
     "beam_deformation",
     "fe_deformation",
     "beam_mid_x",

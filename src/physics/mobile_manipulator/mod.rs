@@ -607,6 +607,7 @@ impl PhysicsSystem for MobileManipulatorPhysics {
             "speed_error",
             "turn_rate_error",
             "joint_rate_error",
+            "tilt_deg",
         ]
         .map(String::from)
         .into_iter()
@@ -632,6 +633,7 @@ impl PhysicsSystem for MobileManipulatorPhysics {
             m.speed - self.last_u[0],
             m.turn_rate - self.last_u[1],
             self.joint_rate_error(r, 0),
+            m.tilt_deg,
         ];
         if self.robots.len() == 2 {
             let m2 = self.platform_motion(1);
@@ -640,6 +642,7 @@ impl PhysicsSystem for MobileManipulatorPhysics {
                 self.body_contacts() as f64,
                 m2.lateral,
                 self.joint_rate_error(&self.robots[1], 1),
+                m2.tilt_deg,
             ]);
             if let Some(b) = &self.beam {
                 out.extend(b.channels(&self.sim.world));
@@ -658,6 +661,9 @@ struct PlatformMotion {
     /// Axle-centre speed along the heading, m/s, and yaw rate, rad/s.
     speed: f64,
     turn_rate: f64,
+    /// Angle between the platform's up axis and the world's, deg: the
+    /// planner's planar state (x, y, θ) cannot see a platform tipping.
+    tilt_deg: f64,
 }
 
 impl MobileManipulatorPhysics {
@@ -678,6 +684,7 @@ impl MobileManipulatorPhysics {
             lateral: f(v_axle.dot(side)),
             speed: f(v_axle.dot(heading)),
             turn_rate: f(base.angvel().z),
+            tilt_deg: f((*base.rotation() * Vector::Z).z.clamp(-1.0, 1.0).acos()).to_degrees(),
         }
     }
 

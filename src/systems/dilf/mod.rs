@@ -18,7 +18,8 @@
 //! (policy samples with V̇ < 0 under the applied input: the paper's V̇ ≥ 0
 //! claim, Appendix G), `ideal_min_manipulability` / `sim_min_manipulability`
 //! (least √det(JᵀJ) = |det J| of any arm at the policy samples, m³: the
-//! singularity-avoidance claim), `slip_lateral_max`, `joint_rate_error_max`.
+//! singularity-avoidance claim), `slip_lateral_max`, `joint_rate_error_max`, `sim_max_tilt_deg` (largest
+//! platform tilt, deg; `sim_max_tilt_2_deg` for robot 2).
 
 mod config;
 mod overlay;
@@ -218,8 +219,9 @@ impl Dilf {
 /// (every step), the largest gap between the physics beam's and the FE
 /// model's ‖q_f‖∞ at the same step, the least robot–robot distance, the
 /// most non-obstacle collision pairs (robot–robot, beam–platform/ground),
-/// the largest grasp force and torque, robot 2's largest lateral slip.
-const PAIR_METRICS: [&str; 9] = [
+/// the largest grasp force and torque, robot 2's largest lateral slip and
+/// tilt.
+const PAIR_METRICS: [&str; 10] = [
     "ideal_max_deformation",
     "sim_max_deformation",
     "sim_beam_max_deformation",
@@ -229,6 +231,7 @@ const PAIR_METRICS: [&str; 9] = [
     "sim_grasp_force_max",
     "sim_grasp_torque_max",
     "slip_lateral_2_max",
+    "sim_max_tilt_2_deg",
 ];
 
 /// √det(JᵀJ) of a PUMA 560 at joint angles `q` (6): |det J| = |a2 f_shoulder
@@ -405,6 +408,7 @@ impl System for Dilf {
             "sim_min_manipulability",
             "slip_lateral_max",
             "joint_rate_error_max",
+            "sim_max_tilt_deg",
         ]
         .map(String::from)
         .to_vec();
@@ -473,6 +477,7 @@ impl System for Dilf {
                 "joint_rate_error_max".into(),
                 max_abs(chan("joint_rate_error")),
             ),
+            ("sim_max_tilt_deg".into(), max_abs(chan("tilt_deg"))),
         ];
         if self.beam.is_some() {
             // ‖q_f‖∞ of the FE model at the ideal and at the simulated grasps,
@@ -504,6 +509,7 @@ impl System for Dilf {
                     max_of(chan("grasp1_torque")).max(max_of(chan("grasp2_torque"))),
                 ),
                 ("slip_lateral_2_max".into(), max_abs(chan("slip_lateral_2"))),
+                ("sim_max_tilt_2_deg".into(), max_abs(chan("tilt_2_deg"))),
             ]);
         }
         (
