@@ -53,8 +53,16 @@
 //!
 //! Joint k frames sit at the joint point, x along the rest tangent: shear
 //! (LinY, LinZ) locked (Timoshenko shear flexibility of a slender rod,
-//! ~(d/l)², is negligible), springs with rest 0 on the other four DOFs:
-//! axial EA/l on LinX, torsion GJ/l on AngX, bending EI/l on AngY and AngZ.
+//! ~(d/l)², is negligible), springs with rest 0 on the three rotations:
+//! torsion GJ/l on AngX, bending EI/l on AngY and AngZ (a ball joint, the
+//! discrete inextensible Kirchhoff rod). The axial compliance L/(EA) of the
+//! whole beam sits in the two end joints (k = 1 and N), which also slide
+//! along LinX with a spring 2 EA/L each: in series EA/L, so the static axial
+//! force and the total (and the middle node's) stretch are the beam's, while
+//! the interior joints are axially rigid. Spreading it over every joint
+//! (EA/l each, as the chain first did) resolved axial modes of 0.5–7 kHz
+//! (2 m rod) that the harness never excites (the stretch is micrometres)
+//! and cost 4N instead of 3N + 2 DOFs in the multibody's dense mass matrix.
 //! Damping is stiffness-proportional, c = β k with β =
 //! [`BeamOptions::damping_time`] (default 2 ms: ζ = β ω / 2, about 1 % at the
 //! 2 m cantilever's 1.6 Hz, 3 % at 4.4 Hz, the range of GFRP's structural
@@ -71,8 +79,15 @@
 //! along the chain: a 0.1 N tip load on the 2 m cantilever (N = 20, β up to
 //! 50 ms, 4 or 20 iterations, with or without joint warm-starting) swung
 //! the tip by 0.1–1.9 m against the closed form's 13.6 mm. The multibody's
-//! cost is a dense solve in its 6 + 4N DOFs per substep, hence N = 10 by
-//! default (see `benches/beam.rs`).
+//! cost is a dense mass matrix (two, with and without the Coriolis terms),
+//! assembled and LU-factorised in its 6 + 3N + 2 DOFs at every substep:
+//! ~O(N³), hence N = 10 by default and few substeps (see `benches/beam.rs`).
+//! The tests validate the chain at dt = 2 ms under 4 substeps of one
+//! Gauss–Seidel sweep and under one substep of 16 sweeps: the second costs a
+//! quarter of the multibody work and converges the impulse joints at the
+//! ends further (the clamped–clamped sag reaches the chain's own static
+//! value), at ~1 % more numerical damping of the first bending mode
+//! (implicit Euler over 2 ms instead of 0.5 ms).
 //!
 //! End attachments are impulse fixed joints (loop closures through the
 //! holders); impulse joints without locked axes switch contacts off between
@@ -80,11 +95,13 @@
 //! Each body carries the mass ρ A of its length, centred, and the inertia of
 //! a rod of that length; colliders are massless capsules along x.
 //!
-//! A curved initial centreline is imposed through the joint coordinates.
-//! Released from a strongly bent shape (κ = 0.5 m⁻¹) a free beam leaves its
+//! A curved initial centreline is imposed through the joint rotations (the
+//! chain starts unstretched). Released from a strongly bent shape (κ = 0.5 m⁻¹) a free beam leaves its
 //! first steps with a spurious linear momentum of ~0.01 kg m/s (a COM drift
-//! of 3 cm/s), constant afterwards; straight or gently bent starts (the
-//! harness's) do not show it.
+//! of 3 cm/s), nearly constant afterwards (it changes by 2·10⁻⁵ kg m/s over
+//! 5 s at 4 substeps, 3·10⁻⁴ at one substep: Rapier's reduced-coordinate
+//! integration is not exactly momentum-conserving); straight or gently bent
+//! starts (the harness's) do not show it.
 //!
 //! # Read-back
 //!
@@ -93,8 +110,9 @@
 //! wrench is not read from joint impulses (Rapier orthogonalises a joint's
 //! rows, so the stored impulses are not in a physical basis): it is the
 //! Newton–Euler balance of the end body and its neighbour, with the joints'
-//! moments and axial forces from the spring laws on the multibody's joint
-//! coordinates and the shear from the neighbour's rotational balance.
+//! moments and the end joints' axial forces from the spring laws on the
+//! multibody's joint coordinates and the shear from the neighbour's
+//! rotational balance.
 //! Accelerations come from velocity differences, so call
 //! [`PhysicsBeam::after_step`] after every step.
 
@@ -159,6 +177,8 @@ struct SpringJoint {
     handle: MultibodyJointHandle,
     at1: Real,
     at2: Real,
+    /// Whether the joint slides axially (the two end joints).
+    axial: bool,
 }
 
 /// A beam inserted in a [`PhysicsWorld`].
@@ -169,7 +189,8 @@ pub struct PhysicsBeam {
     ends: [Option<ImpulseJointHandle>; 2],
     length: Real,
     radius: Real,
-    /// (axial, torsion, bending) stiffness, N/m and N m/rad.
+    /// (axial, torsion, bending) stiffness of a joint, N/m and N m/rad;
+    /// the axial one of each of the two end joints.
     stiffness: [Real; 3],
     damping_time: Real,
     /// Velocities after the last step and the accelerations over it.
@@ -210,8 +231,10 @@ impl PhysicsBeam {
         let ro = real(beam.section.outer_diameter) / 2.0;
         let ri = real(beam.section.inner_diameter) / 2.0;
         let r2 = (ro * ro + ri * ri) / 4.0;
+        // The two end joints carry the axial compliance of the whole beam,
+        // L/(EA), in series: 2 EA/L each.
         let stiffness = [
-            real(beam.axial_stiffness()) / l,
+            2.0 * real(beam.axial_stiffness()) / len,
             real(beam.torsional_stiffness()) / l,
             real(beam.bending_stiffness()) / l,
         ];
@@ -259,29 +282,44 @@ impl PhysicsBeam {
         for k in 1..=n {
             let s = (k as Real - 0.5) * l;
             let (at1, at2) = (s - frame_s(k - 1), s - frame_s(k));
-            let mut j = GenericJoint::new(JointAxesMask::LIN_Y | JointAxesMask::LIN_Z);
+            let axial = k == 1 || k == n;
+            let locked = if axial {
+                JointAxesMask::LIN_Y | JointAxesMask::LIN_Z
+            } else {
+                JointAxesMask::LIN_AXES
+            };
+            let mut j = GenericJoint::new(locked);
             j.set_local_frame1(Pose::from_translation(Vector::new(at1, 0.0, 0.0)))
                 .set_local_frame2(Pose::from_translation(Vector::new(at2, 0.0, 0.0)))
                 .set_contacts_enabled(false);
             let handle = world
                 .insert_multibody_joint(segs[k - 1].handle, segs[k].handle, j)
                 .ok_or("beam: Rapier refused a multibody joint of the chain")?;
-            joints.push(SpringJoint { handle, at1, at2 });
+            joints.push(SpringJoint {
+                handle,
+                at1,
+                at2,
+                axial,
+            });
         }
         // Springs and joint-space dampers on the free DOFs, in Rapier's order
-        // (LinX, AngX, AngY, AngZ), both integrated implicitly.
+        // ([LinX,] AngX, AngY, AngZ), both integrated implicitly.
         let (mb, _) = world
             .multibody_joints
             .get_mut(joints[0].handle)
             .ok_or("beam: chain multibody missing")?;
         let mut dofs = Vec::new();
-        for (k, spring) in mb.links_mut().enumerate().skip(1) {
-            debug_assert_eq!(k, spring.link_id());
-            for (axis, stiff) in [(0, ka), (3, kt), (4, kb), (5, kb)] {
-                spring.joint.set_spring(axis, stiff, 0.0);
+        for (link, sj) in mb.links_mut().skip(1).zip(&joints) {
+            let axes: &[(usize, Real)] = if sj.axial {
+                &[(0, ka), (3, kt), (4, kb), (5, kb)]
+            } else {
+                &[(3, kt), (4, kb), (5, kb)]
+            };
+            let a = link.assembly_id();
+            for (i, &(axis, stiff)) in axes.iter().enumerate() {
+                link.joint.set_spring(axis, stiff, 0.0);
+                dofs.push((a + i, stiff));
             }
-            let a = spring.assembly_id();
-            dofs.extend([(a, ka), (a + 1, kt), (a + 2, kb), (a + 3, kb)]);
         }
         for (i, stiff) in dofs {
             mb.damping_mut()[i] = beta * stiff;
@@ -293,10 +331,13 @@ impl PhysicsBeam {
             let f = |k: usize, at: Real| {
                 centreline(frame_s(k)) * Pose::from_translation(Vector::new(at, 0.0, 0.0))
             };
+            // Rotations only: the chain starts at its rest length (the gaps
+            // between neighbouring tangents of a curved centreline are its
+            // discretisation, not a stretch).
             let rel = f(j, sj.at1).inverse() * f(j + 1, sj.at2);
             let rot = rel.rotation.to_scaled_axis();
-            let a = mb.link(j + 1).map_or(0, |l| l.assembly_id());
-            disp[a..a + 4].copy_from_slice(&[rel.translation.x, rot.x, rot.y, rot.z]);
+            let a = mb.link(j + 1).map_or(0, |l| l.assembly_id()) + usize::from(sj.axial);
+            disp[a..a + 3].copy_from_slice(&[rot.x, rot.y, rot.z]);
         }
         mb.apply_displacements(&disp);
         mb.forward_kinematics(&world.bodies, true);
@@ -424,8 +465,8 @@ impl PhysicsBeam {
 
     /// The spring wrench joint `j` (index 0..N, between bodies j and j+1)
     /// exerts on its second body, about the joint point, with the joint's
-    /// axial force along the first body's axis: (force, torque, point,
-    /// axis).
+    /// axial force along the first body's axis (NaN for an interior,
+    /// axially rigid joint): (force, torque, point, axis).
     fn spring(&self, world: &PhysicsWorld, j: usize) -> (Real, Vector, Vector, Vector) {
         let sj = &self.joints[j];
         let (b1, b2) = (
@@ -451,7 +492,12 @@ impl PhysicsBeam {
             Some((mb, link)) => mb.link(link).map_or([0.0; 6], |l| l.joint().coords()),
             None => [0.0; 6],
         };
-        let axial = -ka * (q[0] + beta * (v2 - v1).dot(x1));
+        // Interior joints are axially rigid: their force is a reaction, not a spring's.
+        let axial = if sj.axial {
+            -ka * (q[0] + beta * (v2 - v1).dot(x1))
+        } else {
+            Real::NAN
+        };
         let theta = Vector::new(q[3], q[4], q[5]);
         let w = r1.inverse() * (b2.angvel() - b1.angvel());
         let k = Vector::new(kt, kb, kb);
