@@ -365,6 +365,13 @@ fn the_pair_holds_the_beam_at_rest_as_the_fe_model_says() {
     let b = c.fe.beam();
     let weight = b.mass_per_length() * 9.81 * b.length;
     let sag = weight * b.length.powi(3) / (384.0 * b.bending_stiffness());
+    // The README's numbers (`--nocapture`).
+    eprintln!(
+        "mid node: physics {:.1} mm, FE {:.1} mm, closed form {:.1} mm; grasp forces {f1:.1} / {f2:.1} N",
+        phys * 1e3,
+        fe * 1e3,
+        -sag * 1e3
+    );
     // The middle node hangs (end-0 z is world up at rest). The FE model at
     // the simulated grasps: the clamped–clamped sag, less what the wrists'
     // rotation under the end moments takes off. The physics chain: less
