@@ -56,6 +56,8 @@ def main():
         "--hide-scrollbars",
         f"--window-size={a.width},{a.height}",
         f"--remote-debugging-port={port}",
+        # Chromium 111+ refuses DevTools websockets from other origins.
+        "--remote-allow-origins=*",
         f"--user-data-dir={profile}",
         "about:blank",
     ]
