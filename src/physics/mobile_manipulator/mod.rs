@@ -696,31 +696,26 @@ impl MobileManipulatorPhysics {
         let g = self.sim.world.gravity;
         let bodies = &mut self.sim.world.bodies;
         for r in &self.robots {
-            let chain: Vec<RigidBodyHandle> = r.arm.iter().copied().chain([r.tool]).collect();
             // Mass and first moment of the links beyond each joint, tool first.
+            let tool = &bodies[r.tool];
+            let (mut m, mut mc) = (tool.mass(), tool.center_of_mass() * tool.mass());
             let mut torque = [Vector::ZERO; 6];
-            let (mut m, mut mc) = (0.0, Vector::ZERO);
-            for k in (0..chain.len()).rev() {
-                let b = &bodies[chain[k]];
+            for k in (0..6).rev() {
+                let b = &bodies[r.arm[k]];
                 m += b.mass();
                 mc += b.center_of_mass() * b.mass();
-                if k < 6 {
-                    let (p, z) = (b.translation(), *b.rotation() * Vector::Z);
-                    // Gravity's moment about the joint axis, negated.
-                    let about = (mc - p * m).cross(g);
-                    torque[k] = -z * about.dot(z);
-                }
+                let (p, z) = (b.translation(), *b.rotation() * Vector::Z);
+                // Gravity's moment about the joint axis, negated.
+                let about = (mc - p * m).cross(g);
+                torque[k] = -z * about.dot(z);
+            }
+            bodies[r.base].reset_torques(false);
+            for &link in &r.arm {
+                bodies[link].reset_torques(false);
             }
             for k in 0..6 {
                 let parent = if k == 0 { r.base } else { r.arm[k - 1] };
-                bodies[chain[k]].reset_torques(false);
-                if k == 0 {
-                    bodies[parent].reset_torques(false);
-                }
-            }
-            for k in 0..6 {
-                let parent = if k == 0 { r.base } else { r.arm[k - 1] };
-                bodies[chain[k]].add_torque(torque[k], true);
+                bodies[r.arm[k]].add_torque(torque[k], true);
                 bodies[parent].add_torque(-torque[k], true);
             }
         }

@@ -299,7 +299,12 @@ impl Scene {
         let beam = self.object.as_ref().map(|o| {
             let st = o.state_from_tools(&s.frames[0].tool, &s.frames[1].tool);
             s.segs.extend((0..o.segments).map(|j| o.segment(&st, j)));
-            (o.ln_admissible(&st.q_f), st.max_deformation(), st)
+            (
+                o.ln_admissible(&st.q_f),
+                st.max_deformation(),
+                o.margin(&st.q_f),
+                st,
+            )
         });
 
         // Forward: Scene::evaluate in f64, keeping what the reverse pass needs.
@@ -451,21 +456,24 @@ impl Scene {
             }
             s.singular.push(g);
         }
-        let (max_deformation, ln_bf, beam) = match beam {
-            Some((ln_bf, m, st)) => (m, Some(ln_bf), Some(st)),
-            None => (0.0, None, None),
+        let (max_deformation, admissible, beam) = match beam {
+            Some((ln_bf, m, margin, st)) => {
+                if let Some(l) = ln_bf {
+                    ln_num += l;
+                }
+                (m, margin, Some(st))
+            }
+            None => (0.0, f64::INFINITY, None),
         };
-        let overstrained = matches!(ln_bf, Some(None));
-        if let Some(Some(l)) = ln_bf {
-            ln_num += l;
-        }
+        // The same factors: ln b_f is None exactly when the margin is ≤ 0.
+        let overstrained = admissible <= 0.0;
         let evaluation = |v: f64| Evaluation {
             v,
             d,
             min_beta,
             min_singular,
             max_deformation,
-            overstrained,
+            admissible,
         };
         if collided || overstrained || min_singular <= 0.0 {
             return Ok((evaluation(0.0), vec![0.0; DOF * k]));

@@ -23,7 +23,7 @@
 //! so the halving ends.
 
 use super::contact::ContactError;
-use super::potential::{Scene, Warm};
+use super::potential::{Evaluation, Scene, Warm};
 use crate::model::mobile_manipulator::{DOF, INPUTS};
 
 /// Each barrier may lose at most this fraction of its value over one hold.
@@ -43,14 +43,18 @@ pub struct Barriers {
 }
 
 impl Barriers {
-    /// The barriers at `q` (f64 evaluation of V's terms).
-    pub fn at(scene: &Scene, q: &[f64], warm: &mut Warm) -> Result<Barriers, ContactError> {
-        let e = scene.evaluate::<f64>(q, warm)?;
-        Ok(Barriers {
+    /// The barriers of an evaluation of V.
+    pub fn of(e: &Evaluation<f64>) -> Barriers {
+        Barriers {
             beta: e.min_beta,
             singular: e.min_singular,
-            admissible: admissible_margin(scene, q),
-        })
+            admissible: e.admissible,
+        }
+    }
+
+    /// The barriers at `q` (f64 evaluation of V's terms).
+    pub fn at(scene: &Scene, q: &[f64], warm: &mut Warm) -> Result<Barriers, ContactError> {
+        Ok(Barriers::of(&scene.evaluate::<f64>(q, warm)?))
     }
 
     /// Whether `next` keeps every barrier of `self` at least at [`KEEP`] of its value.
@@ -60,14 +64,6 @@ impl Barriers {
             && keeps(self.singular, next.singular)
             && keeps(self.admissible, next.admissible)
     }
-}
-
-/// The beam's least admissibility margin ([`super::object::Carried::margin`]; ∞ without a beam).
-pub fn admissible_margin(scene: &Scene, q: &[f64]) -> f64 {
-    let Some(obj) = &scene.object else {
-        return f64::INFINITY;
-    };
-    obj.margin(&obj.state::<f64>(q).q_f)
 }
 
 /// The state after holding input `u` for `t` seconds from `q` (Eq. 1,

@@ -308,11 +308,7 @@ impl Controller for DilfController {
             .map(|(r, b)| b.index() * 3usize.pow(r as u32))
             .sum();
         if p.hold_guard {
-            let now = guard::Barriers {
-                beta: e.min_beta,
-                singular: e.min_singular,
-                admissible: guard::admissible_margin(&p.scene, q),
-            };
+            let now = guard::Barriers::of(&e);
             if guard::guard(&p.scene, q, &now, &mut u, p.period, &mut self.guard_warm) > 0 {
                 label += self.combos;
             }
@@ -363,7 +359,7 @@ pub fn check_configuration(scene: &Scene, q: &[f64], what: &str) -> Result<(), P
             "puts an arm inside a singularity enclosure (see planner.singularity)".into(),
         ));
     }
-    if let (true, Some(o)) = (e.overstrained, &scene.object) {
+    if let (true, Some(o)) = (e.overstrained(), &scene.object) {
         let stretch = o.max_stretch.map_or(String::new(), |eps| {
             let q_f = o.state::<f64>(q).q_f;
             format!(", stretch {:.4} m against max_stretch = {eps}", q_f[0])

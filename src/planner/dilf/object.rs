@@ -130,18 +130,31 @@ impl Carried {
         self
     }
 
-    /// The least admissibility margin of q_f: per node 1 − ‖q_fi‖²/q_F²
-    /// (Eq. 12's balls, normalised), and 1 − (q_f[0]/ε)² under a stretch
-    /// bound. ≤ 0: outside the admissible set.
+    /// The admissible set's factors at q_f: per node 1 − ‖q_fi‖²/q_F² (Eq.
+    /// 12's balls, normalised), then 1 − (q_f[0]/ε)² under a stretch bound.
+    /// Inside the set when every factor is > 0; b_f is their product.
+    fn admissible_factors<'a, T: Scalar>(
+        &'a self,
+        q_f: &'a [T; 12],
+    ) -> impl Iterator<Item = T> + 'a {
+        let balls = q_f.chunks(6).map(|node| {
+            let mut s = k::<T>(0.0);
+            for x in node {
+                s += *x * *x;
+            }
+            k::<T>(1.0) - s * (1.0 / (self.q_max * self.q_max))
+        });
+        let stretch = self.max_stretch.map(|eps| {
+            let u = q_f[0] * (1.0 / eps);
+            k::<T>(1.0) - u * u
+        });
+        balls.chain(stretch)
+    }
+
+    /// The least admissibility factor of q_f ([`Carried::admissible_factors`]):
+    /// ≤ 0 outside the admissible set.
     pub fn margin(&self, q_f: &[f64; 12]) -> f64 {
-        let balls = q_f
-            .chunks(6)
-            .map(|node| 1.0 - node.iter().map(|x| x * x).sum::<f64>() / (self.q_max * self.q_max))
-            .fold(f64::INFINITY, f64::min);
-        match self.max_stretch {
-            Some(eps) => balls.min(1.0 - (q_f[0] / eps).powi(2)),
-            None => balls,
-        }
+        self.admissible_factors(q_f).fold(f64::INFINITY, f64::min)
     }
 
     /// End-0 pose and q_f at q (both robots), generic for exact derivatives.
@@ -168,20 +181,7 @@ impl Carried {
     /// its admissible ball.
     pub fn ln_admissible<T: Scalar>(&self, q_f: &[T; 12]) -> Option<T> {
         let mut out = k::<T>(0.0);
-        for node in q_f.chunks(6) {
-            let mut s = k::<T>(0.0);
-            for x in node {
-                s += *x * *x;
-            }
-            let b = k::<T>(1.0) - s * (1.0 / (self.q_max * self.q_max));
-            if b.re() <= 0.0 {
-                return None;
-            }
-            out += b.ln();
-        }
-        if let Some(eps) = self.max_stretch {
-            let u = q_f[0] * (1.0 / eps);
-            let b = k::<T>(1.0) - u * u;
+        for b in self.admissible_factors(q_f) {
             if b.re() <= 0.0 {
                 return None;
             }
@@ -394,7 +394,7 @@ pub(crate) mod tests {
             q[DOF] = q0[DOF] + 0.05 * step as f64;
             let e = s.evaluate::<f64>(&q, &mut s.warm()).unwrap();
             let stretch = grasp_distance(&q) - grasp_distance(&q0);
-            if e.overstrained {
+            if e.overstrained() {
                 assert_eq!(e.v, 0.0);
                 assert!(
                     e.max_deformation > 0.5 / 3f64.sqrt(),

@@ -202,8 +202,16 @@ pub struct Evaluation<T: Scalar> {
     pub min_singular: f64,
     /// ‖q_f‖∞ of the carried beam (Eq. 5); 0 without one.
     pub max_deformation: f64,
-    /// Whether b_f ≤ 0: a node of the beam outside its admissible ball.
-    pub overstrained: bool,
+    /// The beam's least admissibility factor ([`Carried::margin`]); ∞
+    /// without one.
+    pub admissible: f64,
+}
+
+impl<T: Scalar> Evaluation<T> {
+    /// Whether b_f ≤ 0: the beam outside its admissible set (V = 0).
+    pub fn overstrained(&self) -> bool {
+        self.admissible <= 0.0
+    }
 }
 
 /// Which pair is closest (for messages).
@@ -316,6 +324,7 @@ impl Scene {
                 o.ellipsoids(&st),
                 o.ln_admissible(&st.q_f),
                 st.max_deformation(),
+                o.margin(&st.q_f.map(|x| x.re())),
             )
         });
         let ln_lambda = self.params.lambda.ln();
@@ -368,7 +377,7 @@ impl Scene {
                     collided |= sol.value <= 0.0;
                     seen.push((sol.beta(part, o), spatial::sub(c, o.center)));
                 }
-                if let (Some(obj), Some((segs, _, _))) = (&self.object, &beam) {
+                if let (Some(obj), Some((segs, _, _, _))) = (&self.object, &beam) {
                     for (j, o) in segs.iter().enumerate() {
                         let s_slot = slot;
                         slot += 1;
@@ -416,7 +425,7 @@ impl Scene {
         // V as a factor b̃ = β/(1+β), so V vanishes when the beam touches a
         // wall, as it does for the robots' parts. (The robots' parts against
         // the beam are above, in their own workspace copies.)
-        if let Some((segs, _, _)) = &beam {
+        if let Some((segs, _, _, _)) = &beam {
             for seg in segs {
                 let seg_re = seg.re();
                 for o in &self.obstacles {
@@ -445,14 +454,17 @@ impl Scene {
                 }
             }
         }
-        let (max_deformation, overstrained) = match &beam {
-            Some((_, Some(ln_bf), m)) => {
-                ln_num += *ln_bf;
-                (*m, false)
+        let (max_deformation, admissible) = match &beam {
+            Some((_, ln_bf, m, margin)) => {
+                if let Some(l) = ln_bf {
+                    ln_num += *l;
+                }
+                (*m, *margin)
             }
-            Some((_, None, m)) => (*m, true),
-            None => (0.0, false),
+            None => (0.0, f64::INFINITY),
         };
+        // The same factors: ln b_f is None exactly when the margin is ≤ 0.
+        let overstrained = admissible <= 0.0;
         let v = if collided || overstrained || min_singular <= 0.0 {
             k(0.0)
         } else {
@@ -470,7 +482,7 @@ impl Scene {
             min_beta,
             min_singular,
             max_deformation,
-            overstrained,
+            admissible,
         })
     }
 
@@ -522,7 +534,7 @@ impl Scene {
                 min_beta: e.min_beta,
                 min_singular: e.min_singular,
                 max_deformation: e.max_deformation,
-                overstrained: e.overstrained,
+                admissible: e.admissible,
             },
             grad.iter().map(|g| d2 * g).collect(),
         ))
