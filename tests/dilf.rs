@@ -652,6 +652,41 @@ fn bad_stretch_bounds_and_servo_gains_are_bad_input() {
     );
 }
 
+/// Outside the beam's admissible set V = 0 and Eq. 18 is undefined: the law
+/// stops there ("overstrained"), as at a collision, instead of holding a
+/// zero command until the horizon. Only a simulated state can get there
+/// (the ideal run keeps V̇ ≥ 0): here robot 2 stands 0.5 m further out than
+/// Table I's start, stretching the model beam past q_F = 0.3.
+#[test]
+fn the_law_stops_where_the_beam_leaves_its_admissible_set() {
+    use anholonomy::plan::ControlLaw;
+    use anholonomy::scenario::Scenario;
+    use anholonomy::validate::Prepared;
+    let text = pair_text("max_deformation = 0.3");
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("t.toml");
+    std::fs::write(&path, &text).unwrap();
+    let prep = Prepared::new(Scenario::parse(&path, &text).unwrap()).unwrap();
+    let (start, _) = prep.start_goal();
+    let plan = prep.plan().unwrap();
+    let ControlLaw::Feedback { factory, .. } = &plan.law else {
+        panic!("DILF is a feedback law");
+    };
+    let mut ctl = factory.start();
+    let c = ctl.command(0.0, &start);
+    assert!(
+        !c.done,
+        "stopped at Table I's start: {}",
+        plan.labels[c.label]
+    );
+    let mut stretched = start.clone();
+    stretched[9] += 0.5;
+    let c = ctl.command(0.0, &stretched);
+    assert!(c.done);
+    assert_eq!(plan.labels[c.label], "overstrained");
+    assert!(c.u.iter().all(|u| *u == 0.0));
+}
+
 /// The ideal run of a one-robot task, its labels and the system's metrics.
 fn ideal_run(text: &str) -> (Vec<String>, Vec<(String, f64)>, f64) {
     use anholonomy::record::{Comparison, SimTrajectory};

@@ -62,6 +62,33 @@ pub fn pow2n<T: Scalar>(u: T, n: f64) -> T {
     }
 }
 
+/// φ(u) = |u|^{2n}, φ′ and φ″, with the kink of n < 1 rounded over `eps`
+/// (as (u² + ε²)^n − ε^{2n}, see [`KINK_EPS`]): the one-dimensional pieces of
+/// b's value, gradient and Hessian.
+#[inline]
+pub fn pow2n_derivatives(u: f64, n: f64, eps: f64) -> (f64, f64, f64) {
+    let u2 = u * u;
+    if n < 1.0 {
+        let e2 = eps * eps;
+        let w = u2 + e2;
+        let p = w.powf(n - 1.0);
+        return (
+            w * p - e2.powf(n),
+            2.0 * n * u * p,
+            2.0 * n * p * (1.0 + 2.0 * (n - 1.0) * u2 / w),
+        );
+    }
+    // d/du |u|^{2n} = 2n u |u|^{2n−2}; second derivative 2n(2n−1)|u|^{2n−2}.
+    let p = if n == 1.0 {
+        1.0
+    } else if n.fract() == 0.0 {
+        u2.powi(n as i32 - 1)
+    } else {
+        u2.powf(n - 1.0)
+    };
+    (p * u2, 2.0 * n * u * p, 2.0 * n * (2.0 * n - 1.0) * p)
+}
+
 impl Superellipsoid {
     /// A plain ellipsoid (n = 1) with the given centre and semi-axes, axis-aligned.
     pub fn ellipsoid(center: [f64; 3], semi_axes: [f64; 3]) -> Self {
@@ -236,61 +263,24 @@ impl PlacedEllipsoid<f64> {
     /// (kink rounded over [`KINK_EPS`] below n = 1), without the Hessian.
     pub fn grad(&self, x: [f64; 3]) -> [f64; 3] {
         let u = self.local(x);
-        let n = self.n;
-        let du: [f64; 3] = std::array::from_fn(|k| {
-            let u2 = u[k] * u[k];
-            // d/du |u|^{2n} = 2n u |u|^{2n−2} (rounded: 2n u (u² + ε²)^{n−1}).
-            let p = if n < 1.0 {
-                (u2 + KINK_EPS * KINK_EPS).powf(n - 1.0)
-            } else if n == 1.0 {
-                1.0
-            } else if n.fract() == 0.0 {
-                u2.powi(n as i32 - 1)
-            } else {
-                u2.powf(n - 1.0)
-            };
-            2.0 * n * u[k] * p / self.semi[k]
-        });
+        let du: [f64; 3] =
+            std::array::from_fn(|k| pow2n_derivatives(u[k], self.n, KINK_EPS).1 / self.semi[k]);
         spatial::mul_mv(&self.rot, du)
     }
 
-    /// b(x), its gradient and Hessian in world coordinates.
+    /// b(x), its gradient and Hessian in world coordinates (kink rounded
+    /// over [`KINK_EPS`] below n = 1).
     pub fn value_grad_hess(&self, x: [f64; 3]) -> (f64, [f64; 3], [[f64; 3]; 3]) {
-        self.value_grad_hess_rounded(x, KINK_EPS)
-    }
-
-    /// As [`PlacedEllipsoid::value_grad_hess`], with the kink of n < 1 rounded
-    /// over `eps` instead of [`KINK_EPS`] (for continuation in `eps`).
-    pub fn value_grad_hess_rounded(&self, x: [f64; 3], eps: f64) -> (f64, [f64; 3], [[f64; 3]; 3]) {
         let u = self.local(x);
-        let n = self.n;
         let mut val = -1.0;
         let mut du = [0.0; 3];
         let mut ddu = [0.0; 3];
         for k in 0..3 {
             let s = self.semi[k];
-            let u2 = u[k] * u[k];
-            if n < 1.0 {
-                // Rounded kink, see `pow2n`: w = u² + ε².
-                let e2 = eps * eps;
-                let w = u2 + e2;
-                let p = w.powf(n - 1.0);
-                val += w * p - e2.powf(n);
-                du[k] = 2.0 * n * u[k] * p / s;
-                ddu[k] = 2.0 * n * p * (1.0 + 2.0 * (n - 1.0) * u2 / w) / (s * s);
-                continue;
-            }
-            // d/du |u|^{2n} = 2n u |u|^{2n−2}; second derivative 2n(2n−1)|u|^{2n−2}.
-            let p = if n == 1.0 {
-                1.0
-            } else if n.fract() == 0.0 {
-                u2.powi(n as i32 - 1)
-            } else {
-                u2.powf(n - 1.0)
-            };
-            val += p * u2;
-            du[k] = 2.0 * n * u[k] * p / s;
-            ddu[k] = 2.0 * n * (2.0 * n - 1.0) * p / (s * s);
+            let (f, d1, d2) = pow2n_derivatives(u[k], self.n, KINK_EPS);
+            val += f;
+            du[k] = d1 / s;
+            ddu[k] = d2 / (s * s);
         }
         // Back to world: ∇ = R du, ∇² = R diag(ddu) Rᵀ.
         let r = &self.rot;

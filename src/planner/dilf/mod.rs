@@ -254,7 +254,16 @@ fn labels(robots: usize) -> Vec<String> {
         .collect();
     let mut out = combos.clone();
     out.extend(combos.iter().map(|c| format!("{c} (guarded)")));
-    out.extend(["converged", "collision", "singular", "solver failure"].map(String::from));
+    out.extend(
+        [
+            "converged",
+            "collision",
+            "singular",
+            "solver failure",
+            "overstrained",
+        ]
+        .map(String::from),
+    );
     out
 }
 
@@ -300,6 +309,12 @@ impl Controller for DilfController {
         }
         if e.min_singular <= 0.0 {
             return stop(done + 2);
+        }
+        // The beam outside its admissible set (b_f ≤ 0): V = 0 there, the
+        // law is undefined, as at a collision. (Only a simulated state can
+        // get there: the ideal run keeps V̇ ≥ 0.)
+        if e.overstrained() {
+            return stop(done + 4);
         }
         let (mut u, branches) = control::control(q, &f, &p.scene.goal, &p.gains);
         let mut label = branches
