@@ -132,6 +132,7 @@ pub fn solve(
             (0..3).map(|k| obstacle.rot[k][i] * m[k][j]).sum::<f64>() / obstacle.semi[i]
         })
     });
+    let u0 = obstacle.local(part.center);
     for y0 in starts {
         let mut found = None;
         let mut y = y0;
@@ -139,7 +140,7 @@ pub fn solve(
         for &eps in stages {
             let pulled = Pulled {
                 a,
-                u0: obstacle.local(part.center),
+                u0,
                 n: obstacle.n,
                 eps,
             };
@@ -213,10 +214,12 @@ impl Pulled {
         }
     }
 
-    /// uᵀ ∇²_y F v.
-    fn hess(&self, at: &AtPoint, u: [f64; 3], v: [f64; 3]) -> f64 {
-        let (au, av) = (spatial::mul_mv(&self.a, u), spatial::mul_mv(&self.a, v));
-        (0..3).map(|k| au[k] * at.d2[k] * av[k]).sum()
+    /// ∇²_y F in the tangent basis (t1, t2): (t1ᵀHt1, t1ᵀHt2, t2ᵀHt2), with
+    /// A t1 and A t2 formed once.
+    fn tangent_hessian(&self, at: &AtPoint, t1: [f64; 3], t2: [f64; 3]) -> (f64, f64, f64) {
+        let (a1, a2) = (spatial::mul_mv(&self.a, t1), spatial::mul_mv(&self.a, t2));
+        let form = |u: [f64; 3], v: [f64; 3]| (0..3).map(|k| u[k] * at.d2[k] * v[k]).sum::<f64>();
+        (form(a1, a1), form(a1, a2), form(a2, a2))
     }
 }
 
@@ -224,7 +227,7 @@ impl Pulled {
 /// at a critical point, or None when it does not converge.
 fn newton_on_sphere(f: &Pulled, y0: [f64; 3]) -> Option<([f64; 3], f64, usize)> {
     // Each point is evaluated once: the accepted line-search point's
-    // gradient and Hessian serve the next iteration.
+    // gradient and φ″ serve the next iteration.
     let mut y = y0;
     let mut at_y = f.at(y);
     // The last iterate that is a minimiser to round-off (positive definite
@@ -249,11 +252,8 @@ fn newton_on_sphere(f: &Pulled, y0: [f64; 3]) -> Option<([f64; 3], f64, usize)> 
         let t1 = normalize(cross(y, a));
         let t2 = cross(y, t1);
         // Riemannian Hessian on the sphere: P ∇²F P − (yᵀ∇F) I.
-        let (mut h11, h12, mut h22) = (
-            f.hess(&at_y, t1, t1) - lam,
-            f.hess(&at_y, t1, t2),
-            f.hess(&at_y, t2, t2) - lam,
-        );
+        let (h11, h12, h22) = f.tangent_hessian(&at_y, t1, t2);
+        let (mut h11, mut h22) = (h11 - lam, h22 - lam);
         let (b1, b2) = (-spatial::dot(t1, g), -spatial::dot(t2, g));
         // Levenberg shift until positive definite (far from the minimiser).
         let mut shift = 0.0;
