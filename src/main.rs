@@ -177,6 +177,14 @@ struct RunArgs {
     /// steps of `sim.dt` (memory and time grow with the step count).
     #[arg(long, value_name = "N", default_value_t = anholonomy::validate::DEFAULT_MAX_STEPS)]
     max_steps: u64,
+    /// Link poses per second of simulated time in the logs (`/tf` in run.mcap,
+    /// the `robot/<link>` transforms in run.rrd): every k-th physics sample
+    /// with k = floor(1 / (HZ * sim.dt)), so at least HZ, plus the last
+    /// sample. 0 logs every sample. Every other topic, the metrics and
+    /// series.json use every sample whatever the rate; link poses are most
+    /// of the log's size and writing time.
+    #[arg(long, value_name = "HZ", default_value_t = anholonomy::runner::DEFAULT_POSE_RATE)]
+    pose_rate: f64,
 }
 
 /// What `run_cmd` does with the baselines.
@@ -319,6 +327,15 @@ fn run_cmd(args: &RunArgs, mode: Mode) -> Result<u8, Vec<Error>> {
             "continues the sweep's variants.jsonl in the logs: drop --no-logs",
         )]);
     }
+    if !(args.pose_rate.is_finite() && args.pose_rate >= 0.0) {
+        return Err(vec![Error::input(
+            "--pose-rate",
+            format!(
+                "{} is not a rate: give link poses per second of simulated time (0 = every sample)",
+                args.pose_rate
+            ),
+        )]);
+    }
     let log_root = (!args.no_logs).then(|| args.logs.clone());
     let call = Call {
         log_root: log_root.as_deref(),
@@ -367,6 +384,7 @@ fn run_cmd(args: &RunArgs, mode: Mode) -> Result<u8, Vec<Error>> {
     let opts = RunOptions {
         log_root,
         progress: !args.quiet,
+        pose_rate: args.pose_rate,
     };
     let mut rows = Vec::new();
     let mut results: Vec<(usize, Outcome)> = Vec::new();

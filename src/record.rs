@@ -59,8 +59,12 @@ pub struct LinkVisual {
 pub struct SimTrajectory {
     /// Model coordinates read back from the simulation, with the commands applied.
     pub traj: Trajectory,
-    /// World pose of each link (same order as [`RunRecord::links`]) at each sample.
+    /// World pose of each link (same order as [`RunRecord::links`]) at the
+    /// samples [`SimTrajectory::link_pose_index`] names (every sample, or
+    /// fewer: only the 3D logs read them).
     pub link_poses: Vec<Vec<Pose>>,
+    /// Sample index (into `traj`) of each row of `link_poses`, increasing.
+    pub link_pose_index: Vec<usize>,
     /// Extra named time series (slip, momentum, ...), one value per sample.
     pub channels: Vec<(String, Vec<f64>)>,
     /// Number of physics steps taken.

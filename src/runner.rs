@@ -25,6 +25,44 @@ pub struct RunOptions {
     pub log_root: Option<PathBuf>,
     /// Show a progress bar when a run takes longer than a second.
     pub progress: bool,
+    /// Link poses in the logs per second of simulated time (at least this
+    /// many, see [`pose_stride`]); 0 logs them at every sample.
+    pub pose_rate: f64,
+}
+
+/// Default of [`RunOptions::pose_rate`], Hz: more than a viewer plays back,
+/// a fifth of the samples of a 2 ms run.
+pub const DEFAULT_POSE_RATE: f64 = 100.0;
+
+#[cfg(test)]
+mod pose_stride_tests {
+    use super::pose_stride;
+
+    #[test]
+    fn stride_gives_at_least_the_rate() {
+        assert_eq!(pose_stride(100.0, 0.002), 5);
+        assert_eq!(pose_stride(100.0, 0.001), 10);
+        // 2.5 samples per pose: every 2nd (125 Hz), never every 3rd (83 Hz).
+        assert_eq!(pose_stride(100.0, 0.004), 2);
+        assert_eq!(pose_stride(100.0, 0.02), 1);
+        assert_eq!(pose_stride(0.0, 0.002), 1);
+        for (rate, dt) in [(100.0, 3e-3), (60.0, 1e-3), (7.0, 0.013), (1e3, 1e-4)] {
+            let k = pose_stride(rate, dt) as f64;
+            assert!(1.0 / (k * dt) >= rate && 1.0 / ((k + 1.0) * dt) < rate);
+        }
+    }
+}
+
+/// Physics samples per logged link-pose row for `rate` Hz at step `dt`: the
+/// largest whole stride that still gives at least `rate` rows per second;
+/// 1 (every sample) for rate 0 or a rate above the sample rate.
+pub fn pose_stride(rate: f64, dt: f64) -> usize {
+    if rate > 0.0 && dt > 0.0 {
+        // The small epsilon keeps 1/(100·0.002) = 5 from rounding down to 4.
+        ((1.0 / (rate * dt)) * (1.0 + 1e-9)).floor().max(1.0) as usize
+    } else {
+        1
+    }
 }
 
 /// Wall time of each stage, s.
@@ -111,8 +149,11 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
     let replay_opts = ReplayOptions {
         dt: sc.sim.dt,
         settle: sc.sim.settle,
-        // Only the 3D logs read link poses.
-        link_poses: opts.log_root.is_some(),
+        // Only the 3D logs read link poses, at their own rate.
+        link_pose_every: opts
+            .log_root
+            .is_some()
+            .then(|| pose_stride(opts.pose_rate, sc.sim.dt)),
     };
     let sim =
         replay_with(sys.as_mut(), plan, &replay_opts, &mut |f| bar.set(f)).map_err(|message| {

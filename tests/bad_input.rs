@@ -468,6 +468,20 @@ fn huge_goal_prints_readable_numbers() {
     assert!(!err.contains("0000000000"), "{err}");
 }
 
+/// `--pose-rate` takes a finite rate ≥ 0 (clap alone would take NaN and inf).
+#[test]
+fn pose_rate_must_be_a_rate() {
+    let dir = tempfile::tempdir().unwrap();
+    let text = disk_scenario(&model("rolling_disk.urdf"), "", "");
+    std::fs::write(dir.path().join("d.toml"), text).unwrap();
+    for bad in ["nan", "-1", "inf"] {
+        let rate = format!("--pose-rate={bad}");
+        let args = ["run", "d.toml", "--logs", "logs", &rate];
+        let err = check_contract(&cli(dir.path(), &args), dir.path(), "--pose-rate");
+        assert!(err.contains("is not a rate"), "{err}");
+    }
+}
+
 /// `--max-steps` is documented in `--help` of every command that validates.
 #[test]
 fn max_steps_is_documented() {

@@ -120,7 +120,15 @@ fn logs_are_complete_and_readable() {
     assert_eq!(counts["/plan/command"], samples, "{counts:?}");
     assert_eq!(counts["/tracking/error"], samples, "{counts:?}");
     assert_eq!(counts["/sim/channels"], samples, "{counts:?}");
-    assert!(counts.get("/tf").copied().unwrap_or(0) > 0, "{counts:?}");
+    // Link poses at the default pose rate: every k-th sample and the last.
+    let dt = prepared(&root().join("scenarios/disk_paper.toml"))
+        .scenario
+        .sim
+        .dt;
+    let k = anholonomy::runner::pose_stride(anholonomy::runner::DEFAULT_POSE_RATE, dt);
+    assert!(k > 1 && (1.0 / (k as f64 * dt)) >= anholonomy::runner::DEFAULT_POSE_RATE);
+    let tf = o.steps / k + 1 + usize::from(!o.steps.is_multiple_of(k));
+    assert_eq!(counts["/tf"], tf, "{counts:?}");
     assert!(counts.get("/scene").copied().unwrap_or(0) > 0, "{counts:?}");
 
     // Rerun: non-empty, with the RRD header.
@@ -176,4 +184,37 @@ fn failure_messages_show_the_breach() {
         assert_eq!(b, limit, "{f}: the bound is printed exactly");
         assert!(!f.contains("0.000000"), "{f}");
     }
+}
+
+/// Link poses logged every k-th sample (and the last) are exactly the
+/// every-sample ones at those samples, and reading them back (or not) does
+/// not touch the physics.
+#[test]
+fn thinned_link_poses_are_the_full_rate_ones() {
+    use anholonomy::physics::{replay_with, ReplayOptions};
+    let prep = prepared(&root().join("scenarios/disk_paper.toml"));
+    let sim = &prep.scenario.sim;
+    let replay = |every: Option<usize>| {
+        let mut sys = prep.physics().unwrap();
+        let opts = ReplayOptions {
+            dt: sim.dt,
+            settle: sim.settle,
+            link_pose_every: every,
+        };
+        replay_with(sys.as_mut(), &prep.planned, &opts, &mut |_| {}).unwrap()
+    };
+    let (full, thin, none) = (replay(Some(1)), replay(Some(7)), replay(None));
+    let n = full.traj.len();
+    assert_eq!(full.link_pose_index, (0..n).collect::<Vec<_>>());
+    let mut want: Vec<usize> = (0..n).step_by(7).collect();
+    if !(n - 1).is_multiple_of(7) {
+        want.push(n - 1);
+    }
+    assert_eq!(thin.link_pose_index, want);
+    for (row, &k) in thin.link_pose_index.iter().enumerate() {
+        assert_eq!(thin.link_poses[row], full.link_poses[k], "sample {k}");
+    }
+    assert!(none.link_poses.is_empty() && none.link_pose_index.is_empty());
+    assert_eq!(none.traj.q, full.traj.q);
+    assert_eq!(thin.traj.q, full.traj.q);
 }

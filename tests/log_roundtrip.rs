@@ -261,21 +261,35 @@ fn missing_directory_is_an_error_and_leaves_no_file() {
 #[test]
 fn invalid_record_keeps_previous_file() {
     let dir = tempfile::tempdir().unwrap();
-    let mut fx = Fixture::new(20);
-    fx.sim.link_poses.pop(); // one pose row short
-    for name in ["run.mcap", "run.rrd"] {
-        let path = dir.path().join(name);
-        std::fs::write(&path, b"previous").unwrap();
-        let r = if name.ends_with("mcap") {
-            write_mcap(&path, &fx.record())
-        } else {
-            write_rrd(&path, &fx.record())
-        };
-        let err = r.expect_err("inconsistent record is rejected");
-        assert!(matches!(err, LogError::InvalidRecord { .. }), "{err}");
-        assert!(err.to_string().contains("link pose"), "{err}");
-        assert_eq!(std::fs::read(&path).unwrap(), b"previous");
-        assert!(!tmp_of(&path).exists());
+    // Link pose rows that do not line up with their sample indices.
+    type Corrupt = fn(&mut Fixture);
+    let cases: [(&str, Corrupt); 3] = [
+        ("rows but", |fx| {
+            fx.sim.link_poses.pop(); // one pose row short
+        }),
+        ("not increasing", |fx| fx.sim.link_pose_index.swap(3, 4)),
+        ("but sim has", |fx| {
+            *fx.sim.link_pose_index.last_mut().unwrap() = 20;
+        }),
+    ];
+    for (needle, corrupt) in cases {
+        let mut fx = Fixture::new(20);
+        corrupt(&mut fx);
+        for name in ["run.mcap", "run.rrd"] {
+            let path = dir.path().join(name);
+            std::fs::write(&path, b"previous").unwrap();
+            let r = if name.ends_with("mcap") {
+                write_mcap(&path, &fx.record())
+            } else {
+                write_rrd(&path, &fx.record())
+            };
+            let err = r.expect_err("inconsistent record is rejected");
+            assert!(matches!(err, LogError::InvalidRecord { .. }), "{err}");
+            assert!(err.to_string().contains("link pose"), "{err}");
+            assert!(err.to_string().contains(needle), "{err}");
+            assert_eq!(std::fs::read(&path).unwrap(), b"previous");
+            assert!(!tmp_of(&path).exists());
+        }
     }
 }
 

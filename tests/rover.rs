@@ -120,6 +120,7 @@ fn small_sweep_reports_rate_and_distribution_and_shards_agree() {
     let opts = RunOptions {
         log_root: Some(logs.clone()),
         progress: false,
+        pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
     };
     let o = run_sweep(&p, &opts, None).unwrap();
     assert!(o.passed, "{:?}", o.failures);

@@ -121,11 +121,24 @@ fn check(rec: &RunRecord<'_>) -> Result<(), String> {
     traj_ok("ideal", rec.ideal)?;
     traj_ok("sim", &rec.sim.traj)?;
     let n_sim = rec.sim.traj.len();
-    if !rec.sim.link_poses.is_empty() {
-        if rec.sim.link_poses.len() != n_sim {
+    let (poses, index) = (&rec.sim.link_poses, &rec.sim.link_pose_index);
+    if poses.len() != index.len() {
+        return Err(format!(
+            "{} link pose rows but {} sample indices for them",
+            poses.len(),
+            index.len()
+        ));
+    }
+    if !poses.is_empty() {
+        if let Some(w) = index.windows(2).find(|w| w[1] <= w[0]) {
             return Err(format!(
-                "sim has {n_sim} samples but {} link pose rows",
-                rec.sim.link_poses.len()
+                "link pose sample indices not increasing: {} then {}",
+                w[0], w[1]
+            ));
+        }
+        if let Some(&k) = index.last().filter(|&&k| k >= n_sim) {
+            return Err(format!(
+                "link pose row at sample {k}, but sim has {n_sim} samples"
             ));
         }
         if let Some((k, row)) = rec

@@ -327,7 +327,13 @@ fn log_robot(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrErro
             .with_many_translation(poses.clone().map(|p| f32x3(p.translation)))
             .with_many_quaternion(poses.map(|p| quat(p.rotation)))
             .columns_of_unit_batches()?;
-        stream.send_columns(link_path, [time_col(&rec.sim.traj.t)], cols)?;
+        let times: Vec<f64> = rec
+            .sim
+            .link_pose_index
+            .iter()
+            .map(|&k| rec.sim.traj.t[k])
+            .collect();
+        stream.send_columns(link_path, [time_col(&times)], cols)?;
     }
     Ok(())
 }

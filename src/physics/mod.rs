@@ -57,9 +57,11 @@ pub struct ReplayOptions {
     pub dt: f64,
     /// Zero-input time after the plan (or after a feedback policy's `done`), s.
     pub settle: f64,
-    /// Record every link's world pose at every sample (only the 3D logs use
-    /// them; runs without logs skip the read-back).
-    pub link_poses: bool,
+    /// Record every link's world pose at samples 0, n, 2n, … and the last
+    /// one (`Some(n)`, n ≥ 1), or never (`None`). Only the 3D logs use them:
+    /// runs without logs skip the read-back, and the logs need no more than
+    /// a display rate.
+    pub link_pose_every: Option<usize>,
 }
 
 /// Replay `plan` on `sys` for its duration plus `settle` seconds (zero input),
@@ -78,7 +80,7 @@ pub fn replay(
     let opts = ReplayOptions {
         dt,
         settle,
-        link_poses: true,
+        link_pose_every: Some(1),
     };
     replay_with(sys, plan, &opts, progress)
 }
@@ -110,8 +112,10 @@ pub fn replay_with(
     out.traj.q.reserve(n + 1);
     out.traj.u.reserve(n + 1);
     out.traj.label.reserve(n + 1);
-    if opts.link_poses {
-        out.link_poses.reserve(n + 1);
+    let pose_every = opts.link_pose_every.map(|e| e.max(1));
+    if let Some(e) = pose_every {
+        out.link_poses.reserve(n / e + 2);
+        out.link_pose_index.reserve(n / e + 2);
     }
     let hold = plan.hold_period();
     let mut clock = hold.map(|p| crate::integrate::SampleClock::new(p, dt));
@@ -121,10 +125,12 @@ pub fn replay_with(
     let mut finished = false;
     // Time, state and channels of one sample (the state is the last one read back).
     let record = |out: &mut SimTrajectory, sys: &dyn PhysicsSystem, t: f64, q: State| {
+        let k = out.traj.t.len();
         out.traj.t.push(t);
         out.traj.q.push(q);
-        if opts.link_poses {
+        if pose_every.is_some_and(|e| k.is_multiple_of(e)) {
             out.link_poses.push(sys.link_poses());
+            out.link_pose_index.push(k);
         }
         for (series, v) in out.channels.iter_mut().zip(sys.channels()) {
             series.1.push(v);
@@ -169,6 +175,12 @@ pub fn replay_with(
         if k % 256 == 0 {
             progress(k as f64 / n as f64);
         }
+    }
+    // The final pose too, so the 3D logs end where the run ends.
+    let last_k = out.traj.t.len() - 1;
+    if pose_every.is_some() && out.link_pose_index.last() != Some(&last_k) {
+        out.link_poses.push(sys.link_poses());
+        out.link_pose_index.push(last_k);
     }
     let last = out.traj.u.last().cloned().unwrap_or_else(|| held.u.clone());
     out.traj.u.push(last);

@@ -157,6 +157,7 @@ fn run_variant(prep: &Prepared, cfg: &SweepConfig, v: &Variant) -> String {
     let opts = RunOptions {
         log_root: None,
         progress: false,
+        pose_rate: 0.0,
     };
     let res = prep
         .variant(v)

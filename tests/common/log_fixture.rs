@@ -65,6 +65,7 @@ impl Fixture {
                 .push(DVector::from_vec(vec![1.0, 0.1 * label as f64]));
             sim.traj.label.push(label);
             sim.link_poses.push(vec![base, wheel]);
+            sim.link_pose_index.push(k);
         }
         sim.channels.push((
             "slip".to_string(),

@@ -29,6 +29,7 @@ pub fn run_prepared(prep: &Prepared, logs: Option<&Path>) -> RunOutcome {
     let opts = RunOptions {
         log_root: logs.map(Path::to_path_buf),
         progress: false,
+        pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
     };
     run(prep, &opts).unwrap()
 }
