@@ -17,9 +17,11 @@ rerun analytics disable >/dev/null 2>&1 || true
 port() { python3 -c 'import socket; s=socket.socket(); s.bind(("127.0.0.1",0)); print(s.getsockname()[1])'; }
 web=$(port)
 grpc=$(port)
-rerun --serve-web --web-viewer-port "$web" --port "$grpc" "$rrd" >/tmp/rerun-serve-$web.log 2>&1 &
+# Own session: `rerun` is a wrapper whose viewer child would outlive a plain
+# kill of $pid (and keep a core busy).
+setsid rerun --serve-web --web-viewer-port "$web" --port "$grpc" "$rrd" >/tmp/rerun-serve-$web.log 2>&1 &
 pid=$!
-trap 'kill $pid 2>/dev/null || true' EXIT
+trap 'kill -- -$pid 2>/dev/null || kill $pid 2>/dev/null || true' EXIT
 for _ in $(seq 1 100); do
   curl -fs "http://127.0.0.1:$web/" >/dev/null 2>&1 && break
   sleep 0.3
