@@ -287,9 +287,16 @@ fn write_logs(
         metrics: &outcome.metrics,
         command: &command,
     };
-    crate::log::mcap::write_mcap(&dir.join("run.mcap"), &rec).map_err(|e| e.to_string())?;
-    crate::report::data::write(&dir.join("series.json"), &rec)?;
-    crate::log::rerun::write_rrd(&dir.join("run.rrd"), &rec).map_err(|e| e.to_string())
+    // The writers are independent (each file from the same record): on two
+    // cores a single run's logs take the longer writer's time, not the sum.
+    let (mcap, rest) = rayon::join(
+        || crate::log::mcap::write_mcap(&dir.join("run.mcap"), &rec).map_err(|e| e.to_string()),
+        || {
+            crate::report::data::write(&dir.join("series.json"), &rec)?;
+            crate::log::rerun::write_rrd(&dir.join("run.rrd"), &rec).map_err(|e| e.to_string())
+        },
+    );
+    mcap.and(rest)
 }
 
 fn summary_json(
