@@ -299,6 +299,13 @@ fn write_logs(
     mcap.and(rest)
 }
 
+/// Segment (plan label) of a trajectory's last sample.
+fn final_segment(plan: &Plan, tr: &Trajectory) -> Option<String> {
+    tr.label
+        .last()
+        .map(|&l| crate::log::segment_name(&plan.labels, l).into_owned())
+}
+
 fn summary_json(
     prep: &Prepared,
     plan: &Plan,
@@ -332,10 +339,16 @@ fn summary_json(
         "ideal": {
             "final_state": display_state(model, ideal.last()),
             "goal_error_position": metric("ideal_goal_position"),
+            "end_time_s": ideal.t.last(),
+            "final_segment": final_segment(plan, ideal),
         },
         "sim": {
             "final_state": display_state(model, sim.traj.last()),
             "goal_error_position": metric("sim_goal_position"),
+            "end_time_s": sim.traj.t.last(),
+            // Why a run ended early shows here: a feedback law's stop label
+            // (e.g. `collision`, `overstrained`) is the last sample's segment.
+            "final_segment": final_segment(plan, &sim.traj),
         },
         "metrics": o.metrics.iter().cloned().collect::<std::collections::BTreeMap<_, _>>(),
         "sim_steps": o.steps,

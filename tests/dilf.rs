@@ -797,3 +797,21 @@ fn impedance_servos_hold_the_arm_against_gravity() {
         assert!(settled < 0.1 * d, "{arm:?}: ended {}° away", settled / d);
     }
 }
+
+/// Why a replay ended shows in summary.json: `dilf_pair_rigid`'s law stops
+/// where the beam leaves its admissible set, and the sim's final segment
+/// says so, while the ideal run goes on to its horizon.
+#[test]
+fn summary_names_why_the_replay_ended() {
+    let logs = tempfile::tempdir().unwrap();
+    run_file(&scenario("dilf_pair_rigid.toml"), Some(logs.path()));
+    let path = logs.path().join("dilf_pair_rigid/summary.json");
+    let s: serde_json::Value = serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap();
+    assert_eq!(s["sim"]["final_segment"], "overstrained", "{}", s["sim"]);
+    assert_ne!(s["ideal"]["final_segment"], "overstrained");
+    let (sim_end, ideal_end) = (
+        s["sim"]["end_time_s"].as_f64().unwrap(),
+        s["ideal"]["end_time_s"].as_f64().unwrap(),
+    );
+    assert!(sim_end < 0.5 * ideal_end, "{sim_end} vs {ideal_end}");
+}

@@ -22,6 +22,7 @@ use std::path::{Path, PathBuf};
 pub use self::mcap::write_mcap;
 pub use self::rerun::write_rrd;
 
+pub(crate) use self::scene::segment_name;
 use crate::record::RunRecord;
 
 /// Errors of the log writers. Every variant names the file concerned.
