@@ -258,6 +258,7 @@ enum Ev {
     Sim(usize),
     Channels(usize),
     Error(usize),
+    /// A row of `link_poses` (not a sample index: poses are thinned).
     Tf(usize),
 }
 
@@ -469,9 +470,9 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
                 };
                 emit(&ch_err, ns, &msg)?;
             }
-            Ev::Tf(k) => {
+            Ev::Tf(row) => {
                 let ts = Some(timestamp(ns));
-                let transforms = sim.link_poses[k]
+                let transforms = sim.link_poses[row]
                     .iter()
                     .zip(&frames)
                     .map(|(p, frame)| FrameTransform {
