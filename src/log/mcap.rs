@@ -55,8 +55,6 @@ use foxglove::messages::{
     SpherePrimitive, Timestamp, Vector3,
 };
 use foxglove::{Context, FoxgloveError, PartialMetadata, RawChannel, Schema};
-use serde::ser::{SerializeMap, SerializeStruct};
-use serde::{Serialize, Serializer};
 
 use super::atomic::write_atomically;
 use super::scene::{
@@ -169,29 +167,48 @@ fn write_file(tmp: &Path, rec: &RunRecord<'_>) -> Result<(), LogError> {
 struct JsonMsg<'a> {
     t: f64,
     segment: &'a str,
-    names: &'a [Cow<'a, str>],
+    keys: &'a Keys,
     values: &'a [f64],
 }
 
-struct Values<'a>(&'a [Cow<'a, str>], &'a [f64]);
+/// The `values` object's keys of one topic, each escaped once and written
+/// as `"name":` (`,"name":` after the first): per message only the numbers
+/// and the segment are formatted. The bytes are serde_json's compact output
+/// (test `json_messages_are_serde_jsons_bytes`).
+struct Keys(Vec<Vec<u8>>);
 
-impl Serialize for Values<'_> {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        let mut m = s.serialize_map(Some(self.0.len()))?;
-        for (n, v) in self.0.iter().zip(self.1) {
-            m.serialize_entry(n.as_ref(), v)?;
-        }
-        m.end()
+impl Keys {
+    fn new(names: &[Cow<'_, str>]) -> Keys {
+        Keys(
+            names
+                .iter()
+                .enumerate()
+                .map(|(i, n)| {
+                    let mut k = if i == 0 { Vec::new() } else { vec![b','] };
+                    serde_json::to_writer(&mut k, n.as_ref()).expect("a string serializes");
+                    k.push(b':');
+                    k
+                })
+                .collect(),
+        )
     }
 }
 
-impl Serialize for JsonMsg<'_> {
-    fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
-        let mut st = s.serialize_struct("Msg", 3)?;
-        st.serialize_field("t", &self.t)?;
-        st.serialize_field("segment", self.segment)?;
-        st.serialize_field("values", &Values(self.names, self.values))?;
-        st.end()
+impl JsonMsg<'_> {
+    /// Append the message to `buf`. Numbers are written as serde_json writes
+    /// them (shortest round-trip form; NaN and infinities as null).
+    fn write(&self, buf: &mut Vec<u8>) -> serde_json::Result<()> {
+        buf.extend_from_slice(b"{\"t\":");
+        serde_json::to_writer(&mut *buf, &self.t)?;
+        buf.extend_from_slice(b",\"segment\":");
+        serde_json::to_writer(&mut *buf, self.segment)?;
+        buf.extend_from_slice(b",\"values\":{");
+        for (k, v) in self.keys.0.iter().zip(self.values) {
+            buf.extend_from_slice(k);
+            serde_json::to_writer(&mut *buf, v)?;
+        }
+        buf.extend_from_slice(b"}}");
+        Ok(())
     }
 }
 
@@ -383,6 +400,11 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
         .iter()
         .map(|l| link_frame(&l.name).into_owned())
         .collect();
+    let keys_value_name = Keys::new(&value_name);
+    let keys_input_names = Keys::new(&input_names);
+    let keys_state_names = Keys::new(&state_names);
+    let keys_channel_names = Keys::new(&channel_names);
+    let keys_error_names = Keys::new(&error_names);
     let mut buf: Vec<u8> = Vec::with_capacity(512);
     let mut err_row = vec![0.0; error_names.len()];
     let json_err = |source| LogError::Json {
@@ -391,7 +413,7 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
     };
     let mut emit = |ch: &RawChannel, ns: u64, msg: &JsonMsg<'_>| -> Result<(), LogError> {
         buf.clear();
-        serde_json::to_writer(&mut buf, msg).map_err(json_err)?;
+        msg.write(&mut buf).map_err(json_err)?;
         ch.log_with_meta(&buf, PartialMetadata::with_log_time(ns));
         Ok(())
     };
@@ -402,7 +424,7 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
                 let msg = JsonMsg {
                     t: s.t[k],
                     segment: "",
-                    names: &value_name,
+                    keys: &keys_value_name,
                     values: &s.values[k..k + 1],
                 };
                 emit(&ch_series[i], ns, &msg)?;
@@ -412,7 +434,7 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
                 let msg = JsonMsg {
                     t: ideal.t[k],
                     segment: &seg,
-                    names: &input_names,
+                    keys: &keys_input_names,
                     values: ideal.u[k].as_slice(),
                 };
                 emit(&ch_cmd, ns, &msg)?;
@@ -422,7 +444,7 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
                 let msg = JsonMsg {
                     t: ideal.t[k],
                     segment: &seg,
-                    names: &state_names,
+                    keys: &keys_state_names,
                     values: ideal.q[k].as_slice(),
                 };
                 emit(&ch_ideal, ns, &msg)?;
@@ -432,7 +454,7 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
                 let msg = JsonMsg {
                     t: sim.traj.t[k],
                     segment: &seg,
-                    names: &state_names,
+                    keys: &keys_state_names,
                     values: sim.traj.q[k].as_slice(),
                 };
                 emit(&ch_sim, ns, &msg)?;
@@ -444,7 +466,7 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
                     let msg = JsonMsg {
                         t: sim.traj.t[k],
                         segment: &seg,
-                        names: &channel_names,
+                        keys: &keys_channel_names,
                         values: &row,
                     };
                     emit(ch, ns, &msg)?;
@@ -465,7 +487,7 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
                 let msg = JsonMsg {
                     t,
                     segment: &seg,
-                    names: &error_names,
+                    keys: &keys_error_names,
                     values: &err_row,
                 };
                 emit(&ch_err, ns, &msg)?;
@@ -749,6 +771,65 @@ fn run_metadata(rec: &RunRecord<'_>) -> BTreeMap<String, String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use serde::ser::{SerializeMap, SerializeStruct};
+    use serde::{Serialize, Serializer};
+
+    /// The message as serde_json writes a struct {t, segment, values} with
+    /// `values` a map in key order (what `JsonMsg::write` replaced).
+    struct Reference<'a>(f64, &'a str, &'a [Cow<'a, str>], &'a [f64]);
+
+    impl Serialize for Reference<'_> {
+        fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+            struct Values<'a>(&'a [Cow<'a, str>], &'a [f64]);
+            impl Serialize for Values<'_> {
+                fn serialize<S: Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+                    let mut m = s.serialize_map(Some(self.0.len()))?;
+                    for (n, v) in self.0.iter().zip(self.1) {
+                        m.serialize_entry(n.as_ref(), v)?;
+                    }
+                    m.end()
+                }
+            }
+            let mut st = s.serialize_struct("Msg", 3)?;
+            st.serialize_field("t", &self.0)?;
+            st.serialize_field("segment", self.1)?;
+            st.serialize_field("values", &Values(self.2, self.3))?;
+            st.end()
+        }
+    }
+
+    #[test]
+    fn json_messages_are_serde_jsons_bytes() {
+        let names: Vec<Cow<'_, str>> = ["x", "a \"quoted\" name", "ψ\n\\", ""]
+            .into_iter()
+            .map(Cow::Borrowed)
+            .collect();
+        let rows: [&[f64]; 4] = [
+            &[0.0, -0.0, 1.0, 1e300],
+            &[f64::NAN, f64::INFINITY, f64::NEG_INFINITY, 5e-324],
+            &[0.1 + 0.2, -123456.789, 1e-7, 2f64.powi(60)],
+            &[],
+        ];
+        for (i, values) in rows.into_iter().enumerate() {
+            let n = values.len();
+            let (t, seg) = (0.001 * i as f64, ["OP", "P2 \"b\"", "", "é\t"][i]);
+            let keys = Keys::new(&names[..n]);
+            let mut mine = Vec::new();
+            JsonMsg {
+                t,
+                segment: seg,
+                keys: &keys,
+                values,
+            }
+            .write(&mut mine)
+            .unwrap();
+            let reference = serde_json::to_vec(&Reference(t, seg, &names[..n], values)).unwrap();
+            assert_eq!(
+                String::from_utf8(mine).unwrap(),
+                String::from_utf8(reference).unwrap()
+            );
+        }
+    }
 
     #[test]
     fn offset_rotates_into_parent_frame() {
