@@ -79,6 +79,11 @@ impl SimTrajectory {
             .find(|(n, _)| n == name)
             .map(|(_, v)| v.as_slice())
     }
+
+    /// Time of each row of `link_poses`, s.
+    pub fn link_pose_times(&self) -> impl Iterator<Item = f64> + '_ {
+        self.link_pose_index.iter().map(|&k| self.traj.t[k])
+    }
 }
 
 /// A named time series computed after the run by the system (e.g. the

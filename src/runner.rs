@@ -34,25 +34,6 @@ pub struct RunOptions {
 /// a fifth of the samples of a 2 ms run.
 pub const DEFAULT_POSE_RATE: f64 = 100.0;
 
-#[cfg(test)]
-mod pose_stride_tests {
-    use super::pose_stride;
-
-    #[test]
-    fn stride_gives_at_least_the_rate() {
-        assert_eq!(pose_stride(100.0, 0.002), 5);
-        assert_eq!(pose_stride(100.0, 0.001), 10);
-        // 2.5 samples per pose: every 2nd (125 Hz), never every 3rd (83 Hz).
-        assert_eq!(pose_stride(100.0, 0.004), 2);
-        assert_eq!(pose_stride(100.0, 0.02), 1);
-        assert_eq!(pose_stride(0.0, 0.002), 1);
-        for (rate, dt) in [(100.0, 3e-3), (60.0, 1e-3), (7.0, 0.013), (1e3, 1e-4)] {
-            let k = pose_stride(rate, dt) as f64;
-            assert!(1.0 / (k * dt) >= rate && 1.0 / ((k + 1.0) * dt) < rate);
-        }
-    }
-}
-
 /// Physics samples per logged link-pose row for `rate` Hz at step `dt`: the
 /// largest whole stride that still gives at least `rate` rows per second;
 /// 1 (every sample) for rate 0 or a rate above the sample rate.
@@ -381,4 +362,23 @@ pub fn write_atomic(
         let _ = std::fs::remove_file(&tmp);
         format!("{}: {e}", path.display())
     })
+}
+
+#[cfg(test)]
+mod pose_stride_tests {
+    use super::pose_stride;
+
+    #[test]
+    fn stride_gives_at_least_the_rate() {
+        assert_eq!(pose_stride(100.0, 0.002), 5);
+        assert_eq!(pose_stride(100.0, 0.001), 10);
+        // 2.5 samples per pose: every 2nd (125 Hz), never every 3rd (83 Hz).
+        assert_eq!(pose_stride(100.0, 0.004), 2);
+        assert_eq!(pose_stride(100.0, 0.02), 1);
+        assert_eq!(pose_stride(0.0, 0.002), 1);
+        for (rate, dt) in [(100.0, 3e-3), (60.0, 1e-3), (7.0, 0.013), (1e3, 1e-4)] {
+            let k = pose_stride(rate, dt) as f64;
+            assert!(1.0 / (k * dt) >= rate && 1.0 / ((k + 1.0) * dt) < rate);
+        }
+    }
 }

@@ -382,8 +382,8 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
             evs.push((nanos(t), Ev::Channels(k)));
         }
     }
-    for (row, &k) in sim.link_pose_index.iter().enumerate() {
-        evs.push((nanos(sim.traj.t[k]), Ev::Tf(row)));
+    for (row, t) in sim.link_pose_times().enumerate() {
+        evs.push((nanos(t), Ev::Tf(row)));
     }
     for (k, &t) in cmp.t.iter().enumerate() {
         evs.push((nanos(t), Ev::Error(k)));

@@ -284,6 +284,7 @@ fn log_all(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrError>
 }
 
 fn log_robot(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrError> {
+    let pose_times: Vec<f64> = rec.sim.link_pose_times().collect();
     for (i, link) in rec.links.iter().enumerate() {
         let link_path = ep(&["robot", &link.name]);
         for (k, v) in link.visuals.iter().enumerate() {
@@ -327,13 +328,7 @@ fn log_robot(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrErro
             .with_many_translation(poses.clone().map(|p| f32x3(p.translation)))
             .with_many_quaternion(poses.map(|p| quat(p.rotation)))
             .columns_of_unit_batches()?;
-        let times: Vec<f64> = rec
-            .sim
-            .link_pose_index
-            .iter()
-            .map(|&k| rec.sim.traj.t[k])
-            .collect();
-        stream.send_columns(link_path, [time_col(&times)], cols)?;
+        stream.send_columns(link_path, [time_col(&pose_times)], cols)?;
     }
     Ok(())
 }
