@@ -33,6 +33,7 @@
 //! the run no longer produces is a regression; a new metric is reported only.
 
 use crate::error::Error;
+pub use crate::metric::Direction;
 use crate::runner::RunOutcome;
 use crate::systems::System;
 use serde::{Deserialize, Serialize};
@@ -49,47 +50,6 @@ pub const DEFAULT_REL: f64 = 0.02;
 /// Default absolute tolerance, in the metric's own unit; below any meaningful
 /// value of every metric (m, deg, fractions, counts, kg m²/s).
 pub const DEFAULT_ABS: f64 = 1e-9;
-
-/// Which way a metric gets worse.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
-#[serde(rename_all = "snake_case")]
-pub enum Direction {
-    /// Errors, maxima, times, counts: a rise is a regression.
-    LowerIsBetter,
-    /// Success rates, fractions inside an envelope, minimum clearances: a fall is a regression.
-    HigherIsBetter,
-    /// Reported when it changes, never a regression.
-    Informational,
-}
-
-/// Metrics of the harness itself that are informational.
-const INFORMATIONAL: [&str; 1] = ["sweep_variants"];
-
-impl Direction {
-    /// The harness convention (module docs), used when a system does not declare a direction.
-    pub fn conventional(name: &str) -> Direction {
-        if INFORMATIONAL.contains(&name) {
-            return Direction::Informational;
-        }
-        let higher = name.ends_with("success_rate")
-            || name
-                .split('_')
-                .any(|t| matches!(t, "min" | "clearance" | "margin"));
-        if higher {
-            Direction::HigherIsBetter
-        } else {
-            Direction::LowerIsBetter
-        }
-    }
-
-    fn symbol(self) -> &'static str {
-        match self {
-            Direction::LowerIsBetter => "lower",
-            Direction::HigherIsBetter => "higher",
-            Direction::Informational => "info",
-        }
-    }
-}
 
 /// The direction of `name` for `system`: its declaration, else the convention.
 pub fn direction(system: &dyn System, name: &str) -> Direction {
@@ -221,7 +181,7 @@ impl Baseline {
                 .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
         }
         let text = self.to_json();
-        crate::runner::write_atomic(path, |w| std::io::Write::write_all(w, text.as_bytes()))
+        crate::log::atomic::write_atomic(path, |w| std::io::Write::write_all(w, text.as_bytes()))
     }
 
     /// Read and check a baseline file for `scenario` / `planner`; every problem is an input

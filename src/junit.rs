@@ -175,5 +175,5 @@ fn tempfile_in(dir: &Path) -> std::io::Result<std::path::PathBuf> {
 
 /// Write the report atomically.
 pub fn write(path: &Path, report: &Report) -> Result<(), String> {
-    crate::runner::write_atomic(path, |w| report.serialize(w).map_err(std::io::Error::other))
+    crate::log::atomic::write_atomic(path, |w| report.serialize(w).map_err(std::io::Error::other))
 }

@@ -16,6 +16,7 @@ pub mod input;
 pub mod integrate;
 pub mod junit;
 pub mod log;
+pub mod metric;
 pub mod model;
 pub mod numfmt;
 pub mod paper;
@@ -44,4 +45,10 @@ macro_rules! say {
         use std::io::Write as _;
         let _ = writeln!(std::io::stdout().lock(), $($t)*);
     }};
+}
+
+/// Print text to stdout, ignoring a closed stdout (`| head`) like `say!`.
+pub fn emit(text: &str) {
+    use std::io::Write as _;
+    let _ = write!(std::io::stdout().lock(), "{text}");
 }

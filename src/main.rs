@@ -292,7 +292,7 @@ fn record_regression(o: &RunOutcome, deltas: Option<&[Delta]>) -> Result<(), Err
         message,
     };
     match deltas {
-        Some(d) => anholonomy::runner::write_atomic(&path, |w| {
+        Some(d) => anholonomy::log::atomic::write_atomic(&path, |w| {
             serde_json::to_writer_pretty(w, d).map_err(std::io::Error::other)
         })
         .map_err(log_err),
@@ -612,7 +612,7 @@ fn list_cmd(paths: &[PathBuf], max_steps: u64) -> Result<u8, Vec<Error>> {
 
 fn merge_cmd(paths: &[PathBuf], out: Option<&Path>) -> Result<u8, Vec<Error>> {
     let (sum, path) = anholonomy::sweep::merge::merge(paths, out)?;
-    anholonomy::suite::emit(&sum.table);
+    anholonomy::emit(&sum.table);
     say!("merged: {}", path.display());
     Ok(0)
 }

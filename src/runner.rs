@@ -212,7 +212,7 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
         // The summary carries the final timings, so it is written last; then
         // the three files replace the previous run's as one unit.
         let summary = summary_json(prep, plan, &ideal, &sim, &outcome);
-        write_atomic(&unit.dir().join("summary.json"), |w| {
+        crate::log::atomic::write_atomic(&unit.dir().join("summary.json"), |w| {
             serde_json::to_writer_pretty(w, &summary).map_err(std::io::Error::other)
         })
         .map_err(log_error)?;
@@ -344,24 +344,6 @@ pub fn timing_json(o: &RunOutcome) -> serde_json::Value {
     let mut t = serde_json::to_value(&o.timings).unwrap_or_default();
     t["sim_steps_per_second"] = json!(o.steps as f64 / o.timings.physics.max(1e-9));
     t
-}
-
-/// Write a file via a temporary name in the same directory, renamed on success.
-pub fn write_atomic(
-    path: &Path,
-    write: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>,
-) -> Result<(), String> {
-    let tmp = path.with_extension("tmp");
-    let res = (|| {
-        let mut w = std::io::BufWriter::new(std::fs::File::create(&tmp)?);
-        write(&mut w)?;
-        std::io::Write::flush(&mut w)?;
-        std::fs::rename(&tmp, path)
-    })();
-    res.map_err(|e| {
-        let _ = std::fs::remove_file(&tmp);
-        format!("{}: {e}", path.display())
-    })
 }
 
 #[cfg(test)]

@@ -31,7 +31,7 @@ pub fn run_all(
     let resume = |i: usize| resumed.get(i).and_then(Option::as_ref);
     if preps.len() == 1 {
         let (res, table, wall) = run_one_report(&preps[0], opts, shard, resume(0));
-        emit(&table);
+        crate::emit(&table);
         return vec![(res, wall)];
     }
     // Longest work first keeps both cores busy to the end.
@@ -55,7 +55,7 @@ pub fn run_all(
     done.sort_by_key(|(i, _, _)| *i);
     done.into_iter()
         .map(|(_, ran, table)| {
-            emit(&table);
+            crate::emit(&table);
             ran
         })
         .collect()
@@ -78,12 +78,6 @@ fn run_one_report(
         (run(prep, opts), String::new())
     };
     (res, table, t0.elapsed().as_secs_f64())
-}
-
-/// Print text to stdout, ignoring a closed stdout (`| head`) like `say!`.
-pub fn emit(text: &str) {
-    use std::io::Write as _;
-    let _ = write!(std::io::stdout().lock(), "{text}");
 }
 
 /// A rough cost for scheduling: simulated steps (× variants for sweeps).

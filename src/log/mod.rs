@@ -11,7 +11,7 @@
 //! over the target only once the file is complete; on any error (or panic)
 //! the temporary file is removed, so the final path never holds a partial file.
 
-mod atomic;
+pub mod atomic;
 pub mod mcap;
 pub mod rerun;
 mod scene;

@@ -254,7 +254,7 @@ impl SeriesFile {
 /// Write `series.json` for a run (compact JSON, atomically).
 pub fn write(path: &Path, rec: &RunRecord<'_>) -> Result<(), String> {
     let data = SeriesFile::from_record(rec);
-    crate::runner::write_atomic(path, |w| {
+    crate::log::atomic::write_atomic(path, |w| {
         serde_json::to_writer(w, &data).map_err(std::io::Error::other)
     })
 }

@@ -197,7 +197,7 @@ pub fn write_report(root: &Path, only: Option<&[String]>) -> Result<usize, Error
         .collect::<Result<_, _>>()?;
     for (l, page) in loaded.iter().zip(&pages) {
         let path = l.dir.join("report.html");
-        crate::runner::write_atomic(&path, |w| std::io::Write::write_all(w, page.as_bytes()))
+        crate::log::atomic::write_atomic(&path, |w| std::io::Write::write_all(w, page.as_bytes()))
             .map_err(|message| Error::Log {
                 path: path.clone(),
                 message,
@@ -205,7 +205,7 @@ pub fn write_report(root: &Path, only: Option<&[String]>) -> Result<usize, Error
     }
     let index = root.join("index.html");
     let text = html::index_page(&loaded);
-    crate::runner::write_atomic(&index, |w| std::io::Write::write_all(w, text.as_bytes()))
+    crate::log::atomic::write_atomic(&index, |w| std::io::Write::write_all(w, text.as_bytes()))
         .map_err(|message| Error::Log {
             path: index.clone(),
             message,

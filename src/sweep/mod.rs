@@ -217,7 +217,7 @@ pub fn run_sweep(
     shard: Option<Shard>,
 ) -> Result<RunOutcome, Error> {
     let (outcome, table) = run_sweep_report(prep, opts, shard, None)?;
-    crate::suite::emit(&table);
+    crate::emit(&table);
     Ok(outcome)
 }
 

@@ -5,7 +5,7 @@
 
 use super::distribution;
 use super::records::{raw_record, Entry, Header};
-use crate::runner::write_atomic;
+use crate::log::atomic::write_atomic;
 use crate::scenario::SweepConfig;
 use serde_json::json;
 use std::io::{BufReader, Write};

@@ -36,8 +36,8 @@ pub mod rover;
 pub mod space_robot;
 pub mod sphere;
 
-use crate::baseline::Direction;
 use crate::integrate::Trajectory;
+use crate::metric::Direction;
 use crate::model::{KinematicModel, State};
 use crate::paper::PaperRow;
 use crate::physics::PhysicsSettings;

@@ -9,8 +9,8 @@
 //! which is deterministic, but not on Rapier).
 
 use super::System;
-use crate::baseline::Direction;
 use crate::integrate::{simulate, Trajectory};
+use crate::metric::Direction;
 use crate::model::rover::{RoverGeometry, SwitchingRover, SwitchingSignal};
 use crate::model::{Input, KinematicModel, State};
 use crate::paper::{rows_from, same, PaperRow};
