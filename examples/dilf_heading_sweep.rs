@@ -10,6 +10,7 @@
 //!     [--start-box X0:X1:Y0:Y1]   where random starts are drawn (default:
 //!                                 the file's start ± 1 m)
 //!     [--no-stall]                planner.stall.time = 0: run to the horizon
+//!     [--unguarded]               planner.hold_guard = false
 //!     [--set KEY=VALUE]           any numeric scenario key, e.g.
 //!                                 planner.kv_exponent=10 (repeatable)
 //!     [--ascent]                  from each run that did not converge,
@@ -39,6 +40,7 @@ struct Args {
     start_box: Option<[f64; 4]>,
     no_stall: bool,
     ascent: bool,
+    unguarded: bool,
     set: Vec<(String, f64)>,
 }
 
@@ -51,6 +53,7 @@ fn parse_args() -> Result<Args, String> {
         start_box: None,
         no_stall: false,
         ascent: false,
+        unguarded: false,
         set: Vec::new(),
     };
     let nums = |s: &str| -> Result<Vec<f64>, String> {
@@ -72,6 +75,7 @@ fn parse_args() -> Result<Args, String> {
             }
             "--no-stall" => a.no_stall = true,
             "--ascent" => a.ascent = true,
+            "--unguarded" => a.unguarded = true,
             "--set" => {
                 let kv = value("--set")?;
                 let (k, v) = kv.split_once('=').ok_or("--set KEY=VALUE")?;
@@ -164,7 +168,15 @@ fn main() {
             std::process::exit(2);
         }
     };
-    let base = match Scenario::load(&args.file) {
+    let text = match std::fs::read_to_string(&args.file) {
+        Ok(t) if args.unguarded => t.replacen("[planner]", "[planner]\nhold_guard = false", 1),
+        Ok(t) => t,
+        Err(e) => {
+            eprintln!("error: {}: {e}", args.file.display());
+            std::process::exit(2);
+        }
+    };
+    let base = match Scenario::parse(&args.file, &text) {
         Ok(s) => s,
         Err(e) => {
             eprintln!("{e}");
