@@ -6,6 +6,7 @@ use super::{Loaded, RunData, StoredDelta};
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
+use crate::verdict::Verdict;
 
 const DEG: f64 = 180.0 / std::f64::consts::PI;
 
@@ -38,12 +39,42 @@ fn page(title: &str, body: &str) -> String {
     )
 }
 
-fn verdict(passed: bool) -> &'static str {
-    if passed {
-        "<span class=\"pass\">PASS</span>"
-    } else {
-        "<span class=\"fail\">FAIL</span>"
+/// The verdict of a summary or sweep document (older logs: from `passed`).
+fn verdict_of(doc: &Value) -> Verdict {
+    Verdict::parse(doc["verdict"].as_str(), doc["passed"].as_bool() == Some(true))
+}
+
+/// The verdict as a coloured word; XFAIL carries its reason on hover.
+fn verdict(doc: &Value) -> String {
+    let v = verdict_of(doc);
+    let class = if v.ok() { "pass" } else { "fail" };
+    match doc["expect"]["reason"].as_str() {
+        Some(r) => format!(
+            "<span class=\"{class}\" title=\"expected to fail: {}\">{v}</span>",
+            esc(r)
+        ),
+        None => format!("<span class=\"{class}\">{v}</span>"),
     }
+}
+
+/// "expected to fail: REASON" under a verdict, when the scenario expects to fail.
+fn expectation(doc: &Value) -> String {
+    match (verdict_of(doc), doc["expect"]["reason"].as_str()) {
+        (Verdict::Xfail, Some(r)) => format!(
+            "<p><b>XFAIL</b>: the thresholds below are broken, as this scenario expects: {}</p>",
+            esc(r)
+        ),
+        (Verdict::Xpass, Some(r)) => format!(
+            "<p class=\"fail\">XPASS: every threshold is met, but this scenario is expected to fail ({}). Check what changed: <code>check</code> fails until the scenario shows its limit again or drops <code>expect = \"fails\"</code>.</p>",
+            esc(r)
+        ),
+        _ => String::new(),
+    }
+}
+
+/// Whether the run's tracking metrics mean anything (older logs: yes).
+fn tracking_meaningful(summary: &Value) -> bool {
+    summary["not_meaningful"]["tracking"].is_null()
 }
 
 /// "2 regressed, 1 improved" from a stored comparison.
@@ -84,22 +115,30 @@ fn primary(summary: &Value) -> Option<String> {
 }
 
 /// `LOGDIR/index.html`.
-pub fn index_page(runs: &[Loaded]) -> String {
+pub fn index_page(runs: &[Loaded], unreadable: &[crate::error::Error]) -> String {
     let mut b = String::new();
-    let passed = runs
+    let verdicts: Vec<Verdict> = runs
         .iter()
-        .filter(|l| match &l.data {
-            RunData::Single { summary, .. } => summary["passed"].as_bool() == Some(true),
-            RunData::Sweep(s) => s["passed"].as_bool() == Some(true),
+        .map(|l| match &l.data {
+            RunData::Single { summary, .. } => verdict_of(summary),
+            RunData::Sweep(s) => verdict_of(s),
         })
-        .count();
+        .collect();
+    let count = |v: Verdict| verdicts.iter().filter(|x| **x == v).count();
+    let mut counts = vec![format!("{} PASS", count(Verdict::Pass))];
+    for v in [Verdict::Fail, Verdict::Xfail, Verdict::Xpass] {
+        if count(v) > 0 {
+            counts.push(format!("{} {v}", count(v)));
+        }
+    }
     let _ = write!(
         b,
-        "<h1>anholonomy report</h1><p>{passed} of {} scenarios pass their thresholds.</p>\
+        "<h1>anholonomy report</h1><p>{} scenarios: {}. XFAIL: broke a threshold as the scenario expects (it shows a limit on purpose); XPASS: met every threshold although expected to fail, which <code>check</code> counts as a failure.</p>\
          <table><tr><th class=\"l\">scenario</th><th class=\"l\">planner</th><th>result</th>\
          <th class=\"l\">key metric</th><th>sim goal error</th><th>tracking max</th><th>wall s</th>\
          <th class=\"l\">baseline</th><th class=\"l\">broken thresholds</th></tr>",
-        runs.len()
+        runs.len(),
+        counts.join(", ")
     );
     for l in runs {
         let link = format!("<a href=\"{0}/report.html\">{0}</a>", esc(&l.name));
@@ -115,10 +154,14 @@ pub fn index_page(runs: &[Loaded]) -> String {
                     "<tr><td class=\"l\">{link}</td><td class=\"l\">{}</td><td>{}</td><td class=\"l\">{}</td>\
                      <td>{}</td><td>{}</td><td>{:.2}</td><td class=\"l\">{}</td><td class=\"l\">{}</td></tr>",
                     esc(summary["planner"]["kind"].as_str().unwrap_or("")),
-                    verdict(summary["passed"].as_bool() == Some(true)),
+                    verdict(summary),
                     esc(&c),
                     num(metric(summary, &format!("sim_goal_{c}"))),
-                    num(metric(summary, &format!("tracking_{c}_max"))),
+                    if tracking_meaningful(summary) {
+                        num(metric(summary, &format!("tracking_{c}_max")))
+                    } else {
+                        "<span class=\"muted\" title=\"feedback policy: the runs reach the goal at different times\">n/a</span>".into()
+                    },
                     summary["wall_time_s"]["total"].as_f64().unwrap_or(f64::NAN),
                     baseline_summary(&l.regression),
                     fails.join("; ")
@@ -133,7 +176,7 @@ pub fn index_page(runs: &[Loaded]) -> String {
                     b,
                     "<tr><td class=\"l\">{link}</td><td class=\"l\">sweep</td><td>{}</td><td class=\"l\">success rate {:.1} % ({} variants)</td>\
                      <td>median {}</td><td>–</td><td>{:.2}</td><td class=\"l\">{}</td><td class=\"l\">{}</td></tr>",
-                    verdict(s["passed"].as_bool() == Some(true)),
+                    verdict(s),
                     100.0 * s["success_rate"].as_f64().unwrap_or(f64::NAN),
                     s["variants_run"].as_u64().unwrap_or(0),
                     num(s["final_error"]["median"].as_f64()),
@@ -144,7 +187,14 @@ pub fn index_page(runs: &[Loaded]) -> String {
             }
         }
     }
-    b.push_str("</table><p class=\"muted\">Key metric: the planar position (m) when the model has one, else the first state coordinate (angles in degrees). Baseline: the comparison made by <code>anholonomy check --baseline</code> with this log directory.</p>");
+    for e in unreadable {
+        let _ = write!(
+            b,
+            "<tr><td class=\"l\" colspan=\"9\"><span class=\"fail\">not readable</span> {}</td></tr>",
+            esc(&e.to_string())
+        );
+    }
+    b.push_str("</table><p class=\"muted\">Key metric: the planar position (m) when the model has one, else the first state coordinate (angles in degrees). Tracking n/a: the plan is a feedback policy, so each run reaches the goal at its own time and the runs differ sample by sample whatever the physics. Baseline: the comparison made by <code>anholonomy check --baseline</code> with this log directory.</p>");
     page("anholonomy report", &b)
 }
 
@@ -159,8 +209,23 @@ fn metrics_table(summary: &Value, reg: &Option<Vec<StoredDelta>>) -> String {
     let mut b = String::from(
         "<table><tr><th class=\"l\">metric</th><th>value</th><th>threshold</th><th>baseline</th><th>change</th><th class=\"l\">baseline verdict</th></tr>",
     );
+    let meaningless = (!tracking_meaningful(summary)).then(|| {
+        summary["not_meaningful"]["tracking"]
+            .as_str()
+            .unwrap_or("not meaningful")
+    });
     if let Some(m) = summary["metrics"].as_object() {
         for (k, v) in m {
+            if let (Some(why), true) = (meaningless, k.starts_with("tracking_")) {
+                let _ = write!(
+                    b,
+                    "<tr><td class=\"l\">{}</td><td class=\"muted\" title=\"{}\">n/a</td><td></td><td></td><td></td><td class=\"l muted\">{}</td></tr>",
+                    esc(k),
+                    esc(why),
+                    esc(why)
+                );
+                continue;
+            }
             let v = v.as_f64();
             let th = thresholds.and_then(|t| t.get(k)).and_then(Value::as_f64);
             let th_cell = match th {
@@ -352,7 +417,17 @@ fn single_figures(summary: &Value, sf: &SeriesFile) -> Result<String, String> {
     b.push_str("<h2>Tracking error (simulated − ideal)</h2>");
     b.push_str(&legend);
     b.push_str("<div class=\"grid\">");
-    for s in &sf.errors {
+    let errors: &[Series] = if tracking_meaningful(summary) {
+        &sf.errors
+    } else {
+        let _ = write!(
+            b,
+            "<p class=\"muted\">Not shown: {}. Compare the final states and the paths instead.</p>",
+            esc(summary["not_meaningful"]["tracking"].as_str().unwrap_or("not meaningful"))
+        );
+        &[]
+    };
+    for s in errors {
         let i = sf.state_names.iter().position(|n| *n == s.name);
         let (scale, unit, key) = match i {
             Some(i) => {
@@ -504,13 +579,18 @@ fn sweep_figures(s: &Value) -> Result<String, String> {
         20,
         limit.map(|l| (l, "success limit")),
     )?);
-    b.push_str(&plots::histogram(
-        "time to goal (successes)",
-        "t (s)",
-        &times,
-        20,
-        None,
-    )?);
+    match cfg["time_metric"].as_str() {
+        Some(m) => b.push_str(&plots::histogram(
+            &format!("time to goal, {m} (successes)"),
+            "t (s)",
+            &times,
+            20,
+            None,
+        )?),
+        None => b.push_str(
+            "<p class=\"muted\">Time to goal: no time metric for this model (set <code>sweep.time_metric</code> to name one).</p>",
+        ),
+    }
     b.push_str("</div><h2>Success against each randomised parameter</h2><div class=\"grid\">");
     // Every swept parameter: the [sweep.vary] keys (and the friction shorthand) under
     // `params`, and the mass scale.
@@ -605,15 +685,17 @@ pub fn scenario_page(l: &Loaded) -> Result<String, String> {
         RunData::Single { summary, series } => {
             let _ = write!(
                 b,
-                "<h1>{} {}</h1><p>{}</p><p class=\"muted\">model <b>{}</b>, planner <b>{}</b>, plan {:.3} s, {} physics steps, wall {:.2} s. Logs: <a href=\"run.rrd\">run.rrd</a> (Rerun), <a href=\"run.mcap\">run.mcap</a> (Foxglove), <a href=\"summary.json\">summary.json</a>.</p>",
+                "<h1>{} {}</h1><p>{}</p>{}<p class=\"muted\">model <b>{}</b>, planner <b>{}</b>, {}, {} physics steps, wall {:.2} s. Logs: {}<a href=\"summary.json\">summary.json</a>.</p>",
                 esc(&l.name),
-                verdict(summary["passed"].as_bool() == Some(true)),
+                verdict(summary),
                 esc(summary["description"].as_str().unwrap_or("")),
+                expectation(summary),
                 esc(summary["model"]["kind"].as_str().unwrap_or("")),
                 esc(summary["planner"]["kind"].as_str().unwrap_or("")),
-                summary["plan"]["duration_s"].as_f64().unwrap_or(f64::NAN),
+                durations(summary),
                 summary["sim_steps"].as_u64().unwrap_or(0),
                 summary["wall_time_s"]["total"].as_f64().unwrap_or(f64::NAN),
+                log_links(&l.dir),
             );
             if let Some(f) = summary["failures"].as_array().filter(|f| !f.is_empty()) {
                 b.push_str("<p class=\"fail\">Broken thresholds:</p><ul>");
@@ -630,9 +712,10 @@ pub fn scenario_page(l: &Loaded) -> Result<String, String> {
         RunData::Sweep(s) => {
             let _ = write!(
                 b,
-                "<h1>{} {}</h1><p>Monte Carlo sweep: {} variants, {} successes ({:.1} %; needs ≥ {:.1} %), wall {:.1} s. Final error median {}, p95 {}, max {}; time to goal median {} s.</p>",
+                "<h1>{} {}</h1>{}<p>Monte Carlo sweep: {} variants, {} successes ({:.1} %; needs ≥ {:.1} %), wall {:.1} s. Final error median {}, p95 {}, max {}; {}.</p>",
                 esc(&l.name),
-                verdict(s["passed"].as_bool() == Some(true)),
+                verdict(s),
+                expectation(s),
                 s["variants_run"].as_u64().unwrap_or(0),
                 s["successes"].as_u64().unwrap_or(0),
                 100.0 * s["success_rate"].as_f64().unwrap_or(f64::NAN),
@@ -641,7 +724,13 @@ pub fn scenario_page(l: &Loaded) -> Result<String, String> {
                 num(s["final_error"]["median"].as_f64()),
                 num(s["final_error"]["p95"].as_f64()),
                 num(s["final_error"]["max"].as_f64()),
-                num(s["time_to_goal"]["median"].as_f64()),
+                match s["sweep"]["time_metric"].as_str() {
+                    Some(_) => format!(
+                        "time to goal median {} s",
+                        num(s["time_to_goal"]["median"].as_f64())
+                    ),
+                    None => "no time metric".into(),
+                },
             );
             b.push_str(&sweep_figures(s)?);
             if let Some(d) = &l.regression {
@@ -662,6 +751,38 @@ pub fn scenario_page(l: &Loaded) -> Result<String, String> {
         }
     }
     Ok(page(&format!("{} — anholonomy", l.name), &b))
+}
+
+/// The runs' simulated durations: "ideal run 157.2 s, physics run 160.3 s"
+/// (a feedback policy's plan duration is only its horizon, named as such).
+fn durations(summary: &Value) -> String {
+    let t = |k: &str| summary[k]["end_time_s"].as_f64();
+    let plan = summary["plan"]["duration_s"].as_f64().unwrap_or(f64::NAN);
+    let feedback = summary["plan"]["segments"]
+        .as_array()
+        .is_some_and(|s| s.is_empty());
+    match (t("ideal"), t("sim")) {
+        (Some(a), Some(b)) => {
+            let horizon = if feedback {
+                format!(" (feedback policy, horizon {plan:.1} s)")
+            } else {
+                format!(" (plan {plan:.3} s)")
+            };
+            format!("ideal run {a:.2} s, physics run {b:.2} s{horizon}")
+        }
+        _ => format!("plan {plan:.3} s"),
+    }
+}
+
+/// Links to the 3D logs that are still there (`--keep report` removes them).
+fn log_links(dir: &std::path::Path) -> String {
+    let mut out = String::new();
+    for (f, what) in [("run.rrd", "Rerun"), ("run.mcap", "Foxglove")] {
+        if dir.join(f).is_file() {
+            let _ = write!(out, "<a href=\"{f}\">{f}</a> ({what}), ");
+        }
+    }
+    out
 }
 
 /// A sweep's wall time: `wall_time_s.total` (older logs: a plain number).

@@ -19,9 +19,11 @@ use crate::systems::rover::RoverConfig;
 use crate::systems::space_robot::{SpacePlanner, SpaceRobotConfig};
 use crate::systems::sphere::{SphereConfig, SpherePlanner};
 use crate::systems::{self, System};
+use super::schema::Schema;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 use std::path::Path;
+use std::sync::OnceLock;
 use toml::de::{DeValue, ValueDeserializer};
 use toml::Spanned;
 
@@ -108,6 +110,29 @@ impl ModelConfig {
         }
     }
 
+    /// The schema of the `[model]` table of `kind` (its keys, defaults,
+    /// ranges and docs): what the validation pass checks and `keys` prints.
+    pub fn schema(kind: &str) -> Option<&'static Schema> {
+        static CACHE: OnceLock<Vec<(&'static str, Schema)>> = OnceLock::new();
+        let all = CACHE.get_or_init(|| {
+            Self::KINDS
+                .iter()
+                .filter_map(|k| {
+                    let s = match *k {
+                        "rolling_disk" => Schema::of::<DiskModelConfig>(),
+                        "space_robot" => Schema::of::<SpaceRobotConfig>(),
+                        "rover" => Schema::of::<RoverConfig>(),
+                        "rolling_sphere" => Schema::of::<SphereConfig>(),
+                        "mobile_manipulator" => Schema::of::<MobileManipulatorConfig>(),
+                        _ => return None,
+                    };
+                    Some((*k, s))
+                })
+                .collect()
+        });
+        all.iter().find(|(k, _)| *k == kind).map(|(_, s)| s)
+    }
+
     /// The model of `kind` from its table; `Ok(None)` for an unknown kind.
     pub(crate) fn parse(
         kind: &str,
@@ -147,6 +172,30 @@ impl PlannerConfig {
             PlannerConfig::SphereTriangle(_) => "sphere_triangle",
             PlannerConfig::Dilf(_) => "dilf",
         }
+    }
+
+    /// The schema of the `[planner]` table of `kind` (see [`ModelConfig::schema`]).
+    pub fn schema(kind: &str) -> Option<&'static Schema> {
+        static CACHE: OnceLock<Vec<(&'static str, Schema)>> = OnceLock::new();
+        let all = CACHE.get_or_init(|| {
+            Self::KINDS
+                .iter()
+                .filter_map(|k| {
+                    let s = match *k {
+                        "stokes_disk" => Schema::of::<StokesDiskParams>(),
+                        "stokes_space" => Schema::of::<StokesSpaceParams>(),
+                        "endogenous" => Schema::of::<EndogenousParams>(),
+                        "rover_primitives" => Schema::of::<RoverPrimitiveParams>(),
+                        "sphere_geometric" => Schema::of::<SphereGeometricParams>(),
+                        "sphere_triangle" => Schema::of::<SphereTriangleParams>(),
+                        "dilf" => Schema::of::<DilfParams>(),
+                        _ => return None,
+                    };
+                    Some((*k, s))
+                })
+                .collect()
+        });
+        all.iter().find(|(k, _)| *k == kind).map(|(_, s)| s)
     }
 
     /// The planner of `kind` from its table; `Ok(None)` for an unknown kind.

@@ -41,6 +41,30 @@ pub fn cases(c: &mut Corpus) {
         Some("stat ="),
         Some("stat"),
     );
+    c.sc(
+        "expect fails without a reason",
+        edit(&d, "name = \"d\"", "name = \"d\"\nexpect = \"fails\""),
+        Some("expect ="),
+        Some("expect"),
+    );
+    c.sc(
+        "reason without expect",
+        edit(&d, "name = \"d\"", "name = \"d\"\nreason = \"why\""),
+        Some("reason ="),
+        Some("reason"),
+    );
+    c.sc(
+        "expect is not passes or fails",
+        edit(&d, "name = \"d\"", "name = \"d\"\nexpect = \"maybe\"\nreason = \"x\""),
+        Some("expect ="),
+        Some("expect"),
+    );
+    c.sc(
+        "sim.dt above its documented range",
+        edit(&d, "dt = 0.001", "dt = 0.5"),
+        Some("dt = 0.5"),
+        Some("sim.dt"),
+    );
     c.sc_line(
         "missing start",
         edit(&d, "start = [0.0, 0.0, 0.0, 0.0]\n", ""),
