@@ -119,7 +119,7 @@ enum Cmd {
         /// Markdown instead of plain text.
         #[arg(long)]
         markdown: bool,
-        /// Write every page as Markdown into DIR (DIR/scenario.md, DIR/models/KIND.md, DIR/planners/KIND.md, DIR/README.md).
+        /// Write every page as Markdown into DIR (DIR/keys.md, DIR/scenario-keys.md, DIR/models/KIND.md, DIR/planners/KIND.md).
         #[arg(long, value_name = "DIR", conflicts_with = "name")]
         out: Option<PathBuf>,
     },

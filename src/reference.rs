@@ -12,7 +12,8 @@ use std::path::PathBuf;
 use toml::de::{DeTable, DeValue};
 use toml::Spanned;
 
-/// The command that regenerates the committed pages.
+/// The command that regenerates the committed pages (it writes only the
+/// pages of [`Page::all`]: `keys.md`, `scenario-keys.md`, `models/`, `planners/`).
 pub const REGENERATE: &str = "anholonomy keys --markdown --out docs/src/reference";
 
 /// One reference page.
@@ -49,8 +50,8 @@ impl Page {
     /// Its file under `docs/src/reference/`.
     pub fn file(&self) -> PathBuf {
         match self {
-            Page::Index => "README.md".into(),
-            Page::Scenario => "scenario.md".into(),
+            Page::Index => "keys.md".into(),
+            Page::Scenario => "scenario-keys.md".into(),
             Page::Model(k) => format!("models/{k}.md").into(),
             Page::Planner(k) => format!("planners/{k}.md").into(),
         }
@@ -58,8 +59,8 @@ impl Page {
 
     fn title(&self) -> String {
         match self {
-            Page::Index => "Reference".into(),
-            Page::Scenario => "Scenario file".into(),
+            Page::Index => "Keys of every table".into(),
+            Page::Scenario => "Scenario file keys".into(),
             Page::Model(k) => format!("Model `{k}`"),
             Page::Planner(k) => format!("Planner `{k}`"),
         }
@@ -261,7 +262,7 @@ fn index(b: &mut String) {
     b.push_str("Every key a scenario file can hold, with its default, type and range, generated from the definitions the validation pass checks scenarios against (`anholonomy keys NAME` prints a page in the terminal).\n\n");
     let _ = writeln!(
         b,
-        "- [Scenario file](scenario.md): the top-level keys, `[limits]`, `[sim]`, `[thresholds]`, `[minimums]`, `[sweep]`, `[regression]`."
+        "- [Scenario file keys](scenario-keys.md): the top-level keys, `[limits]`, `[sim]`, `[thresholds]`, `[minimums]`, `[sweep]`, `[regression]`."
     );
     b.push_str("\n## Models\n\n");
     for k in ModelConfig::KINDS {
