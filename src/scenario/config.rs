@@ -6,6 +6,7 @@
 //! define plain parameter structs and never see these enums (nor anything
 //! else of `crate::scenario`); this module picks the system for a pair.
 
+use crate::physics::required::Required;
 use crate::planner::dilf::DilfParams;
 use crate::planner::endogenous::EndogenousParams;
 use crate::planner::rover_primitives::RoverPrimitiveParams;
@@ -131,6 +132,22 @@ impl ModelConfig {
                 .collect()
         });
         all.iter().find(|(k, _)| *k == kind).map(|(_, s)| s)
+    }
+
+    /// The URDF links and joints the model `kind` looks up, as declared by
+    /// its physics module (default names, renaming keys, roles): what the
+    /// validation pass checks and the reference lists. `None` for an
+    /// unknown kind.
+    pub fn required_urdf(kind: &str) -> Option<&'static [Required]> {
+        use crate::physics as p;
+        Some(match kind {
+            "rolling_disk" => &p::disk::REQUIRED,
+            "space_robot" => &p::space_robot::REQUIRED,
+            "rover" => &p::rover::REQUIRED,
+            "rolling_sphere" => &p::sphere::REQUIRED,
+            "mobile_manipulator" => &p::mobile_manipulator::REQUIRED,
+            _ => return None,
+        })
     }
 
     /// The model of `kind` from its table; `Ok(None)` for an unknown kind.

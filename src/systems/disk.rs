@@ -56,6 +56,9 @@ impl System for Disk {
         // α is measured from +y towards +x.
         Some(std::f64::consts::FRAC_PI_2 - goal[3])
     }
+    fn urdf_names(&self) -> Vec<crate::physics::required::Named> {
+        crate::physics::required::defaults(&crate::physics::disk::REQUIRED)
+    }
     fn physics(
         &self,
         robot: &urdf_rs::Robot,

@@ -214,6 +214,9 @@ impl System for Rover {
             details,
         })
     }
+    fn urdf_names(&self) -> Vec<crate::physics::required::Named> {
+        crate::physics::required::defaults(&crate::physics::rover::REQUIRED)
+    }
     fn physics(
         &self,
         robot: &urdf_rs::Robot,

@@ -146,6 +146,9 @@ impl System for Space {
             }
         }
     }
+    fn urdf_names(&self) -> Vec<crate::physics::required::Named> {
+        crate::physics::required::defaults(&crate::physics::space_robot::REQUIRED)
+    }
     fn physics(
         &self,
         robot: &urdf_rs::Robot,

@@ -158,6 +158,9 @@ impl System for Sphere {
             Planner::Triangle(p) => sphere_triangle::plan(&self.euler, &s, &g, p, limits),
         }
     }
+    fn urdf_names(&self) -> Vec<crate::physics::required::Named> {
+        crate::physics::required::defaults(&crate::physics::sphere::REQUIRED)
+    }
     fn physics(
         &self,
         robot: &urdf_rs::Robot,

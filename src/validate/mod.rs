@@ -345,6 +345,10 @@ fn build_physics(
     system: &dyn System,
     robot: &urdf_rs::Robot,
 ) -> Result<Box<dyn PhysicsSystem>, Error> {
+    // Every name the model looks up, in one message, before the physics
+    // stops at the first one it misses.
+    crate::physics::required::check(robot, &system.urdf_names())
+        .map_err(|m| physics_error(sc, &m))?;
     let dir = sc.urdf.parent().unwrap_or(Path::new("."));
     system
         .physics(robot, dir, &sc.start, &sc.sim.physics())
