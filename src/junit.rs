@@ -75,8 +75,11 @@ pub fn test_case(r: &CaseResult<'_>) -> TestCase {
                     )
                 })
                 .collect();
-            let thresholds: Vec<String> =
-                o.failures.iter().map(|f| format!("threshold: {f}")).collect();
+            let thresholds: Vec<String> = o
+                .failures
+                .iter()
+                .map(|f| format!("threshold: {f}"))
+                .collect();
             let reason = o.expect_reason.as_deref().unwrap_or("");
             let status = match (o.verdict, regressions.is_empty()) {
                 (Verdict::Pass, true) => TestCaseStatus::success(),

@@ -435,7 +435,11 @@ fn run_cmd(args: &RunArgs, mode: Mode) -> Result<u8, Vec<Error>> {
     let mut preps = prepare_all(&args.paths, &call)?;
     let base_dir = check_options(args, mode, shard.is_some())?;
     if let Some(i) = args.variant {
-        preps = vec![one_variant(preps, i, shard.is_some() || base_dir.is_some())?];
+        preps = vec![one_variant(
+            preps,
+            i,
+            shard.is_some() || base_dir.is_some(),
+        )?];
     }
     let updating = args.update_baseline || mode == Mode::WriteBaselines;
     // Every baseline is read (and checked) before anything runs.
@@ -742,7 +746,11 @@ fn list_cmd(paths: &[PathBuf], max_steps: u64) -> Result<u8, Vec<Error>> {
             .unwrap_or(0)
     };
     let (w0, w1, w2) = (width(0), width(1), width(2));
-    for r in [&header].into_iter().chain(&rows).take(if rows.is_empty() { 0 } else { usize::MAX }) {
+    for r in [&header]
+        .into_iter()
+        .chain(&rows)
+        .take(if rows.is_empty() { 0 } else { usize::MAX })
+    {
         say!("{:<w0$}  {:<w1$}  {:<w2$}  {}", r[0], r[1], r[2], r[3]);
     }
     if errors.is_empty() {
@@ -756,7 +764,10 @@ fn keys_cmd(name: Option<&str>, markdown: bool, out: Option<&Path>) -> Result<u8
     use anholonomy::reference::Page;
     if let Some(dir) = out {
         if !markdown {
-            return Err(vec![Error::input("--out", "writes Markdown pages: add --markdown")]);
+            return Err(vec![Error::input(
+                "--out",
+                "writes Markdown pages: add --markdown",
+            )]);
         }
         let mut pages = Vec::new();
         for p in Page::all() {
@@ -796,7 +807,10 @@ fn keys_cmd(name: Option<&str>, markdown: bool, out: Option<&Path>) -> Result<u8
         known.extend(anholonomy::scenario::PlannerConfig::KINDS);
         return Err(vec![Error::input(
             "keys",
-            format!("`{name}` is not a model or planner kind (known: {})", known.join(", ")),
+            format!(
+                "`{name}` is not a model or planner kind (known: {})",
+                known.join(", ")
+            ),
         )]);
     };
     let text = if markdown {

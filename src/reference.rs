@@ -115,7 +115,9 @@ impl Page {
                 rows
             }
             Page::Model(k) => ModelConfig::schema(k).ok_or_else(missing)?.rows("model"),
-            Page::Planner(k) => PlannerConfig::schema(k).ok_or_else(missing)?.rows("planner"),
+            Page::Planner(k) => PlannerConfig::schema(k)
+                .ok_or_else(missing)?
+                .rows("planner"),
         })
     }
 
@@ -211,7 +213,11 @@ impl Page {
             let _ = writeln!(b, "inputs: {}", inputs.join(", "));
         }
         let rows = self.rows()?;
-        let w = rows.iter().map(|r| r.key.chars().count()).max().unwrap_or(0);
+        let w = rows
+            .iter()
+            .map(|r| r.key.chars().count())
+            .max()
+            .unwrap_or(0);
         let wd = rows
             .iter()
             .map(|r| r.default.chars().count())
@@ -367,7 +373,11 @@ fn model_intro(b: &mut String, kind: &str) -> Result<(), String> {
     let (states, inputs) = states_of(kind)?;
     b.push_str("## `start` and `goal`\n\nBoth list the state in this order (angles in degrees in the file, radians in the logs):\n\n| # | coordinate | unit in the file |\n|---|---|---|\n");
     for (i, (n, u)) in states.iter().enumerate() {
-        let _ = writeln!(b, "| {i} | `{n}` | {} |", if u.is_empty() { "–" } else { u });
+        let _ = writeln!(
+            b,
+            "| {i} | `{n}` | {} |",
+            if u.is_empty() { "–" } else { u }
+        );
     }
     let inputs: Vec<String> = inputs.iter().map(|s| format!("`{s}`")).collect();
     let _ = writeln!(
@@ -375,6 +385,39 @@ fn model_intro(b: &mut String, kind: &str) -> Result<(), String> {
         "\nInputs (the commands of the plan, one `limits.max_rate` entry each): {}.\n",
         inputs.join(", ")
     );
+    urdf_table(b, kind)?;
     let _ = writeln!(b, "## `[model]` keys\n\n`kind = \"{kind}\"` and:\n");
+    Ok(())
+}
+
+/// The URDF links and joints the model looks up by name (its physics
+/// module's declaration, which the validation pass checks every URDF against).
+fn urdf_table(b: &mut String, kind: &str) -> Result<(), String> {
+    let table = ModelConfig::required_urdf(kind).ok_or_else(|| {
+        format!("model `{kind}`: no URDF declaration (add it to `required_urdf()` in src/scenario/config.rs)")
+    })?;
+    b.push_str(
+        "## URDF links and joints
+
+",
+    );
+    if table.is_empty() {
+        b.push_str("The model looks up no link or joint by name.\n\n");
+        return Ok(());
+    }
+    b.push_str("The URDF (`model.urdf`) must have these, by name; a URDF that lacks some is refused with all the missing names in one message.\n\n| element | name | renamed by | role |\n|---|---|---|---|\n");
+    for r in table {
+        let _ = writeln!(
+            b,
+            "| {} | `{}` | {} | {} |",
+            r.element.tag(),
+            r.name,
+            r.key
+                .map(|k| format!("`model.{k}`"))
+                .unwrap_or_else(|| "–".into()),
+            cell(r.role)
+        );
+    }
+    b.push('\n');
     Ok(())
 }

@@ -96,10 +96,7 @@ mod tests {
             .map(|v| v.ok())
             .collect();
         assert_eq!(ok, [true, false, true, false]);
-        assert_eq!(
-            serde_json::to_string(&Verdict::Xfail).unwrap(),
-            "\"XFAIL\""
-        );
+        assert_eq!(serde_json::to_string(&Verdict::Xfail).unwrap(), "\"XFAIL\"");
         assert_eq!(Verdict::parse(Some("XPASS"), true), Verdict::Xpass);
         assert_eq!(Verdict::parse(None, false), Verdict::Fail);
     }

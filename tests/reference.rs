@@ -103,10 +103,19 @@ fn bounds(allowed: &str) -> Option<(Bound, Bound, bool)> {
         let hi = (n(&b[..b.len() - 1])?, b.ends_with(']'));
         return Some((Some(lo), Some(hi), integer));
     }
-    for (op, lo, incl) in [("> ", true, false), ("≥ ", true, true), ("< ", false, false), ("≤ ", false, true)] {
+    for (op, lo, incl) in [
+        ("> ", true, false),
+        ("≥ ", true, true),
+        ("< ", false, false),
+        ("≤ ", false, true),
+    ] {
         if let Some(x) = rest.strip_prefix(op).and_then(n) {
             let b = Some((x, incl));
-            return Some(if lo { (b, None, integer) } else { (None, b, integer) });
+            return Some(if lo {
+                (b, None, integer)
+            } else {
+                (None, b, integer)
+            });
         }
     }
     None
@@ -152,8 +161,14 @@ fn documented_ranges_are_the_enforced_ones() {
         ("rover_paper.toml", Page::Model("rover")),
         ("rover_paper.toml", Page::Planner("rover_primitives")),
         ("sphere_geometric_paper.toml", Page::Model("rolling_sphere")),
-        ("sphere_geometric_paper.toml", Page::Planner("sphere_geometric")),
-        ("sphere_triangle_paper.toml", Page::Planner("sphere_triangle")),
+        (
+            "sphere_geometric_paper.toml",
+            Page::Planner("sphere_geometric"),
+        ),
+        (
+            "sphere_triangle_paper.toml",
+            Page::Planner("sphere_triangle"),
+        ),
         ("dilf_single_open.toml", Page::Model("mobile_manipulator")),
         ("dilf_single_open.toml", Page::Planner("dilf")),
     ];
@@ -175,7 +190,11 @@ fn documented_ranges_are_the_enforced_ones() {
             };
             for (b, below) in [(lo, true), (hi, false)] {
                 let Some((x, inclusive)) = b else { continue };
-                let step = if integer { 1.0 } else { (x.abs() * 1e-6).max(1e-6) };
+                let step = if integer {
+                    1.0
+                } else {
+                    (x.abs() * 1e-6).max(1e-6)
+                };
                 let toward = if below { -step } else { step };
                 let outside = if inclusive { x + toward } else { x };
                 let inside = if inclusive { x } else { x - toward };
@@ -208,27 +227,43 @@ fn documented_ranges_are_the_enforced_ones() {
 #[test]
 fn keys_command_prints_pages_and_refuses_unknown_names() {
     let bin = env!("CARGO_BIN_EXE_anholonomy");
-    let out = Command::new(bin).args(["keys", "rover_primitives"]).output().unwrap();
+    let out = Command::new(bin)
+        .args(["keys", "rover_primitives"])
+        .output()
+        .unwrap();
     assert!(out.status.success());
     let text = String::from_utf8_lossy(&out.stdout);
     assert!(text.contains("planner.approach_deg"), "{text}");
-    let out = Command::new(bin).args(["keys", "rover", "--markdown"]).output().unwrap();
+    let out = Command::new(bin)
+        .args(["keys", "rover", "--markdown"])
+        .output()
+        .unwrap();
     assert_eq!(
         String::from_utf8_lossy(&out.stdout),
         Page::Model("rover").markdown().unwrap()
     );
-    let out = Command::new(bin).args(["keys", "teleport"]).output().unwrap();
+    let out = Command::new(bin)
+        .args(["keys", "teleport"])
+        .output()
+        .unwrap();
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
     assert_eq!(err.lines().count(), 1, "{err}");
-    assert!(err.starts_with("error: keys: `teleport` is not a model or planner kind"), "{err}");
+    assert!(
+        err.starts_with("error: keys: `teleport` is not a model or planner kind"),
+        "{err}"
+    );
     let dir = tempfile::tempdir().unwrap();
     let out = Command::new(bin)
         .args(["keys", "--markdown", "--out"])
         .arg(dir.path())
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     for p in Page::all() {
         assert_eq!(
             std::fs::read_to_string(dir.path().join(p.file())).unwrap(),

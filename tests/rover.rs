@@ -72,8 +72,17 @@ fn physics_reports_slip_per_wheel_and_envelope_channels() {
 fn open_loop_replay_ends_much_farther() {
     let o = run_prepared(&prepared(&scenario("rover_open_loop.toml")), None);
     // Expected to fail in physics, and it does.
-    assert_eq!(o.verdict, anholonomy::verdict::Verdict::Xfail, "{:?}", o.failures);
-    assert!(o.failures.iter().all(|f| f.starts_with("sim_goal_se2")), "{:?}", o.failures);
+    assert_eq!(
+        o.verdict,
+        anholonomy::verdict::Verdict::Xfail,
+        "{:?}",
+        o.failures
+    );
+    assert!(
+        o.failures.iter().all(|f| f.starts_with("sim_goal_se2")),
+        "{:?}",
+        o.failures
+    );
     // The recorded commands still reach the goal on the (deterministic) ideal model...
     assert!(metric(&o, "ideal_goal_se2") <= EPS);
     // ...but not on Rapier (measured 17.1 m; closed loop 0.043).

@@ -31,7 +31,10 @@ fn ok(o: &Output) -> String {
 fn friction_sweep() -> String {
     let base = disk_scenario(&model("rolling_disk.urdf"), "name = \"fs\"", "")
         .replace("dt = 0.001", "dt = 0.004")
-        .replace("goal = [-0.4, 1.0, 180.0, 22.5]", "goal = [-0.2, 0.3, 90.0, 10.0]");
+        .replace(
+            "goal = [-0.4, 1.0, 180.0, 22.5]",
+            "goal = [-0.2, 0.3, 90.0, 10.0]",
+        );
     format!(
         "{base}\n[sweep]\ncount = 4\nseed = 5\nsuccess_max = 0.05\n\n[sweep.vary]\n\
          \"sim.friction\" = {{ uniform = [0.6, 1.0] }}\n"
@@ -57,12 +60,23 @@ fn a_disk_friction_sweep_needs_no_time_metric_and_one_variant_reruns_with_logs()
     assert!(sweep["time_to_goal"].is_null());
     let page = std::fs::read_to_string(dir.path().join("logs/fs/report.html")).unwrap();
     assert!(page.contains("<h2>Distributions</h2>") && page.contains("<svg"));
-    assert!(page.contains("no time metric"), "the report must say there is none");
+    assert!(
+        page.contains("no time metric"),
+        "the report must say there is none"
+    );
 
     // Variant 2 again, as a single run with every log file.
-    let v2 = sweep["results"][2]["params"]["sim.friction"].as_f64().unwrap();
-    let out = ok(&bin(dir.path(), &["run", "fs.toml", "--variant", "2", "--quiet"]));
-    assert!(out.contains(&format!("variant 2 of fs: sim.friction = {v2}")), "{out}");
+    let v2 = sweep["results"][2]["params"]["sim.friction"]
+        .as_f64()
+        .unwrap();
+    let out = ok(&bin(
+        dir.path(),
+        &["run", "fs.toml", "--variant", "2", "--quiet"],
+    ));
+    assert!(
+        out.contains(&format!("variant 2 of fs: sim.friction = {v2}")),
+        "{out}"
+    );
     let logs = dir.path().join("logs/fs-variant-2");
     for f in ["run.mcap", "run.rrd", "series.json", "summary.json"] {
         assert!(logs.join(f).is_file(), "{f} missing");
@@ -71,7 +85,10 @@ fn a_disk_friction_sweep_needs_no_time_metric_and_one_variant_reruns_with_logs()
         serde_json::from_str(&std::fs::read_to_string(logs.join("summary.json")).unwrap()).unwrap();
     assert_eq!(s["sim_settings"]["friction"].as_f64(), Some(v2));
     let final_error = sweep["results"][2]["final_error"].as_f64().unwrap();
-    assert_eq!(s["metrics"]["sim_goal_position"].as_f64(), Some(final_error));
+    assert_eq!(
+        s["metrics"]["sim_goal_position"].as_f64(),
+        Some(final_error)
+    );
     // The sweep's own logs are still there, and `report` indexes both.
     assert!(dir.path().join("logs/fs/sweep.json").is_file());
     let out = ok(&bin(dir.path(), &["report"]));
@@ -80,7 +97,10 @@ fn a_disk_friction_sweep_needs_no_time_metric_and_one_variant_reruns_with_logs()
     let o = bin(dir.path(), &["run", "fs.toml", "--variant", "4"]);
     assert_eq!(o.status.code(), Some(2));
     let err = String::from_utf8_lossy(&o.stderr);
-    assert!(err.contains("key `sweep.count`: --variant 4 is not a variant"), "{err}");
+    assert!(
+        err.contains("key `sweep.count`: --variant 4 is not a variant"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -91,7 +111,18 @@ fn keep_levels_and_junit_in_a_new_log_directory() {
     // --junit inside a --logs directory that the run creates.
     ok(&bin(
         dir.path(),
-        &["check", "k.toml", "--quiet", "--logs", "out/logs", "--junit", "out/logs/junit.xml", "--keep", "report", "--report"],
+        &[
+            "check",
+            "k.toml",
+            "--quiet",
+            "--logs",
+            "out/logs",
+            "--junit",
+            "out/logs/junit.xml",
+            "--keep",
+            "report",
+            "--report",
+        ],
     ));
     assert!(dir.path().join("out/logs/junit.xml").is_file());
     let names = |d: &Path| {
@@ -107,28 +138,51 @@ fn keep_levels_and_junit_in_a_new_log_directory() {
     assert_eq!(names(&k), ["report.html", "series.json", "summary.json"]);
     let page = std::fs::read_to_string(k.join("report.html")).unwrap();
     assert!(!page.contains("run.rrd"), "links to dropped logs");
-    ok(&bin(dir.path(), &["run", "k.toml", "--quiet", "--logs", "out/logs", "--keep", "summary"]));
+    ok(&bin(
+        dir.path(),
+        &[
+            "run", "k.toml", "--quiet", "--logs", "out/logs", "--keep", "summary",
+        ],
+    ));
     assert_eq!(names(&k), ["summary.json"]);
     let o = bin(dir.path(), &["report", "out/logs"]);
     assert_eq!(o.status.code(), Some(2));
     assert!(String::from_utf8_lossy(&o.stderr).contains("--keep summary"));
-    ok(&bin(dir.path(), &["run", "k.toml", "--quiet", "--logs", "out/logs"]));
-    assert_eq!(names(&k), ["run.mcap", "run.rrd", "series.json", "summary.json"]);
+    ok(&bin(
+        dir.path(),
+        &["run", "k.toml", "--quiet", "--logs", "out/logs"],
+    ));
+    assert_eq!(
+        names(&k),
+        ["run.mcap", "run.rrd", "series.json", "summary.json"]
+    );
     // A --junit directory that nothing creates is still refused.
-    let o = bin(dir.path(), &["run", "k.toml", "--quiet", "--junit", "elsewhere/j.xml"]);
+    let o = bin(
+        dir.path(),
+        &["run", "k.toml", "--quiet", "--junit", "elsewhere/j.xml"],
+    );
     assert_eq!(o.status.code(), Some(2));
 }
 
 #[test]
 fn plan_prints_the_files_units_and_list_is_aligned() {
     let out = ok(&bin(&root(), &["plan", "scenarios/disk_paper.toml"]));
-    let line = out.lines().find(|l| l.contains("ideal final state")).unwrap();
+    let line = out
+        .lines()
+        .find(|l| l.contains("ideal final state"))
+        .unwrap();
     assert!(line.contains(" m, ") && line.contains(" deg"), "{line}");
     // disk_paper's goal heading, written in degrees in the file.
     let text = std::fs::read_to_string(root().join("scenarios/disk_paper.toml")).unwrap();
     let goal = text.lines().find(|l| l.starts_with("goal")).unwrap();
     let theta: f64 = goal.split(',').nth(2).unwrap().trim().parse().unwrap();
-    let shown = line.split("theta = ").nth(1).unwrap().split(' ').next().unwrap();
+    let shown = line
+        .split("theta = ")
+        .nth(1)
+        .unwrap()
+        .split(' ')
+        .next()
+        .unwrap();
     let shown: f64 = shown.parse().unwrap();
     assert!((shown - theta).abs() < 1e-3, "{line} vs {goal}");
 

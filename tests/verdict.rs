@@ -43,10 +43,19 @@ fn expected_failures_are_xfail_and_an_unexpected_pass_fails_check() {
     // Alone, the expected failure passes `check`.
     let (code, out, err) = check(
         dir.path(),
-        &["xfail.toml", "--quiet", "--junit", "logs/junit.xml", "--report"],
+        &[
+            "xfail.toml",
+            "--quiet",
+            "--junit",
+            "logs/junit.xml",
+            "--report",
+        ],
     );
     assert_eq!(code, Some(0), "{out}\n{err}");
-    let row = out.lines().find(|l| l.starts_with("rover_open_loop")).unwrap();
+    let row = out
+        .lines()
+        .find(|l| l.starts_with("rover_open_loop"))
+        .unwrap();
     assert!(row.contains("XFAIL: sim_goal_se2 = "), "{row}");
     assert!(row.contains("(expected: open-loop replay"), "{row}");
     // Tracking is meaningful here: both runs get the same recorded commands.
@@ -54,29 +63,59 @@ fn expected_failures_are_xfail_and_an_unexpected_pass_fails_check() {
     let s = summary(dir.path(), "rover_open_loop");
     assert_eq!(s["verdict"], "XFAIL");
     assert_eq!(s["passed"], false);
-    assert!(s["expect"]["reason"].as_str().unwrap().starts_with("open-loop replay"));
+    assert!(s["expect"]["reason"]
+        .as_str()
+        .unwrap()
+        .starts_with("open-loop replay"));
     let junit = std::fs::read_to_string(dir.path().join("logs/junit.xml")).unwrap();
-    assert!(junit.contains("<skipped message=\"XFAIL: expected failure: open-loop replay"), "{junit}");
+    assert!(
+        junit.contains("<skipped message=\"XFAIL: expected failure: open-loop replay"),
+        "{junit}"
+    );
     assert!(!junit.contains("<failure"), "{junit}");
     let page =
         std::fs::read_to_string(dir.path().join("logs/rover_open_loop/report.html")).unwrap();
-    assert!(page.contains(">XFAIL</span>") && page.contains("as this scenario expects: open-loop replay"));
+    assert!(
+        page.contains(">XFAIL</span>")
+            && page.contains("as this scenario expects: open-loop replay")
+    );
 
     // With the loosened copy, XPASS makes `check` exit 1 and is a JUnit failure.
     let (code, out, err) = check(
         dir.path(),
-        &["xfail.toml", "xpass.toml", "--quiet", "--junit", "logs/junit.xml", "--report"],
+        &[
+            "xfail.toml",
+            "xpass.toml",
+            "--quiet",
+            "--junit",
+            "logs/junit.xml",
+            "--report",
+        ],
     );
     assert_eq!(code, Some(1), "{out}\n{err}");
-    let row = out.lines().find(|l| l.starts_with("open_loop_loose")).unwrap();
-    assert!(row.contains("XPASS: met every threshold, but expected to fail"), "{row}");
-    assert!(err.contains("1 of 2 scenarios met every threshold although they are expected to fail (XPASS)"), "{err}");
+    let row = out
+        .lines()
+        .find(|l| l.starts_with("open_loop_loose"))
+        .unwrap();
+    assert!(
+        row.contains("XPASS: met every threshold, but expected to fail"),
+        "{row}"
+    );
+    assert!(
+        err.contains(
+            "1 of 2 scenarios met every threshold although they are expected to fail (XPASS)"
+        ),
+        "{err}"
+    );
     assert!(!err.contains("broke a threshold"), "{err}");
     assert_eq!(summary(dir.path(), "open_loop_loose")["verdict"], "XPASS");
     let junit = std::fs::read_to_string(dir.path().join("logs/junit.xml")).unwrap();
     assert!(junit.contains("type=\"xpass\""), "{junit}");
     let index = std::fs::read_to_string(dir.path().join("logs/index.html")).unwrap();
-    assert!(index.contains("2 scenarios: 0 PASS, 1 XFAIL, 1 XPASS"), "{index}");
+    assert!(
+        index.contains("2 scenarios: 0 PASS, 1 XFAIL, 1 XPASS"),
+        "{index}"
+    );
 }
 
 /// The rover's feedback policy: tracking is `n/a` in the table and the report,
@@ -92,9 +131,15 @@ fn tracking_of_feedback_policies_is_not_a_number() {
     assert_eq!(row.matches(" n/a ").count(), 2, "{row}");
     assert!(out.contains("n/a: tracking error means nothing for a feedback policy"));
     let s = summary(dir.path(), "rover_mirror");
-    assert!(s["not_meaningful"]["tracking"].as_str().unwrap().contains("feedback policy"));
+    assert!(s["not_meaningful"]["tracking"]
+        .as_str()
+        .unwrap()
+        .contains("feedback policy"));
     let page = std::fs::read_to_string(dir.path().join("logs/rover_mirror/report.html")).unwrap();
-    assert!(page.contains("Not shown: not meaningful: a feedback policy"), "tracking charts shown");
+    assert!(
+        page.contains("Not shown: not meaningful: a feedback policy"),
+        "tracking charts shown"
+    );
     // A real duration in the header, not the 300 s horizon alone.
     assert!(page.contains("ideal run ") && page.contains("feedback policy, horizon 300.0 s"));
 
@@ -103,13 +148,15 @@ fn tracking_of_feedback_policies_is_not_a_number() {
     let (code, _, err) = check(dir.path(), &["b.toml", "--quiet"]);
     assert_eq!(code, Some(2), "{err}");
     assert!(
-        err.starts_with("error: b.toml:") && err.contains("key `thresholds.tracking_position_max`: tracking errors mean nothing"),
+        err.starts_with("error: b.toml:")
+            && err.contains("key `thresholds.tracking_position_max`: tracking errors mean nothing"),
         "{err}"
     );
 }
 
 fn corpus_shipped(file: &str) -> String {
-    std::fs::read_to_string(scenario(file))
-        .unwrap()
-        .replace("../models/", &format!("{}/", root().join("models").display()))
+    std::fs::read_to_string(scenario(file)).unwrap().replace(
+        "../models/",
+        &format!("{}/", root().join("models").display()),
+    )
 }

@@ -33,11 +33,11 @@
 //! estimates, not measured values. (The seed calls Rocky 7 "the first rover to travel to Mars";
 //! that was Sojourner, 1997; Rocky 7 was its research successor and never flew.)
 
-use schemars::JsonSchema;
 use super::{Input, KinematicModel, State};
 use nalgebra::{DMatrix, DVector, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use schemars::JsonSchema;
 
 /// Which rear contact holds (the multiple-model index σ of Eq. 5).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize, serde::Serialize)]

@@ -3,10 +3,10 @@
 use super::data::{Series, SeriesFile};
 use super::plots::{self, HLine, Line, Marker, Path2, Shade};
 use super::{Loaded, RunData, StoredDelta};
+use crate::verdict::Verdict;
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
-use crate::verdict::Verdict;
 
 const DEG: f64 = 180.0 / std::f64::consts::PI;
 
@@ -41,7 +41,10 @@ fn page(title: &str, body: &str) -> String {
 
 /// The verdict of a summary or sweep document (older logs: from `passed`).
 fn verdict_of(doc: &Value) -> Verdict {
-    Verdict::parse(doc["verdict"].as_str(), doc["passed"].as_bool() == Some(true))
+    Verdict::parse(
+        doc["verdict"].as_str(),
+        doc["passed"].as_bool() == Some(true),
+    )
 }
 
 /// The verdict as a coloured word; XFAIL carries its reason on hover.
@@ -420,7 +423,8 @@ fn single_figures(summary: &Value, sf: &SeriesFile) -> Result<String, String> {
     let errors: &[Series] = if tracking_meaningful(summary) {
         &sf.errors
     } else {
-        let _ = write!(
+        let _ =
+            write!(
             b,
             "<p class=\"muted\">Not shown: {}. Compare the final states and the paths instead.</p>",
             esc(summary["not_meaningful"]["tracking"].as_str().unwrap_or("not meaningful"))

@@ -159,7 +159,11 @@ fn scenario_dirs(root: &Path) -> Result<Vec<PathBuf>, Error> {
     }
     let rd = std::fs::read_dir(root)
         .map_err(|e| Error::input(root, format!("cannot list directory: {e}")))?;
-    let mut dirs: Vec<PathBuf> = rd.flatten().map(|e| e.path()).filter(|p| p.is_dir()).collect();
+    let mut dirs: Vec<PathBuf> = rd
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.is_dir())
+        .collect();
     dirs.sort();
     if dirs.is_empty() {
         return Err(Error::input(
@@ -188,10 +192,8 @@ pub struct Written {
 /// older run's interrupted directory does not hide this run's report).
 pub fn write_report(root: &Path, this_run: Option<&[String]>) -> Result<Written, Error> {
     let dirs = scenario_dirs(root)?;
-    let results: Vec<(PathBuf, Result<Loaded, Error>)> = dirs
-        .par_iter()
-        .map(|d| (d.clone(), load_dir(d)))
-        .collect();
+    let results: Vec<(PathBuf, Result<Loaded, Error>)> =
+        dirs.par_iter().map(|d| (d.clone(), load_dir(d))).collect();
     let mut loaded = Vec::new();
     let mut skipped = Vec::new();
     for (dir, r) in results {

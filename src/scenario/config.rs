@@ -6,6 +6,7 @@
 //! define plain parameter structs and never see these enums (nor anything
 //! else of `crate::scenario`); this module picks the system for a pair.
 
+use super::schema::Schema;
 use crate::physics::required::Required;
 use crate::planner::dilf::DilfParams;
 use crate::planner::endogenous::EndogenousParams;
@@ -20,7 +21,6 @@ use crate::systems::rover::RoverConfig;
 use crate::systems::space_robot::{SpacePlanner, SpaceRobotConfig};
 use crate::systems::sphere::{SphereConfig, SpherePlanner};
 use crate::systems::{self, System};
-use super::schema::Schema;
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 use std::path::Path;

@@ -461,7 +461,8 @@ impl Scenario {
         // Every number against its documented range (the reference pages
         // show the same schemas).
         let ranges = |schema: &schema::Schema, value: Result<serde_json::Value, _>, prefix| {
-            let value = value.map_err(|e: serde_json::Error| bad(format!("key `{prefix}`: {e}")))?;
+            let value =
+                value.map_err(|e: serde_json::Error| bad(format!("key `{prefix}`: {e}")))?;
             schema.check(&value, prefix).map_err(&bad)
         };
         ranges(file_schema(), serde_json::to_value(&file), "")?;

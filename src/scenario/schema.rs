@@ -251,7 +251,14 @@ impl Schema {
                 continue;
             }
             let d = p.get("default").or_else(|| default.and_then(|d| d.get(k)));
-            self.rows_of(p, &join(path, k), d, required.contains(&k.as_str()), note, out);
+            self.rows_of(
+                p,
+                &join(path, k),
+                d,
+                required.contains(&k.as_str()),
+                note,
+                out,
+            );
         }
     }
 
@@ -406,7 +413,9 @@ impl Schema {
                 .iter()
                 .map(|b| {
                     let r = self.resolve(b);
-                    if let Some(c) = r.get("const").or_else(|| r.get("enum").and_then(|e| e.get(0)))
+                    if let Some(c) = r
+                        .get("const")
+                        .or_else(|| r.get("enum").and_then(|e| e.get(0)))
                     {
                         toml_value(c)
                     } else if let Some(p) = r.get("properties").and_then(Value::as_object) {
@@ -552,7 +561,10 @@ pub fn toml_value(v: &Value) -> String {
             _ => n.to_string(),
         },
         Value::String(s) => format!("\"{s}\""),
-        Value::Array(a) => format!("[{}]", a.iter().map(toml_value).collect::<Vec<_>>().join(", ")),
+        Value::Array(a) => format!(
+            "[{}]",
+            a.iter().map(toml_value).collect::<Vec<_>>().join(", ")
+        ),
         Value::Object(m) => inline_table(m),
     }
 }
@@ -683,7 +695,11 @@ mod tests {
     #[test]
     fn rows_show_defaults_ranges_and_docs() {
         let rows = Schema::of::<Outer>().rows("model");
-        let row = |k: &str| rows.iter().find(|r| r.key == k).unwrap_or_else(|| panic!("{k}: {rows:?}"));
+        let row = |k: &str| {
+            rows.iter()
+                .find(|r| r.key == k)
+                .unwrap_or_else(|| panic!("{k}: {rows:?}"))
+        };
         assert_eq!(row("model.dt").allowed, "number in (0, 0.1]");
         assert_eq!(row("model.dt").default, "required");
         assert_eq!(row("model.n").allowed, "integer in [1, 64]");
@@ -691,10 +707,17 @@ mod tests {
         assert_eq!(row("model.b").default, "none");
         assert_eq!(row("model.b").allowed, "number in (0, 360)");
         assert_eq!(row("model.inner.l").default, "0.25");
-        assert!(row("model.opt.l").doc.contains("Optional table `[model.opt]`"));
+        assert!(row("model.opt.l")
+            .doc
+            .contains("Optional table `[model.opt]`"));
         assert_eq!(row("model.turn").allowed, "\"short\" or \"left\"");
-        assert_eq!(row("model.signal.kind").allowed, "\"fixed\" or \"telegraph\"");
-        assert!(row("model.signal.rate").doc.starts_with("With `kind = \"telegraph\"`"));
+        assert_eq!(
+            row("model.signal.kind").allowed,
+            "\"fixed\" or \"telegraph\""
+        );
+        assert!(row("model.signal.rate")
+            .doc
+            .starts_with("With `kind = \"telegraph\"`"));
         assert_eq!(row("model.signal.rate").allowed, "number ≥ 0");
         assert_eq!(row("model.items[].l").allowed, "number > 0");
     }

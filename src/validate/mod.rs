@@ -85,8 +85,10 @@ impl Prepared {
             }
         }
         let written = |k: &str| scenario.has_key(k);
-        let (success_written, time_written) =
-            (written("sweep.success_metric"), written("sweep.time_metric"));
+        let (success_written, time_written) = (
+            written("sweep.success_metric"),
+            written("sweep.time_metric"),
+        );
         if let Some(sw) = &mut scenario.sweep {
             // The default time metric only where the model reports one.
             if sw.time_metric.is_none() && known.iter().any(|k| k == DEFAULT_TIME_METRIC) {

@@ -55,7 +55,11 @@ pub fn cases(c: &mut Corpus) {
     );
     c.sc(
         "expect is not passes or fails",
-        edit(&d, "name = \"d\"", "name = \"d\"\nexpect = \"maybe\"\nreason = \"x\""),
+        edit(
+            &d,
+            "name = \"d\"",
+            "name = \"d\"\nexpect = \"maybe\"\nreason = \"x\"",
+        ),
         Some("expect ="),
         Some("expect"),
     );
