@@ -33,8 +33,8 @@ impl Page {
     /// Every page: the index, the scenario file, each model, each planner.
     pub fn all() -> Vec<Page> {
         let mut out = vec![Page::Index, Page::Scenario];
-        out.extend(ModelConfig::KINDS.iter().map(|k| Page::Model(k)));
-        out.extend(PlannerConfig::KINDS.iter().map(|k| Page::Planner(k)));
+        out.extend(ModelConfig::KINDS.iter().map(|k| Page::Model(*k)));
+        out.extend(PlannerConfig::KINDS.iter().map(|k| Page::Planner(*k)));
         out
     }
 
@@ -143,7 +143,7 @@ impl Page {
             b,
             "Every range below is checked when a scenario is read (`run`, `check`, `plan`, `list`): a value outside it is refused with the file, line and key. Print this page with `anholonomy keys {}`.\n",
             match self {
-                Page::Model(k) | Page::Planner(k) => k,
+                Page::Model(k) | Page::Planner(k) => *k,
                 _ => "scenario",
             }
         );
@@ -313,17 +313,19 @@ fn minimal_table(kind: &str) -> Result<String, String> {
     Ok(t)
 }
 
+/// A TOML document as the table value the config parsers take.
+fn toml_table(text: &str) -> Result<Spanned<DeValue<'_>>, String> {
+    let t = DeTable::parse(text)
+        .map_err(|e| e.to_string())?
+        .into_inner();
+    Ok(Spanned::new(0..0, DeValue::Table(t)))
+}
+
 /// The file coordinates of `start`/`goal` (name, unit) and the input names of a model.
 #[allow(clippy::type_complexity)]
 pub fn states_of(kind: &str) -> Result<(Vec<(String, String)>, Vec<String>), String> {
     let text = minimal_table(kind)?;
-    let parse = |text: &str| -> Result<Spanned<DeValue<'_>>, String> {
-        let t = DeTable::parse(text)
-            .map_err(|e| e.to_string())?
-            .into_inner();
-        Ok(Spanned::new(0..0, DeValue::Table(t)))
-    };
-    let model = ModelConfig::parse(kind, parse(&text)?)
+    let model = ModelConfig::parse(kind, toml_table(&text)?)
         .map_err(|e| e.to_string())?
         .ok_or_else(|| format!("unknown model `{kind}`"))?;
     let planner_kind = PAIRS
@@ -331,7 +333,7 @@ pub fn states_of(kind: &str) -> Result<(Vec<(String, String)>, Vec<String>), Str
         .find(|(m, _)| *m == kind)
         .and_then(|(_, ps)| ps.first())
         .ok_or_else(|| format!("model `{kind}`: no planner in PAIRS"))?;
-    let planner = PlannerConfig::parse(planner_kind, parse("")?)
+    let planner = PlannerConfig::parse(planner_kind, toml_table("")?)
         .map_err(|e| e.to_string())?
         .ok_or_else(|| format!("unknown planner `{planner_kind}`"))?;
     let system = build_system(&model, &planner)?;

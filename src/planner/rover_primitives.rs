@@ -83,11 +83,14 @@ pub enum StopRule {
     Printed,
 }
 
-/// Parameters of the P1–P3 policy. Angles in degrees.
+/// Seed 002 feedback primitives P1–P3 (turn, follow the line through the goal,
+/// drive straight): a feedback policy. Angles in degrees.
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct RoverPrimitiveParams {
     /// Drive speed k of P1 and P2 and top speed of P3, m/s (front-wheel ground speed).
+    /// The default gains place P2's poles for the default speed; for a speed k choose
+    /// k3 = 3p, k2 = 3p²l/k, k1 = p³l/k² (a triple pole −p, wheelbase l).
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub speed: f64,
     /// Lateral gain k1, rad/(s·m).
@@ -102,13 +105,14 @@ pub struct RoverPrimitiveParams {
     /// Goal tolerance ε in the seed's SE(2) metric (m and rad alike).
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub epsilon: f64,
-    /// Wheel angle held during P1 (the seed chose π/6).
+    /// Wheel angle held during P1 (the seed chose π/6), deg; at most `max_steer_deg`.
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub p1_wheel_deg: f64,
-    /// Angle between the heading and N at which P1 ends (the seed: π/6).
+    /// Angle between the heading and N at which P1 ends (the seed: π/6), deg.
     #[schemars(extend("exclusiveMinimum" = 0, "exclusiveMaximum" = 90))]
     pub approach_deg: f64,
-    /// P1 is skipped when the heading is already this close to the approach heading.
+    /// P1 is skipped when the heading is already this close to the approach heading, deg;
+    /// below `approach_deg`.
     #[schemars(range(min = 0))]
     pub p1_tolerance_deg: f64,
     /// Turning direction of P1.
@@ -129,7 +133,7 @@ pub struct RoverPrimitiveParams {
     /// Control (sample-and-hold) period, s.
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub period: f64,
-    /// Time horizon of the run, s.
+    /// Time horizon of the run, s: at least one control period (`planner.period`).
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub horizon: f64,
 }

@@ -55,7 +55,8 @@ pub enum ArcDirection {
     Cw,
 }
 
-/// Parameters of the geometric planner.
+/// Seed 003 §3 geometric planner: roll straight (A), along a circular arc (B),
+/// straight again (A).
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct SphereGeometricParams {

@@ -69,7 +69,8 @@ impl Handedness {
     }
 }
 
-/// Parameters of the spherical-triangle planner.
+/// Seed 003 §4 spherical-triangle planner: closed paths whose spherical
+/// triangles' area turns the sphere.
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct SphereTriangleParams {

@@ -69,7 +69,8 @@ pub enum Order {
     YFirst,
 }
 
-/// Parameters of the Stokes disk planner (scenario `[planner]` table).
+/// Seed 000 §4.2 Stokes planner for the rolling disk: (θ, α) converge on a
+/// line, then (x, y) with closed loops sized by Green's theorem.
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct StokesDiskParams {

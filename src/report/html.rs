@@ -305,7 +305,13 @@ fn end_time(sf: &SeriesFile) -> f64 {
         .fold(0.0f32, f32::max) as f64
 }
 
-/// Segment shading and the legend that names the colours.
+/// Most shaded spans per chart: a feedback policy can switch labels every
+/// sample period (hundreds of one-pixel spans, most of a page's bytes).
+const MAX_SHADES: usize = 120;
+
+/// Segment shading and the legend that names the colours. More than
+/// [`MAX_SHADES`] spans are merged into that many equal time bins, each
+/// shaded with the label that covers most of it.
 fn shades(sf: &SeriesFile) -> (Vec<Shade>, String) {
     let mut names: Vec<&str> = Vec::new();
     let mut out = Vec::new();
@@ -318,6 +324,9 @@ fn shades(sf: &SeriesFile) -> (Vec<Shade>, String) {
             }
         };
         out.push((s.start, s.end, k));
+    }
+    if out.len() > MAX_SHADES {
+        out = bin_shades(&out, MAX_SHADES);
     }
     let mut legend = String::from("<p>Plan segments (shaded in every time plot): ");
     for (k, n) in names.iter().enumerate() {
@@ -333,6 +342,43 @@ fn shades(sf: &SeriesFile) -> (Vec<Shade>, String) {
     }
     legend.push_str("</p>");
     (out, legend)
+}
+
+/// `spans` merged into `n` equal time bins (each with the label covering
+/// most of it), adjacent bins of one label joined.
+fn bin_shades(spans: &[Shade], n: usize) -> Vec<Shade> {
+    let (t0, t1) = (
+        spans.first().map_or(0.0, |s| s.0),
+        spans.last().map_or(0.0, |s| s.1),
+    );
+    let w = (t1 - t0) / n as f64;
+    if w <= 0.0 {
+        return spans.to_vec();
+    }
+    let mut out: Vec<Shade> = Vec::new();
+    let mut j = 0;
+    for b in 0..n {
+        let (a, z) = (t0 + b as f64 * w, t0 + (b + 1) as f64 * w);
+        let mut cover: Vec<(usize, f64)> = Vec::new();
+        while j < spans.len() && spans[j].1 <= a {
+            j += 1;
+        }
+        for s in spans[j..].iter().take_while(|s| s.0 < z) {
+            let len = s.1.min(z) - s.0.max(a);
+            match cover.iter_mut().find(|(k, _)| *k == s.2) {
+                Some(c) => c.1 += len,
+                None => cover.push((s.2, len)),
+            }
+        }
+        let Some(&(k, _)) = cover.iter().max_by(|x, y| x.1.total_cmp(&y.1)) else {
+            continue;
+        };
+        match out.last_mut() {
+            Some(last) if last.2 == k && (last.1 - a).abs() < 1e-9 => last.1 = z,
+            _ => out.push((a, z, k)),
+        }
+    }
+    out
 }
 
 /// Display name, scale and unit of state coordinate `i`.
@@ -796,4 +842,31 @@ fn sweep_wall(s: &Value) -> f64 {
         .as_f64()
         .or_else(|| w.as_f64())
         .unwrap_or(f64::NAN)
+}
+
+#[cfg(test)]
+mod shade_tests {
+    use super::bin_shades;
+
+    #[test]
+    fn many_spans_become_at_most_n_bins_with_the_dominant_label() {
+        // 470 spans of 20 ms alternating 0, 1, 0, 1 ..., with label 2 over [4, 6) s.
+        let mut spans = Vec::new();
+        for i in 0..470 {
+            let (a, b) = (i as f64 * 0.02, (i + 1) as f64 * 0.02);
+            let k = if (4.0..6.0).contains(&a) { 2 } else { i % 2 };
+            spans.push((a, b, k));
+        }
+        let out = bin_shades(&spans, 120);
+        assert!(out.len() <= 120, "{}", out.len());
+        assert_eq!(out.first().unwrap().0, 0.0);
+        assert!((out.last().unwrap().1 - 9.4).abs() < 1e-9);
+        for w in out.windows(2) {
+            assert!((w[0].1 - w[1].0).abs() < 1e-9 && w[0].2 != w[1].2);
+        }
+        // The long span keeps its label across its bins, merged into one.
+        let long: Vec<_> = out.iter().filter(|s| s.2 == 2).collect();
+        assert_eq!(long.len(), 1);
+        assert!(long[0].0 <= 4.1 && long[0].1 >= 5.9, "{long:?}");
+    }
 }

@@ -124,8 +124,9 @@ impl Default for SimConfig {
     }
 }
 
-/// The scenario file's own keys (`[model]` and `[planner]` are parsed by
-/// kind, see [`config`]).
+/// A scenario file: what to plan, how to simulate it and which thresholds the
+/// runs must meet. The keys of `[model]` and `[planner]` depend on their
+/// `kind` and are on the model's and the planner's pages.
 #[derive(Debug, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct ScenarioFile {

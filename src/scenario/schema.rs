@@ -316,7 +316,11 @@ impl Schema {
                 .iter()
                 .map(|b| {
                     let r = self.resolve(b);
-                    format!("`{}`: {}", tag(r).unwrap_or_default(), doc(r))
+                    format!(
+                        "`{}`: {}",
+                        tag(r).unwrap_or_default(),
+                        doc(r).trim_end_matches('.')
+                    )
                 })
                 .collect();
             out.push(Row {
@@ -326,7 +330,7 @@ impl Schema {
                     .map(toml_value)
                     .unwrap_or_else(default_text),
                 allowed: one_of(&kinds),
-                doc: format!("{doc_text} {}", variants.join("; ")),
+                doc: format!("{doc_text} {}.", variants.join("; ")),
             });
             for b in bs {
                 let r = self.resolve(b);
@@ -372,13 +376,13 @@ impl Schema {
             .filter_map(|b| {
                 let c = b.get("const")?.as_str()?;
                 let d = doc(b);
-                (!d.is_empty()).then(|| format!("`{c}`: {d}"))
+                (!d.is_empty()).then(|| format!("`{c}`: {}", d.trim_end_matches('.')))
             })
             .collect();
         let doc_text = if values.is_empty() {
             doc_text
         } else {
-            format!("{doc_text} {}", values.join("; "))
+            format!("{doc_text} {}.", values.join("; "))
         };
         out.push(Row {
             key: path.to_string(),

@@ -14,7 +14,8 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// `[model] kind = "rolling_disk"`.
+/// A disk rolling upright without slipping on a plane (seed 000 §4.2), replayed
+/// on a wheel URDF in Rapier.
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DiskModelConfig {

@@ -51,7 +51,9 @@ impl Default for SwitchingConfig {
     }
 }
 
-/// `[model] kind = "rover"`.
+/// The overconstrained rover of seed 002: a steered, driven front wheel and
+/// two passive rear axles, one of which must slip (σ(t) says which in the
+/// ideal run; the contact solver decides on Rapier).
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RoverConfig {

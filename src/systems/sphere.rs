@@ -36,7 +36,8 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// `[model] kind = "rolling_sphere"`.
+/// A sphere rolling without slipping on a plane (seed 003), its orientation
+/// written as Euler angles in scenario files.
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SphereConfig {

@@ -94,6 +94,8 @@ impl Prepared {
             if sw.time_metric.is_none() && known.iter().any(|k| k == DEFAULT_TIME_METRIC) {
                 sw.time_metric = Some(DEFAULT_TIME_METRIC.into());
             }
+        }
+        if let Some(sw) = &scenario.sweep {
             let metrics = [
                 ("success_metric", Some(&sw.success_metric), success_written),
                 ("time_metric", sw.time_metric.as_ref(), time_written),

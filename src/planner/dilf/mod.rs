@@ -74,7 +74,8 @@ impl Tolerance {
     }
 }
 
-/// `[planner] kind = "dilf"`.
+/// Seed 004 dipolar inverse Lyapunov function: the feedback law of Eq. 18
+/// (a feedback policy).
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DilfParams {

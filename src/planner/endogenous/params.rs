@@ -49,7 +49,8 @@ pub struct ControlPoint {
     pub derivative: Option<Vec<f64>>,
 }
 
-/// Planner parameters. Control constraints are in model units (rad/s,
+/// Seed 001 endogenous-configuration-space planner: Legendre-series controls
+/// iterated on the end-point map (Eq. 26). Control constraints are in model units (rad/s,
 /// rad/s²) like the paper's du/dt(0) = 0.01; only waypoints are in degrees.
 #[derive(Debug, Clone, serde::Deserialize, serde::Serialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]

@@ -33,7 +33,8 @@ pub enum Cost {
     Travel,
 }
 
-/// Parameters of the planner. Angles in degrees.
+/// Seed 000 §4.1 Stokes planner for the space robot: rectangles in the joint
+/// plane whose enclosed area turns the vehicle. Angles in degrees.
 #[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct StokesSpaceParams {
@@ -51,7 +52,7 @@ pub struct StokesSpaceParams {
     /// Number of cycles n tried first.
     #[schemars(range(min = 1, max = 10000))]
     pub cycles: usize,
-    /// Most cycles tried when the rectangle violates the joint limit.
+    /// Most cycles tried when the rectangle violates the joint limit; at least `planner.cycles`.
     #[schemars(range(min = 1, max = 10000))]
     pub max_cycles: usize,
     /// Joint-1 limit |θ1| ≤ L (paper: 120); `None` = unconstrained.

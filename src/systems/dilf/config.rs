@@ -165,7 +165,9 @@ impl BeamConfig {
     }
 }
 
-/// `[model] kind = "mobile_manipulator"`.
+/// Mobile manipulators (seed 004): differential-drive platforms with PUMA 560
+/// arms among superellipsoid obstacles; one robot, or two carrying a
+/// deformable beam.
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MobileManipulatorConfig {
