@@ -37,14 +37,14 @@ fn expected_failures_are_xfail_and_an_unexpected_pass_fails_check() {
         .replace("sim_goal_se2 = 0.1", "sim_goal_se2 = 50.0")
         .replace("description =", "name = \"open_loop_loose\"\ndescription =");
     assert_ne!(xpass, shipped);
-    std::fs::write(dir.path().join("xfail.toml"), &shipped).unwrap();
-    std::fs::write(dir.path().join("xpass.toml"), &xpass).unwrap();
+    std::fs::write(dir.path().join("rover_open_loop.toml"), &shipped).unwrap();
+    std::fs::write(dir.path().join("loose.toml"), &xpass).unwrap();
 
     // Alone, the expected failure passes `check`.
     let (code, out, err) = check(
         dir.path(),
         &[
-            "xfail.toml",
+            "rover_open_loop.toml",
             "--quiet",
             "--junit",
             "logs/junit.xml",
@@ -84,8 +84,8 @@ fn expected_failures_are_xfail_and_an_unexpected_pass_fails_check() {
     let (code, out, err) = check(
         dir.path(),
         &[
-            "xfail.toml",
-            "xpass.toml",
+            "rover_open_loop.toml",
+            "loose.toml",
             "--quiet",
             "--junit",
             "logs/junit.xml",
@@ -124,8 +124,8 @@ fn expected_failures_are_xfail_and_an_unexpected_pass_fails_check() {
 fn tracking_of_feedback_policies_is_not_a_number() {
     let dir = tempfile::tempdir().unwrap();
     let text = corpus_shipped("rover_mirror.toml");
-    std::fs::write(dir.path().join("a.toml"), &text).unwrap();
-    let (code, out, err) = check(dir.path(), &["a.toml", "--quiet", "--report"]);
+    std::fs::write(dir.path().join("rover_mirror.toml"), &text).unwrap();
+    let (code, out, err) = check(dir.path(), &["rover_mirror.toml", "--quiet", "--report"]);
     assert_eq!(code, Some(0), "{out}\n{err}");
     let row = out.lines().find(|l| l.starts_with("rover_mirror")).unwrap();
     assert_eq!(row.matches(" n/a ").count(), 2, "{row}");

@@ -61,7 +61,8 @@ pub struct EndogenousParams {
     /// Intermediate targets y1, y2, … (full states, degrees), reached at T, 2T, …;
     /// the goal is reached at (len + 1) T.
     pub via_deg: Vec<Vec<f64>>,
-    /// Legendre terms per input (s = m · basis_terms parameters per segment).
+    /// Legendre terms per input (s = m · basis_terms parameters per segment); the
+    /// parameters must at least match the segment's task and constraint rows.
     #[schemars(range(min = 1, max = 64))]
     pub basis_terms: usize,
     /// Error decay rate γ of Eq. 26 (paper: 0.02).
