@@ -131,7 +131,7 @@ pub struct DilfParams {
     /// [`DipoleProduct`]): `"geometric_mean"` (default) or `"printed"`.
     #[serde(default)]
     pub dipole: DipoleProduct,
-    /// p of the field f = (Σ‖h2‖²)^p ∂V/∂q; Eq. 17 prints p = 2 (see the README).
+    /// p of the field f = (Σ‖h2‖²)^p ∂V/∂q; Eq. 17 prints p = 2 (the research notes on seed 004 discuss it).
     #[serde(default = "default_field_power")]
     #[schemars(extend("exclusiveMinimum" = 1.5))]
     pub field_power: f64,
