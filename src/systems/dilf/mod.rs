@@ -335,6 +335,9 @@ impl System for Dilf {
         })?;
         dilf::plan(Arc::new(scene), start, &self.params)
     }
+    fn urdf_names(&self) -> Vec<crate::physics::required::Named> {
+        crate::physics::required::defaults(&crate::physics::mobile_manipulator::REQUIRED)
+    }
     fn physics(
         &self,
         robot: &urdf_rs::Robot,
