@@ -136,7 +136,9 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
 /// run ending at `horizon` or `settle` seconds after a command with `done`.
 /// The controller sees the same `t` and state values an external process is
 /// sent (the JSON numbers round-trip exactly), so a deterministic law gives
-/// bit-identical results in process and through the protocol. A factory
+/// bit-identical results in process and through the protocol; wrap it in
+/// [`crate::plan::OncePerSample`] as the external law is, so that it is
+/// asked once per sample (the runs ask twice at t = 0) like the process. A factory
 /// that names labels while running returns them from
 /// [`crate::plan::PolicyFactory::labels`] (see [`crate::plan::LabelTable`]).
 ///

@@ -18,7 +18,7 @@ pub mod process;
 pub mod protocol;
 
 use crate::model::{Input, State};
-use crate::plan::{Command, Controller, LabelTable, Plan, PolicyFactory};
+use crate::plan::{Command, Controller, LabelTable, OncePerSample, Plan, PolicyFactory};
 use process::{describe, Failure, LawProcess};
 use protocol::Answer;
 use serde::{Deserialize, Serialize};
@@ -156,14 +156,14 @@ impl PolicyFactory for ExternalFactory {
                 Some(format!("cannot start `{}`: {e}", law.command.join(" "))),
             ),
         };
-        Box::new(ExternalController {
+        Box::new(OncePerSample::new(ExternalController {
             m: law.input_names.len(),
             law,
             proc,
             fault,
             sample: 0,
             buf: Vec::with_capacity(256),
-        })
+        }))
     }
 
     fn labels(&self) -> Option<Vec<String>> {

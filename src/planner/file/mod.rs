@@ -311,8 +311,10 @@ impl Samples {
                 }),
             }
         }
-        // Jumps of a held u: where a sample differs from the one before.
-        let jumps: Arc<[f64]> = (1..n - 1)
+        // Jumps of a held u: where a sample differs from the one before,
+        // the last one included (the run ends there, so the step before it
+        // must read the held value up to its end, not the last sample's).
+        let jumps: Arc<[f64]> = (1..n)
             .filter(|&i| self.u[i * m..(i + 1) * m] != self.u[(i - 1) * m..i * m])
             .map(|i| self.t[i])
             .collect();
@@ -386,8 +388,8 @@ mod tests {
             serde_json::Value::Null,
         );
         assert_eq!(p.duration, 2.0);
-        // 0.5 repeats the value before: no jump there.
-        assert_eq!(p.jumps(), vec![1.0]);
+        // 0.5 repeats the value before: no jump there; the end is one.
+        assert_eq!(p.jumps(), vec![1.0, 2.0]);
         let mut c = p.controller();
         let q = crate::model::State::zeros(1);
         let u = |c: &mut Box<dyn crate::plan::Controller>, t: f64| c.command(t, &q).u[0];
