@@ -125,7 +125,9 @@ fn fault(mode: &str, extra: &str) -> (String, &'static str, Vec<u32>) {
     }
     // One line, then the stderr tail as `  | ` lines.
     let mut lines = message.lines();
-    let first = lines.next().unwrap().to_string();
+    assert!(lines
+        .next()
+        .is_some_and(|l| l.contains(mode) || l.contains("the law")));
     assert!(
         lines.all(|l| l.starts_with("  | ")),
         "{mode}: tail lines not indented:\n{message}"
