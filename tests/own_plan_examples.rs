@@ -121,3 +121,41 @@ fn the_logged_plan_replays_with_the_same_metrics() {
     }
     assert!(exact >= 10, "{exact}");
 }
+
+/// The plan-file example of the tutorial passes its gates; its goal is the
+/// disk's closed-form motion under the held inputs (written in the
+/// scenario), which the ideal run reaches to round-off.
+#[test]
+fn the_plan_file_example_passes() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    let ex = "examples/plan_file";
+    workspace(
+        d,
+        &[
+            "models/rolling_disk.urdf",
+            &format!("{ex}/disk_turn.csv"),
+            &format!("{ex}/disk_turn.toml"),
+        ],
+    );
+    let out = cli(d, &["check", ex, "--logs", "logs", "--quiet"]);
+    assert!(
+        out.status.success(),
+        "{}\n{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let m = summary_metrics(&d.join("logs/disk_turn/summary.json"));
+    let ideal = m["ideal_goal_position"].as_f64().unwrap();
+    assert!(ideal < 1e-9, "{ideal}");
+    // Broken plan files are refused at their row and column.
+    std::fs::write(
+        d.join(format!("{ex}/disk_turn.csv")),
+        "t,theta_rate,alpha_rate\n0.0,2.0,0.0\n1.0,2.0,NaN\n2.0,0.0,0.0\n",
+    )
+    .unwrap();
+    let out = cli(d, &["check", ex, "--quiet"]);
+    assert_eq!(out.status.code(), Some(2));
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(err.contains("disk_turn.csv:3: column `alpha_rate`"), "{err}");
+}

@@ -233,6 +233,8 @@ impl PlannerConfig {
                         "sphere_geometric" => Schema::of::<SphereGeometricParams>(),
                         "sphere_triangle" => Schema::of::<SphereTriangleParams>(),
                         "dilf" => Schema::of::<DilfParams>(),
+                        "file" => Schema::of::<FilePlanParams>(),
+                        "external" => Schema::of::<ExternalParams>(),
                         _ => return None,
                     };
                     Some((*k, s))
