@@ -6,7 +6,7 @@
 //! differ from it.
 
 use crate::scenario::schema::{Row, Schema};
-use crate::scenario::{build_system, file_schema, ModelConfig, PlannerConfig, PAIRS};
+use crate::scenario::{build_system, file_schema, ModelConfig, PlannerConfig, OUTSIDE, PAIRS};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use toml::de::{DeTable, DeValue};
@@ -149,6 +149,10 @@ impl Page {
         );
         match self {
             Page::Model(k) => model_intro(&mut b, k)?,
+            Page::Planner(k) if OUTSIDE.contains(k) => {
+                let _ = writeln!(b, "Plans for every model: see [Validate your own planner](../../own-planner.md).\n");
+                let _ = writeln!(b, "## `[planner]` keys\n\n`kind = \"{k}\"` and:\n");
+            }
             Page::Planner(k) => {
                 let models: Vec<String> = PAIRS
                     .iter()

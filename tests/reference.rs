@@ -188,6 +188,11 @@ fn documented_ranges_are_the_enforced_ones() {
         ),
         ("dilf_single_open.toml", Page::Model("mobile_manipulator")),
         ("dilf_single_open.toml", Page::Planner("dilf")),
+        // Outside plans for every model: their shipped examples.
+        (
+            "../examples/external_law/disk_heading.toml",
+            Page::Planner("external"),
+        ),
     ];
     let mut probed = 0;
     let mut wrong = Vec::new();
