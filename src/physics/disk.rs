@@ -8,8 +8,8 @@
 
 use super::rapier::prelude::*;
 use super::real::{f, r, vector};
-use super::urdf::{Drive, SimWorld};
 use super::required::Required;
+use super::urdf::{Drive, SimWorld};
 use super::{angles, PhysicsSettings, PhysicsSystem};
 use crate::model::{Input, State};
 use crate::record::Pose;

@@ -20,8 +20,8 @@
 
 use super::rapier::prelude::*;
 use super::real::{f, r as real, vector};
-use super::urdf::{Drive, SimWorld};
 use super::required::Required;
+use super::urdf::{Drive, SimWorld};
 use super::{angles, PhysicsSettings, PhysicsSystem};
 use crate::model::rover::{envelope, RoverGeometry};
 use crate::model::{Input, State};

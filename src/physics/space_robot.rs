@@ -35,8 +35,8 @@
 
 use super::rapier::prelude::*;
 use super::real::{arr, quat, r, vector};
-use super::urdf::{Drive, SimWorld, WorldOptions};
 use super::required::Required;
+use super::urdf::{Drive, SimWorld, WorldOptions};
 use super::{angles, PhysicsSettings, PhysicsSystem};
 use crate::model::space_robot::SpaceRobot;
 use crate::model::{Input, State};
@@ -52,7 +52,10 @@ pub const JOINTS: [&str; 2] = ["joint1", "joint2"];
 /// The links and joints the space robot looks up in its URDF (it must have
 /// exactly these, with the model's masses, inertias and lengths).
 pub const REQUIRED: [Required; 5] = [
-    Required::link(LINKS[0], "the vehicle (root link), mass m0 and izz I0 of the model"),
+    Required::link(
+        LINKS[0],
+        "the vehicle (root link), mass m0 and izz I0 of the model",
+    ),
     Required::link(LINKS[1], "arm link 1, CoM at l1/2 on its x axis"),
     Required::link(LINKS[2], "arm link 2, CoM at l2/2 on its x axis"),
     Required::joint(JOINTS[0], "vehicle to link1 at its origin, about +z: θ1"),

@@ -16,8 +16,8 @@
 
 use super::rapier::prelude::*;
 use super::real::{f, quat, r, rotation, vector};
-use super::urdf::SimWorld;
 use super::required::Required;
+use super::urdf::SimWorld;
 use super::{PhysicsSettings, PhysicsSystem};
 use crate::model::rolling_sphere::geodesic_angle;
 use crate::model::{Input, State};

@@ -156,9 +156,8 @@ pub fn round_collision(robot: &Robot, link: &str, what: &str) -> Result<f64, Str
     if !robot.links.iter().any(|l| l.name == link) {
         return Err(format!("URDF lacks link `{link}`"));
     }
-    collision_radius(robot, link).ok_or_else(|| {
-        format!("URDF link `{link}` needs a sphere or cylinder collision ({what})")
-    })
+    collision_radius(robot, link)
+        .ok_or_else(|| format!("URDF link `{link}` needs a sphere or cylinder collision ({what})"))
 }
 
 /// Check that `link` has a round collision (`what`, e.g. "the wheel") of the

@@ -35,11 +35,14 @@
 //!    key (`model.radius`, `goal`, ...) or, for URDF problems, starts with
 //!    `URDF` and names the link or joint (`` link `wheel` ``).
 
+pub mod car;
+pub mod diff_drive;
 pub mod dilf;
 pub mod disk;
 pub mod rover;
 pub mod space_robot;
 pub mod sphere;
+pub mod wheeled;
 
 use crate::integrate::Trajectory;
 use crate::metric::Direction;

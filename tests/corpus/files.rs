@@ -140,8 +140,14 @@ pub fn cases(c: &mut Corpus) {
         &[
             ("name=\"steer_joint\"", "name=\"steering_joint\""),
             ("name=\"front_wheel_joint\"", "name=\"drive_joint\""),
-            ("<link name=\"back_left_wheel\">", "<link name=\"rear_left_wheel\">"),
-            ("<child link=\"back_left_wheel\"/>", "<child link=\"rear_left_wheel\"/>"),
+            (
+                "<link name=\"back_left_wheel\">",
+                "<link name=\"rear_left_wheel\">",
+            ),
+            (
+                "<child link=\"back_left_wheel\"/>",
+                "<child link=\"rear_left_wheel\"/>",
+            ),
         ],
         None,
         "URDF lacks joints `steer_joint`, `front_wheel_joint` and link `back_left_wheel`",

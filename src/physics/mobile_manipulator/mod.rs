@@ -93,8 +93,14 @@ pub const REQUIRED: [Required; 20] = [
     ),
     Required::link(WHEELS[0], "driven wheel, left"),
     Required::link(WHEELS[1], "driven wheel, right"),
-    Required::link(CASTERS[0], "front caster (its collisions are made frictionless)"),
-    Required::link(CASTERS[1], "rear caster (its collisions are made frictionless)"),
+    Required::link(
+        CASTERS[0],
+        "front caster (its collisions are made frictionless)",
+    ),
+    Required::link(
+        CASTERS[1],
+        "rear caster (its collisions are made frictionless)",
+    ),
     Required::link("link1", "PUMA 560 link 1"),
     Required::link("link2", "PUMA 560 link 2"),
     Required::link("link3", "PUMA 560 link 3"),
@@ -102,8 +108,14 @@ pub const REQUIRED: [Required; 20] = [
     Required::link("link5", "PUMA 560 link 5"),
     Required::link("link6", "PUMA 560 link 6"),
     Required::link("tool", "the gripper"),
-    Required::joint(WHEEL_JOINTS[0], "base_link to left_wheel: driven at (v − ω b)/r"),
-    Required::joint(WHEEL_JOINTS[1], "base_link to right_wheel: driven at (v + ω b)/r"),
+    Required::joint(
+        WHEEL_JOINTS[0],
+        "base_link to left_wheel: driven at (v − ω b)/r",
+    ),
+    Required::joint(
+        WHEEL_JOINTS[1],
+        "base_link to right_wheel: driven at (v + ω b)/r",
+    ),
     Required::joint(ARM_JOINTS[0], "arm joint 1 (PUMA 560 DH table, axis z)"),
     Required::joint(ARM_JOINTS[1], "arm joint 2 (PUMA 560 DH table, axis z)"),
     Required::joint(ARM_JOINTS[2], "arm joint 3 (PUMA 560 DH table, axis z)"),
