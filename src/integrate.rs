@@ -89,11 +89,20 @@ impl SampleClock {
     }
 }
 
-/// Whether `t` is (within round-off of) one of `jumps`.
+/// Whether `t` is (within round-off of) one of `jumps` (increasing: a plan
+/// file held sample by sample has one per sample, so no linear scan).
 fn is_jump(jumps: &[f64], t: f64) -> bool {
-    jumps
-        .iter()
-        .any(|j| (j - t).abs() <= 1e-12 * t.abs().max(1.0))
+    let tol = 1e-12 * t.abs().max(1.0);
+    let i = jumps.partition_point(|j| *j < t - tol);
+    jumps.get(i).is_some_and(|j| (j - t).abs() <= tol)
+}
+
+/// The jumps of `jumps` (increasing) in [a − slack, b + slack].
+fn jumps_near(jumps: &[f64], a: f64, b: f64) -> &[f64] {
+    let slack = 1e-9 * (b - a).abs().max(1e-300) + 1e-12 * b.abs().max(1.0);
+    let lo = jumps.partition_point(|j| *j < a - slack);
+    let hi = jumps.partition_point(|j| *j <= b + slack);
+    &jumps[lo..hi.max(lo)]
 }
 
 /// Integrate `model` from `q0` under `plan` with step `dt`.
@@ -102,13 +111,45 @@ fn is_jump(jumps: &[f64], t: f64) -> bool {
 /// feedback policies are sampled every `hold_period` and held (the physics
 /// replay does the same, so both runs see the same control timing).
 /// The run stops at the plan's duration or when a policy reports `done`.
+///
+/// A controller that faults ([`crate::plan::Controller::fault`]) ends the
+/// run at the faulting sample; [`simulate_checked`] reports the fault.
+/// Built-in planners' controllers never fault.
 pub fn simulate(model: &dyn KinematicModel, plan: &Plan, q0: &State, dt: f64) -> Trajectory {
+    run_ideal(model, plan, q0, dt).0
+}
+
+/// [`simulate`], or the fault of a controller that stopped working (an
+/// external law's process died, answered garbage or too late).
+pub fn simulate_checked(
+    model: &dyn KinematicModel,
+    plan: &Plan,
+    q0: &State,
+    dt: f64,
+) -> Result<Trajectory, String> {
+    match run_ideal(model, plan, q0, dt) {
+        (tr, None) => Ok(tr),
+        (_, Some(fault)) => Err(fault),
+    }
+}
+
+/// The ideal run and the controller's fault, if it faulted (the run then
+/// ends at the faulting sample, without applying its command).
+fn run_ideal(
+    model: &dyn KinematicModel,
+    plan: &Plan,
+    q0: &State,
+    dt: f64,
+) -> (Trajectory, Option<String>) {
     let mut ctl = plan.controller();
     let n = step_count(plan.duration, dt);
     let hold = plan.hold_period();
     let mut out = Trajectory::default();
     let mut q = q0.clone();
     let mut held = ctl.command(0.0, &q);
+    if let Some(fault) = ctl.fault() {
+        return (out, Some(fault));
+    }
     let mut clock = hold.map(|p| SampleClock::new(p, dt));
     // Open-loop u(t) may jump at segment joins: no RK4 step straddles one
     // (it is split there) and each piece reads u strictly on its own side.
@@ -119,6 +160,9 @@ pub fn simulate(model: &dyn KinematicModel, plan: &Plan, q0: &State, dt: f64) ->
             Some(clock) => {
                 if clock.due(t) {
                     held = ctl.command(t, &q);
+                    if let Some(fault) = ctl.fault() {
+                        return (out, Some(fault));
+                    }
                 }
                 held.clone()
             }
@@ -131,7 +175,7 @@ pub fn simulate(model: &dyn KinematicModel, plan: &Plan, q0: &State, dt: f64) ->
         out.u.push(cmd.u.clone());
         out.label.push(cmd.label);
         if cmd.done {
-            return out;
+            return (out, None);
         }
         q = match hold {
             Some(_) => rk4_step(&mut |s, x| model.velocity(s, x, &cmd.u), t, &q, dt),
@@ -145,7 +189,8 @@ pub fn simulate(model: &dyn KinematicModel, plan: &Plan, q0: &State, dt: f64) ->
                 let mut cuts = vec![t];
                 // Jumps on the grid itself are the pieces' ends already.
                 let inside = |j: f64| !is_jump(&[t, t + dt], j) && j > t && j < t + dt;
-                cuts.extend(jumps.iter().copied().filter(|&j| inside(j)));
+                let near = jumps_near(&jumps, t, t + dt);
+                cuts.extend(near.iter().copied().filter(|&j| inside(j)));
                 cuts.push(t + dt);
                 let mut x = q;
                 for w in cuts.windows(2) {
@@ -174,11 +219,14 @@ pub fn simulate(model: &dyn KinematicModel, plan: &Plan, q0: &State, dt: f64) ->
     }
     let t_end = n as f64 * dt;
     let last = ctl.command(t_end, &q);
+    if let Some(fault) = ctl.fault() {
+        return (out, Some(fault));
+    }
     out.t.push(t_end);
     out.q.push(q);
     out.u.push(last.u);
     out.label.push(last.label);
-    out
+    (out, None)
 }
 
 #[cfg(test)]

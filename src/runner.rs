@@ -4,11 +4,11 @@
 
 use crate::compare::compare;
 use crate::error::Error;
-use crate::integrate::{simulate, Trajectory};
+use crate::integrate::{simulate_checked, Trajectory};
 use crate::log::unit::LogUnit;
 use crate::model::{KinematicModel, State};
-use crate::physics::{replay_with, ReplayOptions};
-use crate::plan::Plan;
+use crate::physics::{replay_with, ReplayError, ReplayOptions};
+use crate::plan::{ControlLaw, Plan};
 use crate::record::{RunRecord, SimTrajectory};
 use serde::Serialize;
 use serde_json::json;
@@ -110,18 +110,96 @@ fn display_state(model: &dyn KinematicModel, q: &State) -> serde_json::Value {
 
 /// Run one scenario end to end.
 pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
+    // Planned by the validation pass.
+    run_plan(prep, &prep.planned, prep.plan_wall_s, opts)
+}
+
+/// Run a prepared scenario with a plan the caller supplies instead of the
+/// one its planner made: the same ideal run, physics replay, comparison,
+/// thresholds and logs as [`run`].
+///
+/// This is how a feedback law from outside the scenario file runs (the
+/// Python package's `run(scenario, law=callable, period=...)`): wrap it in a
+/// [`crate::plan::PolicyFactory`] whose controllers answer
+/// [`crate::plan::Controller::command`] (and report failures through
+/// [`crate::plan::Controller::fault`], which ends the run with
+/// [`Error::Law`], exit 3), then
+///
+/// ```ignore
+/// let plan = Plan::feedback(Vec::new(), factory, period, horizon, json!({}));
+/// let outcome = runner::run_with_plan(&prep, &plan, &opts)?;
+/// ```
+///
+/// The law is sampled exactly as an external law of `[planner] kind =
+/// "external"` is: at t = j · period on the `sim.dt` grid (the first at 0),
+/// held in between, one controller per run (ideal first, then physics), the
+/// run ending at `horizon` or `settle` seconds after a command with `done`.
+/// The controller sees the same `t` and state values an external process is
+/// sent (the JSON numbers round-trip exactly), so a deterministic law gives
+/// bit-identical results in process and through the protocol; wrap it in
+/// [`crate::plan::OncePerSample`] as the external law is, so that it is
+/// asked once per sample (the runs ask twice at t = 0) like the process. A factory
+/// that names labels while running returns them from
+/// [`crate::plan::PolicyFactory::labels`] (see [`crate::plan::LabelTable`]).
+///
+/// Bad plans are bad input (exit 2) naming the scenario: a hold period that
+/// is not a positive number, a non-finite or negative duration, or one over
+/// the scenario's step budget.
+pub fn run_with_plan(prep: &Prepared, plan: &Plan, opts: &RunOptions) -> Result<RunOutcome, Error> {
+    let sc = &prep.scenario;
+    if let ControlLaw::Feedback { period, .. } = &plan.law {
+        if !(period.is_finite() && *period > 0.0) {
+            return Err(Error::input(
+                &sc.path,
+                format!("feedback law: period must be a number > 0 s, got {period}"),
+            ));
+        }
+    }
+    if !(plan.duration.is_finite() && plan.duration >= 0.0) {
+        return Err(Error::input(
+            &sc.path,
+            format!(
+                "plan: duration must be a number >= 0 s, got {}",
+                plan.duration
+            ),
+        ));
+    }
+    let steps = crate::integrate::step_count(plan.duration + sc.sim.settle, sc.sim.dt) as u64;
+    if steps > prep.max_steps {
+        return Err(Error::input(
+            &sc.path,
+            format!(
+                "plan: {} s and settling at sim.dt = {} s is {steps} steps, over the budget of {} steps",
+                plan.duration, sc.sim.dt, prep.max_steps
+            ),
+        ));
+    }
+    run_plan(prep, plan, 0.0, opts)
+}
+
+fn run_plan(
+    prep: &Prepared,
+    plan: &Plan,
+    plan_wall_s: f64,
+    opts: &RunOptions,
+) -> Result<RunOutcome, Error> {
     let t_all = Instant::now();
     let sc = &prep.scenario;
     let model = prep.model();
     let (start, goal) = prep.start_goal();
-    let mut timings = Timings::default();
-
-    // Planned by the validation pass.
-    let plan = &prep.planned;
-    timings.plan = prep.plan_wall_s;
+    let mut timings = Timings {
+        plan: plan_wall_s,
+        ..Default::default()
+    };
+    let law_error = |run: &'static str, message: String| Error::Law {
+        path: sc.path.clone(),
+        run,
+        message,
+    };
 
     let t0 = Instant::now();
-    let ideal = simulate(model, plan, &start, sc.sim.dt);
+    let ideal =
+        simulate_checked(model, plan, &start, sc.sim.dt).map_err(|m| law_error("ideal", m))?;
     timings.ideal = t0.elapsed().as_secs_f64();
 
     let t0 = Instant::now();
@@ -136,14 +214,17 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
             .is_some()
             .then(|| pose_stride(opts.pose_rate, sc.sim.dt)),
     };
-    let sim =
-        replay_with(sys.as_mut(), plan, &replay_opts, &mut |f| bar.set(f)).map_err(|message| {
-            Error::Physics {
-                path: sc.path.clone(),
-                message,
-            }
-        })?;
+    let sim = replay_with(sys.as_mut(), plan, &replay_opts, &mut |f| bar.set(f));
     bar.finish();
+    let sim = sim.map_err(|e| match e {
+        ReplayError::Law(m) => law_error("physics", m),
+        ReplayError::Diverged(message) => Error::Physics {
+            path: sc.path.clone(),
+            message,
+        },
+    })?;
+    // Labels an external law named while running, for the logs.
+    let plan = &*plan.with_run_labels();
     timings.physics = t0.elapsed().as_secs_f64();
 
     let t0 = Instant::now();
@@ -207,7 +288,7 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
     };
     outcome.timings.logs = t0.elapsed().as_secs_f64();
     // Planning happened during validation: count it in.
-    outcome.timings.total = t_all.elapsed().as_secs_f64() + prep.plan_wall_s;
+    outcome.timings.total = t_all.elapsed().as_secs_f64() + plan_wall_s;
     if let Some(unit) = unit {
         // The summary carries the final timings, so it is written last; then
         // the three files replace the previous run's as one unit.

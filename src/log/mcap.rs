@@ -10,6 +10,7 @@
 //! | topic | encoding / schema | one message per | content |
 //! |---|---|---|---|
 //! | `/plan/command` | json / jsonschema `anholonomy.Command` | ideal sample | inputs applied from `t` on (right limit at a jump) |
+//! | `/sim/command` | json / jsonschema `anholonomy.Command` | sim step with the plan in force, and its end | inputs the physics applied over the step from `t` on; the last message, at the plan's end, holds zeros (settling) |
 //! | `/ideal/state` | json / jsonschema `anholonomy.State` | ideal sample | ideal (RK4) state |
 //! | `/sim/state` | json / jsonschema `anholonomy.State` | sim sample | state read back from physics |
 //! | `/sim/channels` | json / jsonschema `anholonomy.SimChannels` | sim sample | extra physics measurements (slip, momentum, ...), when the system has any |
@@ -271,6 +272,9 @@ fn json_channel(
 enum Ev {
     Series(usize, usize),
     Command(usize),
+    /// A step of the physics run while the plan was in force (the one at
+    /// `plan_steps` marks its end).
+    SimCommand(usize),
     Ideal(usize),
     Sim(usize),
     Channels(usize),
@@ -296,6 +300,14 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
         "/plan/command",
         "anholonomy.Command",
         "Plan inputs applied from t on (ideal run)",
+        &input_names,
+        tmp,
+    )?;
+    let ch_sim_cmd = json_channel(
+        ctx,
+        "/sim/command",
+        "anholonomy.Command",
+        "Inputs the physics applied from t on (zero from the plan's end: settling)",
         &input_names,
         tmp,
     )?;
@@ -376,6 +388,11 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
         evs.push((nanos(t), Ev::Command(k)));
         evs.push((nanos(t), Ev::Ideal(k)));
     }
+    // Steps while the plan was in force, then the plan's end (a zero).
+    let plan_end = sim.plan_steps.min(sim.traj.t.len().saturating_sub(1));
+    for (k, &t) in sim.traj.t.iter().enumerate().take(plan_end + 1) {
+        evs.push((nanos(t), Ev::SimCommand(k)));
+    }
     for (k, &t) in sim.traj.t.iter().enumerate() {
         evs.push((nanos(t), Ev::Sim(k)));
         if ch_chan.is_some() {
@@ -407,6 +424,7 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
     let keys_error_names = Keys::new(&error_names);
     let mut buf: Vec<u8> = Vec::with_capacity(512);
     let mut err_row = vec![0.0; error_names.len()];
+    let zeros = vec![0.0; input_names.len()];
     let json_err = |source| LogError::Json {
         path: tmp.to_path_buf(),
         source,
@@ -438,6 +456,21 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
                     values: ideal.u[k].as_slice(),
                 };
                 emit(&ch_cmd, ns, &msg)?;
+            }
+            Ev::SimCommand(k) => {
+                let seg = segment_name(rec.labels, sim.traj.label[k]);
+                let values = if k < plan_end {
+                    sim.traj.u[k].as_slice()
+                } else {
+                    &zeros
+                };
+                let msg = JsonMsg {
+                    t: sim.traj.t[k],
+                    segment: &seg,
+                    keys: &keys_input_names,
+                    values,
+                };
+                emit(&ch_sim_cmd, ns, &msg)?;
             }
             Ev::Ideal(k) => {
                 let seg = segment_name(rec.labels, ideal.label[k]);
@@ -748,7 +781,7 @@ fn plan_metadata(rec: &RunRecord<'_>) -> BTreeMap<String, String> {
         "command".into(),
         c["kind"].as_str().unwrap_or("continuous").to_string(),
     );
-    for key in ["hold_period_s", "jumps_s", "details"] {
+    for key in ["hold_period_s", "jumps_s", "jump_count", "details"] {
         if !c[key].is_null() {
             m.insert(key.into(), c[key].to_string());
         }

@@ -39,6 +39,7 @@ pub mod car;
 pub mod diff_drive;
 pub mod dilf;
 pub mod disk;
+pub mod own_plan;
 pub mod rover;
 pub mod space_robot;
 pub mod sphere;
