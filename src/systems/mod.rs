@@ -134,6 +134,13 @@ pub trait System: Send + Sync {
     ) -> (Vec<(String, f64)>, Vec<Series>) {
         (self.extra_metrics(goal, ideal, sim, cmp), Vec::new())
     }
+    /// Whether both runs execute the same commands, a function of time alone, so
+    /// they can be compared sample by sample (the `tracking_*` metrics mean
+    /// something only then). Default: open-loop plans yes; feedback policies no
+    /// (each run closes the loop on its own state and reaches the goal at its own time).
+    fn same_commands(&self, plan: &Plan) -> bool {
+        matches!(plan.law, crate::plan::ControlLaw::OpenLoop(_))
+    }
     /// Which way one of this system's metrics regresses, when the harness convention
     /// ([`Direction::conventional`]: `min`/`clearance`/`margin` tokens and success rates are
     /// higher-is-better, the rest lower-is-better) does not fit. Default: no declaration.

@@ -466,4 +466,14 @@ pub fn cases(c: &mut Corpus) {
         &["--logs", "logfile"],
         no_line("logfile"),
     ));
+    c.raw(flagged(
+        "--keep summary with --report",
+        &["--keep", "summary", "--report"],
+        no_line("--report"),
+    ));
+    c.raw(flagged(
+        "--variant of a scenario without [sweep]",
+        &["--variant", "0"],
+        no_line("case.toml"),
+    ));
 }
