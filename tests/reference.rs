@@ -188,6 +188,10 @@ fn documented_ranges_are_the_enforced_ones() {
         ),
         ("dilf_single_open.toml", Page::Model("mobile_manipulator")),
         ("dilf_single_open.toml", Page::Planner("dilf")),
+        ("car_parking.toml", Page::Model("car")),
+        ("car_parking.toml", Page::Planner("file")),
+        ("diff_drive_go_to_pose.toml", Page::Model("diff_drive")),
+        ("diff_drive_go_to_pose.toml", Page::Planner("external")),
     ];
     let mut probed = 0;
     let mut wrong = Vec::new();

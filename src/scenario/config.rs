@@ -152,6 +152,8 @@ impl ModelConfig {
                         "rover" => Schema::of::<RoverConfig>(),
                         "rolling_sphere" => Schema::of::<SphereConfig>(),
                         "mobile_manipulator" => Schema::of::<MobileManipulatorConfig>(),
+                        "diff_drive" => Schema::of::<DiffDriveConfig>(),
+                        "car" => Schema::of::<CarConfig>(),
                         _ => return None,
                     };
                     Some((*k, s))
@@ -251,6 +253,8 @@ impl PlannerConfig {
                         "sphere_geometric" => Schema::of::<SphereGeometricParams>(),
                         "sphere_triangle" => Schema::of::<SphereTriangleParams>(),
                         "dilf" => Schema::of::<DilfParams>(),
+                        "file" => Schema::of::<FilePlanParams>(),
+                        "external" => Schema::of::<ExternalParams>(),
                         _ => return None,
                     };
                     Some((*k, s))
@@ -302,7 +306,7 @@ pub fn build_system(
 /// rover's ε in `*_time_to_goal`, see those defaults). A model without a
 /// built-in planner is built with the `outside` planner itself: its arm in
 /// [`builtin_system`] accepts any planner.
-fn model_system(model: &ModelConfig, outside: &PlannerConfig) -> Result<Box<dyn System>, String> {
+pub(crate) fn model_system(model: &ModelConfig, outside: &PlannerConfig) -> Result<Box<dyn System>, String> {
     let first = PAIRS
         .iter()
         .find(|(m, _)| *m == model.kind())

@@ -19,20 +19,26 @@ use crate::physics::{PhysicsSettings, PhysicsSystem};
 use crate::plan::{Limits, Plan};
 use crate::planner::PlanError;
 use crate::record::{Comparison, SimTrajectory};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// `[model] kind = "car"`.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+/// A car (kinematic bicycle: x, y, θ, φ; inputs v, φ') on four wheels with
+/// Ackermann steering and rear-wheel drive; wheel radii and tracks are read
+/// from the URDF. No built-in planner: plans come from a file or an
+/// external law.
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CarConfig {
     /// URDF file, relative to the scenario file.
     pub urdf: PathBuf,
-    /// Wheelbase L, m: rear axle to the front steering pivots (must match the URDF).
+    /// Wheelbase L, m: rear axle to the front steering pivots (the URDF's must match it within 0.1 mm).
     #[serde(default = "default_wheelbase")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub wheelbase: f64,
-    /// Steering limit of the bicycle angle φ, degrees (0 < max_steer_deg < 90).
+    /// Steering limit of the bicycle angle φ, degrees.
     #[serde(default = "default_max_steer")]
+    #[schemars(extend("exclusiveMinimum" = 0, "exclusiveMaximum" = 90))]
     pub max_steer_deg: f64,
     /// The body link; its +x axis is the heading.
     #[serde(default = "default_base")]

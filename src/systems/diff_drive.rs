@@ -18,11 +18,15 @@ use crate::physics::{PhysicsSettings, PhysicsSystem};
 use crate::plan::{Limits, Plan};
 use crate::planner::PlanError;
 use crate::record::{Comparison, SimTrajectory};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// `[model] kind = "diff_drive"`.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+/// A differential drive (unicycle: x, y, θ; inputs v, ω) on two driven
+/// wheels and a caster; wheel radius, track and reference point are read
+/// from the URDF. No built-in planner: plans come from a file or an
+/// external law.
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DiffDriveConfig {
     /// URDF file, relative to the scenario file.

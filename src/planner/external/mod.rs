@@ -21,6 +21,7 @@ use crate::model::{Input, State};
 use crate::plan::{Command, Controller, LabelTable, OncePerSample, Plan, PolicyFactory};
 use process::{describe, Failure, LawProcess};
 use protocol::Answer;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -33,19 +34,23 @@ fn default_timeout() -> f64 {
     DEFAULT_TIMEOUT
 }
 
-/// `[planner] kind = "external"`.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+/// A feedback law in another process, for any model: asked for the input
+/// every `period` with the time and state, one JSON line each way.
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ExternalParams {
     /// Program and arguments, e.g. `["python3", "law.py"]`; run in the
     /// scenario's directory (so relative paths are relative to the scenario).
     pub command: Vec<String>,
     /// Control period, s: the law is asked every `period` and its input held.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub period: f64,
     /// Longest run, s (it ends earlier when the law answers `done`).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub horizon: f64,
     /// Longest wait for one answer, s (the first includes the process's start).
     #[serde(default = "default_timeout")]
+    #[schemars(extend("exclusiveMinimum" = 0), range(max = 3600))]
     pub timeout: f64,
     /// The scenario file's directory (set by the scenario layer).
     #[serde(skip)]

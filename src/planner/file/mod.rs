@@ -27,6 +27,7 @@ pub mod mcap;
 use crate::model::Input;
 use crate::plan::{ControlLaw, Plan, Segment};
 use crate::planner::PlanError;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -39,7 +40,7 @@ pub const MCAP_MAX_BYTES: u64 = 4 << 30;
 pub const DEFAULT_TOPIC: &str = "/plan/command";
 
 /// What happens between two samples.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Hold {
     /// u(t) = u_i on [t_i, t_{i+1}): a digital controller's output.
@@ -59,13 +60,14 @@ impl Hold {
     }
 }
 
-/// `[planner] kind = "file"`.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+/// A plan read from a file (CSV, JSON, or a run log's commands), for any
+/// model: one column per input, sampled at increasing times from 0.
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FilePlanParams {
     /// The plan file (`.csv`, `.json` or `.mcap`), relative to the scenario file.
     pub path: PathBuf,
-    /// Between samples: `zero_order` (default) or `linear`.
+    /// What u is between two samples.
     #[serde(default)]
     pub hold: Hold,
     /// MCAP only: the topic to read (default `/plan/command`; `/sim/command`
