@@ -306,7 +306,10 @@ pub fn build_system(
 /// rover's ε in `*_time_to_goal`, see those defaults). A model without a
 /// built-in planner is built with the `outside` planner itself: its arm in
 /// [`builtin_system`] accepts any planner.
-pub(crate) fn model_system(model: &ModelConfig, outside: &PlannerConfig) -> Result<Box<dyn System>, String> {
+pub(crate) fn model_system(
+    model: &ModelConfig,
+    outside: &PlannerConfig,
+) -> Result<Box<dyn System>, String> {
     let first = PAIRS
         .iter()
         .find(|(m, _)| *m == model.kind())

@@ -141,7 +141,10 @@ pub trait System: Send + Sync {
     /// reaches the goal at its own time).
     fn same_commands(&self, plan: &Plan) -> bool {
         use crate::plan::ControlLaw;
-        matches!(plan.law, ControlLaw::OpenLoop(_) | ControlLaw::Piecewise { .. })
+        matches!(
+            plan.law,
+            ControlLaw::OpenLoop(_) | ControlLaw::Piecewise { .. }
+        )
     }
     /// Which way one of this system's metrics regresses, when the harness convention
     /// ([`Direction::conventional`]: `min`/`clearance`/`margin` tokens and success rates are
