@@ -6,7 +6,7 @@
 //! differ from it.
 
 use crate::scenario::schema::{Row, Schema};
-use crate::scenario::{build_system, file_schema, ModelConfig, PlannerConfig, OUTSIDE, PAIRS};
+use crate::scenario::{file_schema, model_system, planners_for, ModelConfig, PlannerConfig};
 use std::fmt::Write as _;
 use std::path::PathBuf;
 use toml::de::{DeTable, DeValue};
@@ -149,17 +149,17 @@ impl Page {
         );
         match self {
             Page::Model(k) => model_intro(&mut b, k)?,
-            Page::Planner(k) if OUTSIDE.contains(k) => {
-                let _ = writeln!(b, "Plans for every model: see [Validate your own planner](../../own-planner.md).\n");
-                let _ = writeln!(b, "## `[planner]` keys\n\n`kind = \"{k}\"` and:\n");
-            }
             Page::Planner(k) => {
-                let models: Vec<String> = PAIRS
+                let models: Vec<String> = ModelConfig::KINDS
                     .iter()
-                    .filter(|(_, ps)| ps.contains(k))
-                    .map(|(m, _)| format!("[`{m}`](../models/{m}.md)"))
+                    .filter(|m| planners_for(m).contains(k))
+                    .map(|m| format!("[`{m}`](../models/{m}.md)"))
                     .collect();
-                let _ = writeln!(b, "Plans for the model {}.\n", models.join(", "));
+                if models.len() == ModelConfig::KINDS.len() {
+                    let _ = writeln!(b, "Plans for every model: {}.\n", models.join(", "));
+                } else {
+                    let _ = writeln!(b, "Plans for the model {}.\n", models.join(", "));
+                }
                 let _ = writeln!(b, "## `[planner]` keys\n\n`kind = \"{k}\"` and:\n");
             }
             _ => {}
@@ -332,15 +332,12 @@ pub fn states_of(kind: &str) -> Result<(Vec<(String, String)>, Vec<String>), Str
     let model = ModelConfig::parse(kind, toml_table(&text)?)
         .map_err(|e| e.to_string())?
         .ok_or_else(|| format!("unknown model `{kind}`"))?;
-    let planner_kind = PAIRS
-        .iter()
-        .find(|(m, _)| *m == kind)
-        .and_then(|(_, ps)| ps.first())
-        .ok_or_else(|| format!("model `{kind}`: no planner in PAIRS"))?;
-    let planner = PlannerConfig::parse(planner_kind, toml_table("")?)
+    // A plan from outside fits every model, and leaves its states and
+    // inputs as they are (a model's own planners are built at defaults).
+    let planner = PlannerConfig::parse("file", toml_table("path = \"plan.csv\"")?)
         .map_err(|e| e.to_string())?
-        .ok_or_else(|| format!("unknown planner `{planner_kind}`"))?;
-    let system = build_system(&model, &planner)?;
+        .ok_or("unknown planner `file`")?;
+    let system = model_system(&model, &planner)?;
     let chart = system.file_model();
     let angular = chart.angular_states();
     let position = chart.position_states();
@@ -369,10 +366,8 @@ pub fn states_of(kind: &str) -> Result<(Vec<(String, String)>, Vec<String>), Str
 }
 
 fn model_intro(b: &mut String, kind: &str) -> Result<(), String> {
-    let planners: Vec<String> = PAIRS
+    let planners: Vec<String> = planners_for(kind)
         .iter()
-        .filter(|(m, _)| *m == kind)
-        .flat_map(|(_, ps)| ps.iter())
         .map(|p| format!("[`{p}`](../planners/{p}.md)"))
         .collect();
     let _ = writeln!(b, "Planners: {}.\n", planners.join(", "));

@@ -193,6 +193,10 @@ fn documented_ranges_are_the_enforced_ones() {
             "../examples/external_law/disk_heading.toml",
             Page::Planner("external"),
         ),
+        ("car_parking.toml", Page::Model("car")),
+        ("car_parking.toml", Page::Planner("file")),
+        ("diff_drive_go_to_pose.toml", Page::Model("diff_drive")),
+        ("diff_drive_go_to_pose.toml", Page::Planner("external")),
     ];
     let mut probed = 0;
     let mut wrong = Vec::new();

@@ -4,6 +4,7 @@
 //! integrates it with the shared fixed-step RK4 of [`crate::integrate`].
 
 pub mod beam;
+pub mod bicycle;
 pub mod disk;
 pub mod ellipsoid;
 pub mod mobile_manipulator;
@@ -13,6 +14,7 @@ pub mod rover;
 pub mod space_manipulator;
 pub mod space_robot;
 pub mod spatial;
+pub mod unicycle;
 
 use nalgebra::{DMatrix, DVector};
 

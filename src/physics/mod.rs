@@ -9,6 +9,8 @@
 
 pub mod angles;
 pub mod beam;
+pub mod car;
+pub mod diff_drive;
 pub mod disk;
 pub mod mobile_manipulator;
 pub mod real;
@@ -18,6 +20,7 @@ pub mod settings;
 pub mod space_robot;
 pub mod sphere;
 pub mod urdf;
+pub mod wheeled;
 pub mod world;
 
 /// The engine. Physics code names its types through this alias and the

@@ -380,6 +380,8 @@ pub struct Drive {
     pub angle: f64,
     /// Joint limits of the axis, if any (the commanded angle stays inside).
     limits: Option<[f64; 2]>,
+    /// This drive's torque limit, N·m (`None`: the settings' `motor_max_torque`).
+    pub max_torque: Option<f64>,
 }
 
 impl SimWorld {
@@ -396,6 +398,7 @@ impl SimWorld {
             axis,
             angle,
             limits,
+            max_torque: None,
         }
     }
 
@@ -425,7 +428,7 @@ impl SimWorld {
                     r(k),
                     r(c),
                 )
-                .set_motor_max_force(d.axis, r(s.motor_max_torque));
+                .set_motor_max_force(d.axis, r(d.max_torque.unwrap_or(s.motor_max_torque)));
         }
     }
 }

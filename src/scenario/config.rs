@@ -17,6 +17,8 @@ use crate::planner::sphere_geometric::SphereGeometricParams;
 use crate::planner::sphere_triangle::SphereTriangleParams;
 use crate::planner::stokes_disk::StokesDiskParams;
 use crate::planner::stokes_space::StokesSpaceParams;
+use crate::systems::car::CarConfig;
+use crate::systems::diff_drive::DiffDriveConfig;
 use crate::systems::dilf::MobileManipulatorConfig;
 use crate::systems::disk::DiskModelConfig;
 use crate::systems::own_plan::{self, Source};
@@ -45,6 +47,10 @@ pub enum ModelConfig {
     RollingSphere(SphereConfig),
     /// Mobile manipulators among ellipsoid obstacles (seed 004).
     MobileManipulator(MobileManipulatorConfig),
+    /// Differential drive: unicycle kinematics (x, y, θ), inputs (v, ω).
+    DiffDrive(DiffDriveConfig),
+    /// Car-like robot: kinematic bicycle (x, y, θ, φ), inputs (v, φ').
+    Car(CarConfig),
 }
 
 /// `[planner]`: which planner, with its parameters.
@@ -78,12 +84,14 @@ pub const OUTSIDE: [&str; 2] = ["file", "external"];
 /// Which built-in planners plan for which model (`model kind`, `planner
 /// kinds`); the [`OUTSIDE`] kinds plan for every model besides. A model
 /// without a planner of its own has an empty list.
-pub const PAIRS: [(&str, &[&str]); 5] = [
+pub const PAIRS: [(&str, &[&str]); 7] = [
     ("rolling_disk", &["stokes_disk"]),
     ("space_robot", &["stokes_space", "endogenous"]),
     ("rover", &["rover_primitives"]),
     ("rolling_sphere", &["sphere_geometric", "sphere_triangle"]),
     ("mobile_manipulator", &["dilf"]),
+    ("diff_drive", &[]),
+    ("car", &[]),
 ];
 
 /// Typed parameters from a table (its `kind` already removed); serde errors
@@ -94,12 +102,14 @@ fn de<T: DeserializeOwned>(v: Spanned<DeValue<'_>>) -> Result<T, toml::de::Error
 
 impl ModelConfig {
     /// Every model `kind`.
-    pub const KINDS: [&'static str; 5] = [
+    pub const KINDS: [&'static str; 7] = [
         "rolling_disk",
         "space_robot",
         "rover",
         "rolling_sphere",
         "mobile_manipulator",
+        "diff_drive",
+        "car",
     ];
 
     /// The `kind` string.
@@ -110,6 +120,8 @@ impl ModelConfig {
             ModelConfig::Rover(_) => "rover",
             ModelConfig::RollingSphere(_) => "rolling_sphere",
             ModelConfig::MobileManipulator(_) => "mobile_manipulator",
+            ModelConfig::DiffDrive(_) => "diff_drive",
+            ModelConfig::Car(_) => "car",
         }
     }
 
@@ -121,6 +133,8 @@ impl ModelConfig {
             ModelConfig::Rover(m) => &m.urdf,
             ModelConfig::RollingSphere(m) => &m.urdf,
             ModelConfig::MobileManipulator(m) => &m.urdf,
+            ModelConfig::DiffDrive(m) => &m.urdf,
+            ModelConfig::Car(m) => &m.urdf,
         }
     }
 
@@ -138,6 +152,8 @@ impl ModelConfig {
                         "rover" => Schema::of::<RoverConfig>(),
                         "rolling_sphere" => Schema::of::<SphereConfig>(),
                         "mobile_manipulator" => Schema::of::<MobileManipulatorConfig>(),
+                        "diff_drive" => Schema::of::<DiffDriveConfig>(),
+                        "car" => Schema::of::<CarConfig>(),
                         _ => return None,
                     };
                     Some((*k, s))
@@ -159,6 +175,8 @@ impl ModelConfig {
             "rover" => &p::rover::REQUIRED,
             "rolling_sphere" => &p::sphere::REQUIRED,
             "mobile_manipulator" => &p::mobile_manipulator::REQUIRED,
+            "diff_drive" => &p::diff_drive::REQUIRED,
+            "car" => &p::car::REQUIRED,
             _ => return None,
         })
     }
@@ -174,6 +192,8 @@ impl ModelConfig {
             "rover" => ModelConfig::Rover(de(table)?),
             "rolling_sphere" => ModelConfig::RollingSphere(de(table)?),
             "mobile_manipulator" => ModelConfig::MobileManipulator(de(table)?),
+            "diff_drive" => ModelConfig::DiffDrive(de(table)?),
+            "car" => ModelConfig::Car(de(table)?),
             _ => return Ok(None),
         }))
     }
@@ -286,7 +306,10 @@ pub fn build_system(
 /// rover's ε in `*_time_to_goal`, see those defaults). A model without a
 /// built-in planner is built with the `outside` planner itself: its arm in
 /// [`builtin_system`] accepts any planner.
-fn model_system(model: &ModelConfig, outside: &PlannerConfig) -> Result<Box<dyn System>, String> {
+pub(crate) fn model_system(
+    model: &ModelConfig,
+    outside: &PlannerConfig,
+) -> Result<Box<dyn System>, String> {
     let first = PAIRS
         .iter()
         .find(|(m, _)| *m == model.kind())
@@ -321,6 +344,9 @@ fn builtin_system(model: &ModelConfig, planner: &PlannerConfig) -> Result<Box<dy
             systems::sphere::build(m, SpherePlanner::Triangle(p.clone()))
         }
         (M::MobileManipulator(m), P::Dilf(p)) => systems::dilf::build(m, p),
+        // No planner of their own: only plans from outside, which wrap them.
+        (M::DiffDrive(m), P::File(_) | P::External(_)) => systems::diff_drive::build(m),
+        (M::Car(m), P::File(_) | P::External(_)) => systems::car::build(m),
         (m, p) => Err(mismatch(m.kind(), p.kind())),
     }
 }
@@ -416,5 +442,23 @@ mod tests {
         assert!(ModelConfig::parse("teleport", table("teleport", ""))
             .unwrap()
             .is_none());
+    }
+
+    /// Every model kind declares its URDF names, and its shipped URDF has them all.
+    #[test]
+    fn every_model_declares_its_urdf_names_and_ships_a_urdf_with_them() {
+        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
+        for kind in ModelConfig::KINDS {
+            let table = ModelConfig::required_urdf(kind).unwrap_or_else(|| panic!("{kind}"));
+            assert!(!table.is_empty(), "{kind}");
+            let file = match kind {
+                "rolling_sphere" => "sphere",
+                k => k,
+            };
+            let robot = crate::validate::urdf::load(&dir.join(format!("{file}.urdf"))).unwrap();
+            crate::physics::required::check(&robot, &crate::physics::required::defaults(table))
+                .unwrap_or_else(|e| panic!("{kind}: {e}"));
+        }
+        assert!(ModelConfig::required_urdf("teleport").is_none());
     }
 }

@@ -17,6 +17,7 @@ pub mod keypath;
 pub mod schema;
 mod sweep_config;
 
+pub(crate) use config::model_system;
 pub use config::{build_system, planners_for, ModelConfig, PlannerConfig, OUTSIDE, PAIRS};
 pub use keypath::KeyPath;
 pub use sweep_config::{

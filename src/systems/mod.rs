@@ -35,12 +35,15 @@
 //!    key (`model.radius`, `goal`, ...) or, for URDF problems, starts with
 //!    `URDF` and names the link or joint (`` link `wheel` ``).
 
+pub mod car;
+pub mod diff_drive;
 pub mod dilf;
 pub mod disk;
 pub mod own_plan;
 pub mod rover;
 pub mod space_robot;
 pub mod sphere;
+pub mod wheeled;
 
 use crate::integrate::Trajectory;
 use crate::metric::Direction;
@@ -133,8 +136,9 @@ pub trait System: Send + Sync {
     }
     /// Whether both runs execute the same commands, a function of time alone, so
     /// they can be compared sample by sample (the `tracking_*` metrics mean
-    /// something only then). Default: open-loop plans yes; feedback policies no
-    /// (each run closes the loop on its own state and reaches the goal at its own time).
+    /// something only then). Default: open-loop plans (held plan files too) yes;
+    /// feedback policies no (each run closes the loop on its own state and
+    /// reaches the goal at its own time).
     fn same_commands(&self, plan: &Plan) -> bool {
         use crate::plan::ControlLaw;
         matches!(

@@ -314,15 +314,7 @@ impl System for Rover {
             "envelope_distance_max".into(),
             finite.iter().fold(0.0, |m: f64, v| m.max(*v)),
         ));
-        let max_abs = |suffix: &str| {
-            sim.channels
-                .iter()
-                .filter(|(n, _)| n.starts_with("slip_") && n.ends_with(suffix))
-                .flat_map(|(_, v)| v.iter())
-                .fold(0.0, |m: f64, v| m.max(v.abs()))
-        };
-        out.push(("slip_lateral_max".into(), max_abs("_lat")));
-        out.push(("slip_longitudinal_max".into(), max_abs("_lon")));
+        out.extend(super::wheeled::slip_metrics(sim));
         out
     }
 }

@@ -1,0 +1,178 @@
+//! The differential drive: unicycle kinematics on a two-wheel-plus-caster
+//! URDF (`models/diff_drive.urdf` or the user's own).
+//!
+//! No built-in planner: plans come from a plan file or an external feedback
+//! law (`[planner] kind = "file"` or `"external"`), which wrap this system.
+//! The wheel radius, track and reference point are read from the URDF (the
+//! unicycle itself has no parameters); the names of the parts the physics
+//! looks up are `[model]` keys with the defaults of `models/diff_drive.urdf`.
+
+use super::wheeled::{slip_metrics, SLIP_METRICS};
+use super::System;
+use crate::integrate::Trajectory;
+use crate::model::unicycle::Unicycle;
+use crate::model::{KinematicModel, State};
+use crate::physics::diff_drive::{self as phys, DiffDriveNames, DiffDrivePhysics, REQUIRED};
+use crate::physics::required::Named;
+use crate::physics::{PhysicsSettings, PhysicsSystem};
+use crate::plan::{Limits, Plan};
+use crate::planner::PlanError;
+use crate::record::{Comparison, SimTrajectory};
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+
+/// A differential drive (unicycle: x, y, θ; inputs v, ω) on two driven
+/// wheels and a caster; wheel radius, track and reference point are read
+/// from the URDF. No built-in planner: plans come from a file or an
+/// external law.
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct DiffDriveConfig {
+    /// URDF file, relative to the scenario file.
+    pub urdf: PathBuf,
+    /// The body link; its +x axis is the heading.
+    #[serde(default = "default_base")]
+    pub base_link: String,
+    /// The left wheel's continuous joint (its child is the wheel).
+    #[serde(default = "default_left")]
+    pub left_wheel_joint: String,
+    /// The right wheel's continuous joint.
+    #[serde(default = "default_right")]
+    pub right_wheel_joint: String,
+    /// Caster links (made frictionless); may be empty.
+    #[serde(default = "default_casters")]
+    pub caster_links: Vec<String>,
+}
+
+fn default_base() -> String {
+    phys::BASE.into()
+}
+fn default_left() -> String {
+    phys::LEFT_JOINT.into()
+}
+fn default_right() -> String {
+    phys::RIGHT_JOINT.into()
+}
+fn default_casters() -> Vec<String> {
+    vec![phys::CASTER.into()]
+}
+
+/// Names given in `[model]`: none empty, none given twice.
+pub(crate) fn check_names(names: &[(&str, &str)]) -> Result<(), String> {
+    for (i, (key, name)) in names.iter().enumerate() {
+        if name.trim().is_empty() {
+            return Err(format!("key `model.{key}`: must not be empty"));
+        }
+        if let Some((other, _)) = names[..i].iter().find(|(_, n)| n == name) {
+            return Err(format!(
+                "key `model.{key}`: `{name}` is also `model.{other}` (each part needs its own name)"
+            ));
+        }
+    }
+    Ok(())
+}
+
+struct DiffDrive {
+    names: DiffDriveNames,
+}
+
+/// Build the differential-drive system.
+pub fn build(cfg: &DiffDriveConfig) -> Result<Box<dyn System>, String> {
+    let mut names = vec![
+        ("base_link", cfg.base_link.as_str()),
+        ("left_wheel_joint", cfg.left_wheel_joint.as_str()),
+        ("right_wheel_joint", cfg.right_wheel_joint.as_str()),
+    ];
+    names.extend(
+        cfg.caster_links
+            .iter()
+            .map(|c| ("caster_links", c.as_str())),
+    );
+    check_names(&names)?;
+    Ok(Box::new(DiffDrive {
+        names: DiffDriveNames {
+            base: cfg.base_link.clone(),
+            left: cfg.left_wheel_joint.clone(),
+            right: cfg.right_wheel_joint.clone(),
+            casters: cfg.caster_links.clone(),
+        },
+    }))
+}
+
+/// The refusal of a model without a planner of its own (the plan-file and
+/// external-law wrappers replace [`System::plan`]).
+pub(crate) fn no_planner(model: &str) -> PlanError {
+    PlanError::InvalidParameter {
+        name: "kind".into(),
+        reason: format!(
+            "model `{model}` has no built-in planner: use kind = \"file\" or kind = \"external\""
+        ),
+    }
+}
+
+impl System for DiffDrive {
+    fn model(&self) -> &dyn KinematicModel {
+        &Unicycle
+    }
+    /// v in m/s, ω in rad/s (for built-in open-loop planners; plan files
+    /// and external laws set their own).
+    fn default_max_rate(&self) -> Vec<f64> {
+        vec![0.5, 2.0]
+    }
+    fn plan(&self, _start: &State, _goal: &State, _limits: &Limits) -> Result<Plan, PlanError> {
+        Err(no_planner("diff_drive"))
+    }
+    fn goal_heading(&self, goal: &State) -> Option<f64> {
+        Some(goal[2])
+    }
+    fn urdf_names(&self) -> Vec<Named> {
+        let n = &self.names;
+        let mut out = vec![
+            Named {
+                required: &REQUIRED[0],
+                name: n.base.clone(),
+            },
+            Named {
+                required: &REQUIRED[1],
+                name: n.left.clone(),
+            },
+            Named {
+                required: &REQUIRED[2],
+                name: n.right.clone(),
+            },
+        ];
+        out.extend(n.casters.iter().map(|c| Named {
+            required: &REQUIRED[3],
+            name: c.clone(),
+        }));
+        out
+    }
+    fn physics(
+        &self,
+        robot: &urdf_rs::Robot,
+        urdf_dir: &Path,
+        start: &[f64],
+        sim: &PhysicsSettings,
+    ) -> Result<Box<dyn PhysicsSystem>, String> {
+        Ok(Box::new(DiffDrivePhysics::new(
+            robot,
+            urdf_dir,
+            &self.names,
+            start,
+            sim,
+        )?))
+    }
+    fn extra_metric_names(&self) -> Vec<String> {
+        SLIP_METRICS.map(String::from).to_vec()
+    }
+    fn extra_metrics(
+        &self,
+        _goal: &State,
+        _ideal: &Trajectory,
+        sim: &SimTrajectory,
+        _cmp: &Comparison,
+    ) -> Vec<(String, f64)> {
+        slip_metrics(sim)
+    }
+}
