@@ -69,6 +69,10 @@ pub struct SimTrajectory {
     pub channels: Vec<(String, Vec<f64>)>,
     /// Number of physics steps taken.
     pub steps: usize,
+    /// What the drives received from `traj.t[k]` on, when a perturbation
+    /// delays or lags the commands (`traj.u` is what was issued); empty
+    /// otherwise.
+    pub received: Vec<crate::model::Input>,
 }
 
 impl SimTrajectory {

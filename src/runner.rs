@@ -7,7 +7,7 @@ use crate::error::Error;
 use crate::integrate::{simulate, Trajectory};
 use crate::log::unit::LogUnit;
 use crate::model::{KinematicModel, State};
-use crate::physics::{replay_with, ReplayOptions};
+use crate::physics::{replay_perturbed, ReplayOptions};
 use crate::plan::Plan;
 use crate::record::{RunRecord, SimTrajectory};
 use serde::Serialize;
@@ -136,13 +136,20 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
             .is_some()
             .then(|| pose_stride(opts.pose_rate, sc.sim.dt)),
     };
-    let sim =
-        replay_with(sys.as_mut(), plan, &replay_opts, &mut |f| bar.set(f)).map_err(|message| {
-            Error::Physics {
-                path: sc.path.clone(),
-                message,
-            }
-        })?;
+    let perturb = &sc.sim.perturb;
+    let mut sim = replay_perturbed(
+        sys.as_mut(),
+        plan,
+        &replay_opts,
+        perturb,
+        &mut |_| false,
+        &mut |f| bar.set(f),
+    )
+    .map_err(|message| Error::Physics {
+        path: sc.path.clone(),
+        message,
+    })?;
+    crate::physics::perturb::add_drive_channels(&mut sim, model.input_names());
     bar.finish();
     timings.physics = t0.elapsed().as_secs_f64();
 
@@ -152,28 +159,10 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
     let mut metrics = spec.compute(&goal, ideal.last(), sim.traj.last(), &cmp);
     let (extra, series) = prep.system.analysis(&goal, &ideal, &sim, &cmp);
     metrics.extend(extra);
-    let value = |k: &str| {
-        metrics
-            .iter()
-            .find(|(n, _)| n == k)
-            .map(|(_, v)| *v)
-            .unwrap_or(f64::NAN)
-    };
-    let mut failures = Vec::new();
-    for (k, limit) in &sc.thresholds {
-        let v = value(k);
-        if v.is_nan() || v > *limit {
-            let (v, limit) = crate::numfmt::breach(v, *limit);
-            failures.push(format!("{k} = {v} > {limit}"));
-        }
-    }
-    for (k, floor) in &sc.minimums {
-        let v = value(k);
-        if v.is_nan() || v < *floor {
-            let (v, floor) = crate::numfmt::breach(v, *floor);
-            failures.push(format!("{k} = {v} < {floor}"));
-        }
-    }
+    let failures = crate::gate::breaches(&sc.thresholds, &sc.minimums, &metrics)
+        .iter()
+        .map(ToString::to_string)
+        .collect::<Vec<_>>();
     timings.analysis = t0.elapsed().as_secs_f64();
     let t0 = Instant::now();
     let mut outcome = RunOutcome {
@@ -316,6 +305,8 @@ fn summary_json(
         },
         "paper": prep.system.paper(&start, &goal, plan),
         "sim_settings": sc.sim,
+        // What reality added to the physics replay (empty: nothing).
+        "perturbation": sc.sim.perturb.active_json(),
         "goal": display_state(model, &State::from_vec(sc.goal.clone())),
         "ideal": {
             "final_state": display_state(model, ideal.last()),
