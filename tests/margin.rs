@@ -409,3 +409,106 @@ fn check_fails_when_a_gated_margin_drops() {
         .any(|l| l.contains("margin_command_latency") && l.contains("REGRESSED"));
     assert!(regressed, "{stdout}");
 }
+
+/// The early-stop rules are sound on real runs: over any prefix, a running
+/// maximum is at most its final value, a running minimum at least, and a
+/// first passage is either the final value or not reached yet (then the
+/// final one is later or never). Gates of every family, four systems.
+#[test]
+fn early_stop_families_hold_on_prefixes_of_real_runs() {
+    use anholonomy::margin::early::{family, prefix, Family};
+    use anholonomy::margin::level::Ctx;
+    use anholonomy::record::SimTrajectory;
+    let mut checked = BTreeMap::<&str, usize>::new();
+    for file in [
+        "disk_paper.toml",
+        "rover_behind.toml",
+        "space_manipulator_s2.toml",
+        "dilf_single_open.toml",
+    ] {
+        let prep = prepared(&scenario(file));
+        let ctx = Ctx::new(&prep);
+        let sc = &prep.scenario;
+        let opts = ReplayOptions {
+            dt: sc.sim.dt,
+            settle: sc.sim.settle,
+            link_pose_every: None,
+        };
+        let mut sys = prep.physics().unwrap();
+        let nominal = Perturbation::default();
+        let sim = replay_perturbed(sys.as_mut(), &prep.planned, &opts, &nominal, &mut |_| false, &mut |_| {})
+            .unwrap();
+        let full = ctx.metrics(&ctx.ideal, &sim);
+        let value = |m: &[(String, f64)], k: &str| m.iter().find(|(n, _)| n == k).map(|(_, v)| *v).unwrap();
+        let n = sim.traj.t.len();
+        for cut in [n / 7, n / 3, 2 * n / 3, n - 2] {
+            let part = SimTrajectory {
+                traj: anholonomy::integrate::Trajectory {
+                    t: sim.traj.t[..cut].to_vec(),
+                    q: sim.traj.q[..cut].to_vec(),
+                    u: sim.traj.u[..cut - 1].to_vec(),
+                    label: sim.traj.label[..cut - 1].to_vec(),
+                },
+                channels: sim
+                    .channels
+                    .iter()
+                    .map(|(k, v)| (k.clone(), v[..cut].to_vec()))
+                    .collect(),
+                steps: cut - 1,
+                ..Default::default()
+            };
+            let pre = prefix(&part);
+            let t = pre.traj.t[cut - 1];
+            let m = ctx.metrics(&ctx.ideal_until(t), &pre);
+            for (k, _) in full.iter().filter(|(k, _)| !k.starts_with("ideal_")) {
+                let (p, f) = (value(&m, k), value(&full, k));
+                let minimum = k.split('_').any(|t| t == "min" || t == "clearance");
+                let fam = family(k, minimum);
+                let ok = match fam {
+                    Family::RunningMax => !(p > f),
+                    Family::RunningMin => !(p < f),
+                    Family::FirstPassage => (p.is_nan() && (f.is_nan() || f >= t)) || p == f,
+                    Family::EndOnly => continue,
+                };
+                assert!(ok, "{file}: {k} ({fam:?}) is {p} over [0, {t}] s but {f} at the end");
+                *checked.entry(match fam {
+                    Family::RunningMax => "max",
+                    Family::RunningMin => "min",
+                    _ => "first",
+                })
+                .or_default() += 1;
+            }
+        }
+    }
+    // Every family was exercised.
+    assert!(checked.len() == 3 && checked.values().all(|&c| c >= 4), "{checked:?}");
+}
+
+/// A level stopped early breaks the same gate as the whole run would: the
+/// disk with 30 % less torque breaks `tracking_theta_deg_max` long before
+/// the plan ends, and the full run confirms it.
+#[test]
+fn a_run_stopped_early_breaks_what_the_whole_run_breaks() {
+    use anholonomy::margin::level::{run as level_run, Ctx};
+    let dir = tempfile::tempdir().unwrap();
+    let text = shipped("disk_paper.toml");
+    let weak = Perturbation {
+        torque_scale: 0.1,
+        ..Default::default()
+    };
+    let prep = prepared(&write(dir.path(), "d.toml", &text));
+    let ctx = Ctx::new(&prep);
+    let early = level_run(&ctx, &weak, None);
+    let t = early.stopped_at_s.expect("stopped early");
+    assert!(!early.passed && t < prep.planned.duration * 0.6, "{t}");
+    let full = run_file(
+        &write(dir.path(), "w.toml", &with_perturb(&text, "torque_scale = 0.1\n")),
+        None,
+    );
+    assert!(!full.passed);
+    for b in &early.broken {
+        let v = full.metric(&b.metric).unwrap();
+        assert!(v > b.bound && v >= b.value, "{}: {v} at the end, {} early", b.metric, b.value);
+    }
+    assert!(full.steps > early.steps);
+}

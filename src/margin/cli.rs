@@ -5,6 +5,7 @@ use crate::error::Error;
 use crate::physics::perturb::Dimension;
 use crate::runner::{RunOptions, DEFAULT_POSE_RATE};
 use crate::validate::{not_applicable, prepare_all, Call, Prepared};
+use rayon::prelude::*;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -189,6 +190,64 @@ fn plan_dimensions(
     }
 }
 
+/// What one scenario adds to the output.
+struct Scenario {
+    rows: Vec<output::Row>,
+    json: Option<serde_json::Value>,
+    /// Its name, when logs (and margins.json) were written.
+    logged: Option<String>,
+}
+
+/// The nominal run (with its logs) and the margins of one scenario.
+fn one(
+    a: &MarginArgs,
+    prep: &Prepared,
+    dims: &Result<Vec<Dimension>, String>,
+    opts: &RunOptions,
+) -> Result<Scenario, Error> {
+    let name = &prep.scenario.name;
+    let dims = match dims {
+        Ok(d) => d,
+        Err(why) => {
+            return Ok(Scenario {
+                rows: vec![output::skipped(name, why)],
+                json: None,
+                logged: None,
+            })
+        }
+    };
+    let t0 = Instant::now();
+    // The nominal run, with its logs: level 0 of every dimension.
+    let o = crate::runner::run(prep, opts)?;
+    let s = settings(a, prep);
+    let progress = |r: &super::DimensionResult| {
+        if !a.quiet {
+            let row = output::row(name, r);
+            eprintln!(
+                "{name}: {} margin {} ({} runs, {:.1} s CPU)",
+                row.dimension, row.margin, row.runs, r.cpu_s
+            );
+        }
+    };
+    let rep = super::margins(prep, Nominal::of(prep, &o), dims, &s, &progress);
+    let wall = t0.elapsed().as_secs_f64();
+    let logged = match &o.log_dir {
+        Some(dir) => {
+            rep.write(dir, wall).map_err(|message| Error::Log {
+                path: dir.join("margins.json"),
+                message,
+            })?;
+            Some(name.clone())
+        }
+        None => None,
+    };
+    Ok(Scenario {
+        rows: output::rows(&rep),
+        json: Some(rep.to_json(wall)),
+        logged,
+    })
+}
+
 /// `anholonomy margin`: exit 0, 2 (bad input, nothing run) or 3 (a run or
 /// the logs failed).
 pub fn margin_cmd(a: &MarginArgs) -> Result<u8, Vec<Error>> {
@@ -207,43 +266,30 @@ pub fn margin_cmd(a: &MarginArgs) -> Result<u8, Vec<Error>> {
         progress: false,
         pose_rate: DEFAULT_POSE_RATE,
     };
+    // Scenarios in parallel (each with its dimensions and levels in
+    // parallel): results in input order, whatever the thread count.
+    let done: Vec<Result<Scenario, Error>> = preps
+        .par_iter()
+        .zip(plan.par_iter())
+        .with_max_len(1)
+        .map(|(prep, dims)| one(a, prep, dims, &opts))
+        .collect();
     let mut rows = Vec::new();
     let mut reports = Vec::new();
     let mut names = Vec::new();
-    for (prep, dims) in preps.iter().zip(&plan) {
-        let name = &prep.scenario.name;
-        let dims = match dims {
-            Ok(d) => d,
-            Err(why) => {
-                rows.push(output::skipped(name, why));
-                continue;
+    let mut errors = Vec::new();
+    for d in done {
+        match d {
+            Ok(s) => {
+                rows.extend(s.rows);
+                reports.extend(s.json);
+                names.extend(s.logged);
             }
-        };
-        let t0 = Instant::now();
-        // The nominal run, with its logs: level 0 of every dimension.
-        let o = crate::runner::run(prep, &opts).map_err(|e| vec![e])?;
-        let s = settings(a, prep);
-        let rep = super::margins(prep, Nominal::of(prep, &o), dims, &s, |r| {
-            if !a.quiet {
-                let row = output::row(name, r);
-                eprintln!(
-                    "{name}: {} margin {} ({} runs, {:.1} s)",
-                    row.dimension, row.margin, row.runs, r.wall_s
-                );
-            }
-        });
-        if let Some(dir) = &o.log_dir {
-            rep.write(dir, t0.elapsed().as_secs_f64())
-                .map_err(|message| {
-                    vec![Error::Log {
-                        path: dir.join("margins.json"),
-                        message,
-                    }]
-                })?;
-            names.push(name.clone());
+            Err(e) => errors.push(e),
         }
-        rows.extend(output::rows(&rep));
-        reports.push(rep.to_json(t0.elapsed().as_secs_f64()));
+    }
+    if !errors.is_empty() {
+        return Err(errors);
     }
     if a.json {
         crate::say!(

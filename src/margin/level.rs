@@ -119,10 +119,31 @@ pub struct Run {
     /// Why the run could not finish (physics diverged): counts as broken.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub error: Option<String>,
+    /// CPU time of the run, s (NaN where the platform does not tell); a
+    /// clock value, kept out of the serialized result.
+    #[serde(skip)]
+    pub cpu_s: f64,
+}
+
+/// CPU time of the calling thread so far, s (Linux: `/proc/thread-self/schedstat`;
+/// NaN elsewhere). A run executes on one thread, so the difference across
+/// it is the run's own CPU time, whatever else the machine runs.
+pub fn thread_cpu_s() -> f64 {
+    std::fs::read_to_string("/proc/thread-self/schedstat")
+        .ok()
+        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
+        .map_or(f64::NAN, |ns| ns * 1e-9)
 }
 
 /// Run the scenario of `ctx` under `p`.
 pub fn run(ctx: &Ctx<'_>, p: &Perturbation, seed: Option<u64>) -> Run {
+    let c0 = thread_cpu_s();
+    let mut r = run_inner(ctx, p, seed);
+    r.cpu_s = thread_cpu_s() - c0;
+    r
+}
+
+fn run_inner(ctx: &Ctx<'_>, p: &Perturbation, seed: Option<u64>) -> Run {
     let prep = ctx.prep;
     let sc = &prep.scenario;
     let mut sim_cfg = sc.sim.clone();
@@ -135,6 +156,7 @@ pub fn run(ctx: &Ctx<'_>, p: &Perturbation, seed: Option<u64>) -> Run {
         stopped_at_s: None,
         steps: 0,
         error: Some(error),
+        cpu_s: 0.0,
     };
     let mut sys = match prep.physics_with(&sim_cfg.physics()) {
         Ok(s) => s,
@@ -169,6 +191,7 @@ pub fn run(ctx: &Ctx<'_>, p: &Perturbation, seed: Option<u64>) -> Run {
             stopped_at_s: Some(stop.t),
             steps: sim.steps,
             error: None,
+            cpu_s: 0.0,
         };
     }
     let metrics = ctx.metrics(&ctx.ideal, &sim);
@@ -181,5 +204,6 @@ pub fn run(ctx: &Ctx<'_>, p: &Perturbation, seed: Option<u64>) -> Run {
         stopped_at_s: None,
         steps: sim.steps,
         error: None,
+        cpu_s: 0.0,
     }
 }

@@ -70,7 +70,7 @@ impl Settings {
 pub fn range(d: Dimension) -> (f64, f64, f64) {
     match d {
         Dimension::CommandLatency | Dimension::ActuatorTau | Dimension::StateLatency => {
-            (0.01, 1e-6, 5.0)
+            (0.01, 1e-6, 2.0)
         }
         Dimension::StateNoise => (1e-3, 1e-7, 1.0),
         Dimension::TorqueScale | Dimension::FrictionScale => (0.05, 1e-4, 0.99),
@@ -134,6 +134,8 @@ pub struct Level {
     pub value: f64,
     /// Passed (random dimensions: success rate reached).
     pub passed: bool,
+    /// The search round that ran it (0: the nominal run).
+    pub round: usize,
     /// Runs that passed.
     pub successes: usize,
     /// The runs.
@@ -176,6 +178,9 @@ pub struct DimensionResult {
     /// Wall time, s (not serialized here: `margins.json` keeps clock values apart).
     #[serde(skip)]
     pub wall_s: f64,
+    /// CPU time of its runs, s (likewise).
+    #[serde(skip)]
+    pub cpu_s: f64,
 }
 
 impl DimensionResult {
@@ -233,6 +238,7 @@ pub fn search_dimension(
         level: 0.0,
         value: d.value_at(0.0),
         passed: nominal.passed,
+        round: 0,
         successes: usize::from(nominal.passed),
         runs: Vec::new(),
     };
@@ -261,6 +267,7 @@ pub fn search_dimension(
                     level: m,
                     value: d.value_at(m),
                     passed,
+                    round: 0,
                     successes,
                     runs: runs.to_vec(),
                 };
@@ -288,8 +295,17 @@ pub fn search_dimension(
         }
     };
     let runs = outcome.probes.iter().map(|p| p.data.runs.len()).sum();
+    let cpu_s = outcome
+        .probes
+        .iter()
+        .flat_map(|p| &p.data.runs)
+        .map(|r| r.cpu_s)
+        .sum();
     let mut levels = vec![nominal_level];
-    levels.extend(outcome.probes.into_iter().map(|p| p.data));
+    levels.extend(outcome.probes.into_iter().map(|p| Level {
+        round: p.round,
+        ..p.data
+    }));
     let first_fail = levels.iter().find(|l| !l.passed);
     let first_broken = match first_fail {
         Some(l) if l.level == 0.0 => nominal.broken.clone(),
@@ -316,6 +332,7 @@ pub fn search_dimension(
         seeds: d.random().then_some(seeds),
         levels,
         wall_s: t0.elapsed().as_secs_f64(),
+        cpu_s,
     }
 }
 
@@ -395,13 +412,24 @@ pub struct Report {
 }
 
 impl Report {
-    /// `margins.json`: the report, then `wall_time_s` (per dimension and
-    /// total), the only clock-dependent member, last.
+    /// `margins.json`: the report, then `wall_time_s` (per dimension: wall
+    /// and the CPU time of its runs; total), the only clock-dependent
+    /// member, last.
     pub fn to_json(&self, total_wall_s: f64) -> serde_json::Value {
         let mut v = serde_json::to_value(self).unwrap_or_default();
         let mut wall = serde_json::Map::new();
         for d in &self.dimensions {
-            wall.insert(d.dimension.name().into(), serde_json::json!(d.wall_s));
+            // Each run's CPU time by round: a round's longest run bounds
+            // its wall time on idle cores, whatever else the machine ran.
+            let runs: Vec<[f64; 2]> = d
+                .levels
+                .iter()
+                .flat_map(|l| l.runs.iter().map(|r| [l.round as f64, r.cpu_s]))
+                .collect();
+            wall.insert(
+                d.dimension.name().into(),
+                serde_json::json!({"wall": d.wall_s, "cpu": d.cpu_s, "runs_cpu": runs}),
+            );
         }
         wall.insert("total".into(), serde_json::json!(total_wall_s));
         v["wall_time_s"] = serde_json::Value::Object(wall);
@@ -418,18 +446,21 @@ impl Report {
 }
 
 /// Search the margins of `dims` for a prepared scenario whose nominal run
-/// is `nominal`.
+/// is `nominal`. The dimensions are searched in parallel (each its own
+/// sequence of rounds, so the results do not depend on it); `each` sees
+/// each result as it is found.
 pub fn margins(
     prep: &Prepared,
     nominal: Nominal,
     dims: &[Dimension],
     s: &Settings,
-    mut each: impl FnMut(&DimensionResult),
+    each: &(dyn Fn(&DimensionResult) + Sync),
 ) -> Report {
     let ctx = Ctx::new(prep);
     let sc = &prep.scenario;
     let dimensions = dims
-        .iter()
+        .par_iter()
+        .with_max_len(1)
         .map(|&d| {
             let r = search_dimension(&ctx, d, &nominal, s);
             each(&r);
@@ -467,7 +498,7 @@ pub fn gate(prep: &Prepared, o: &mut RunOutcome) -> Result<(), crate::error::Err
     let t0 = Instant::now();
     let dims: Vec<Dimension> = gates.iter().map(|(d, _)| *d).collect();
     let s = Settings::of(&prep.scenario.margins);
-    let report = margins(prep, Nominal::of(prep, o), &dims, &s, |_| {});
+    let report = margins(prep, Nominal::of(prep, o), &dims, &s, &|_| {});
     for ((d, least), r) in gates.iter().zip(&report.dimensions) {
         let name = MarginsConfig::metric(*d);
         o.metrics.push((name.clone(), r.margin));
@@ -485,12 +516,30 @@ pub fn gate(prep: &Prepared, o: &mut RunOutcome) -> Result<(), crate::error::Err
     let wall = t0.elapsed().as_secs_f64();
     o.timings.total += wall;
     if let Some(dir) = &o.log_dir {
-        report
-            .write(dir, wall)
-            .map_err(|message| crate::error::Error::Log {
-                path: prep.scenario.path.clone(),
-                message,
-            })?;
+        let log_error = |message: String| crate::error::Error::Log {
+            path: prep.scenario.path.clone(),
+            message,
+        };
+        report.write(dir, wall).map_err(log_error)?;
+        amend_summary(&dir.join("summary.json"), o).map_err(log_error)?;
     }
     Ok(())
+}
+
+/// The run's `summary.json` with the margins' verdict: `passed`, `failures`
+/// and `metrics` as the outcome now has them (the run wrote it before the
+/// margins were searched).
+fn amend_summary(path: &std::path::Path, o: &RunOutcome) -> Result<(), String> {
+    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let mut s: serde_json::Value =
+        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+    s["passed"] = serde_json::json!(o.passed);
+    s["failures"] = serde_json::json!(o.failures);
+    let metrics: std::collections::BTreeMap<&str, f64> =
+        o.metrics.iter().map(|(k, v)| (k.as_str(), *v)).collect();
+    s["metrics"] = serde_json::json!(metrics);
+    s["wall_time_s"]["total"] = serde_json::json!(o.timings.total);
+    crate::log::atomic::write_atomic(path, |w| {
+        serde_json::to_writer_pretty(w, &s).map_err(std::io::Error::other)
+    })
 }

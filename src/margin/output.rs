@@ -22,6 +22,8 @@ pub struct Row {
     pub runs: String,
     /// Wall time, s.
     pub wall: String,
+    /// CPU time of the runs, s.
+    pub cpu: String,
     /// Ceiling, floor, non-monotone, ...
     pub note: String,
 }
@@ -40,7 +42,7 @@ pub fn magnitude(d: Dimension, m: f64) -> String {
     match d.kind() {
         Kind::Scale => {
             let extra = if m > 0.0 {
-                (-m.log10()).ceil().clamp(0.0, 12.0) as usize
+                ((-m.log10()).ceil() - 1.0).clamp(0.0, 12.0) as usize
             } else {
                 0
             };
@@ -88,6 +90,7 @@ pub fn row(scenario: &str, r: &DimensionResult) -> Row {
         breaks,
         runs,
         wall: format!("{:.1}", r.wall_s),
+        cpu: format!("{:.1}", r.cpu_s),
         note: r.note(),
     }
 }
@@ -110,22 +113,24 @@ pub fn skipped(scenario: &str, why: &str) -> Row {
         breaks: "–".into(),
         runs: "0".into(),
         wall: "–".into(),
+        cpu: "–".into(),
         note: why.into(),
     }
 }
 
-const HEAD: [&str; 8] = [
+const HEAD: [&str; 9] = [
     "scenario",
     "dimension",
     "margin",
     "edge in",
     "first gate broken beyond it",
     "runs",
+    "cpu s",
     "wall s",
     "note",
 ];
 
-fn cells(r: &Row) -> [&str; 8] {
+fn cells(r: &Row) -> [&str; 9] {
     [
         &r.scenario,
         &r.dimension,
@@ -133,6 +138,7 @@ fn cells(r: &Row) -> [&str; 8] {
         &r.edge,
         &r.breaks,
         &r.runs,
+        &r.cpu,
         &r.wall,
         &r.note,
     ]
@@ -146,10 +152,10 @@ pub fn text(rows: &[Row]) -> String {
             w[i] = w[i].max(c.chars().count());
         }
     }
-    let line = |c: [&str; 8]| {
+    let line = |c: [&str; 9]| {
         let mut s = String::new();
         for (i, x) in c.iter().enumerate() {
-            if i == 7 {
+            if i == HEAD.len() - 1 {
                 s.push_str(x);
             } else {
                 let pad = w[i] - x.chars().count();

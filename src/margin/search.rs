@@ -58,6 +58,8 @@ pub struct Probe<T> {
     pub level: f64,
     /// Every gate held.
     pub pass: bool,
+    /// The round it was evaluated in (1, 2, …).
+    pub round: usize,
     /// What the evaluation returned.
     pub data: T,
 }
@@ -166,6 +168,7 @@ impl<T> State<T> {
             self.probes.push(Probe {
                 level: *level,
                 pass,
+                round: self.rounds,
                 data,
             });
         }

@@ -112,9 +112,9 @@ pub fn section(m: &Value) -> Result<String, String> {
     Ok(b)
 }
 
-/// The breaking metric against the level, one point per run (the nominal
-/// run at 0), pass green, fail red; non-finite values (e.g. a goal never
-/// reached) drawn at the top.
+/// The breaking metric against the level (log scale), one point per run,
+/// pass green, fail red; non-finite values (e.g. a goal never reached)
+/// drawn at the top. The nominal run (level 0) is in the table.
 fn figure(m: &Value, d: &Value, dim: Dimension) -> Result<String, String> {
     let Some(metric) = d["breaking_metric"].as_str() else {
         return Ok(String::new());
@@ -123,9 +123,6 @@ fn figure(m: &Value, d: &Value, dim: Dimension) -> Result<String, String> {
         .as_f64()
         .or_else(|| m["minimums"][metric].as_f64());
     let mut pts: Vec<(f64, f64, bool)> = Vec::new();
-    if let Some(v) = m["nominal"]["gates"][metric].as_f64() {
-        pts.push((0.0, v, m["nominal"]["passed"].as_bool() == Some(true)));
-    }
     for l in d["levels"].as_array().into_iter().flatten() {
         let x = l["level"].as_f64().unwrap_or(f64::NAN);
         for r in l["runs"].as_array().into_iter().flatten() {
@@ -163,7 +160,7 @@ fn figure(m: &Value, d: &Value, dim: Dimension) -> Result<String, String> {
         dim.name(),
         if nan { " (NaN at top)" } else { "" }
     );
-    plots::scatter(
+    plots::scatter_log_x(
         &title,
         &format!("{} magnitude{unit}", dim.name()),
         metric,
