@@ -13,6 +13,7 @@ pub mod disk;
 pub mod mobile_manipulator;
 pub mod perturb;
 pub mod real;
+pub mod required;
 pub mod rover;
 pub mod settings;
 pub mod space_robot;

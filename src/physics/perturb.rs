@@ -40,30 +40,41 @@ use crate::model::{Input, State};
 use crate::plan::{ControlLaw, Plan};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-/// `[sim.perturb]`: every value off (0 or 1) by default.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+/// `[sim.perturb]`: what reality adds to the physics replay, every value off
+/// (0 or 1) by default. The ideal run is never perturbed; a key that does not
+/// apply to the system or plan is refused.
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct Perturbation {
-    /// Delay from the controller to the drives, s.
+    /// Delay from the controller to the drives, s: the drives receive each command this much later.
+    #[schemars(range(min = 0))]
     pub command_latency: f64,
     /// Time constant of a first-order lag on each drive's command, s.
+    #[schemars(range(min = 0))]
     pub actuator_tau: f64,
     /// Factor on the drives' torque limit (`sim.motor_max_torque`).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub torque_scale: f64,
     /// Standard deviation of the Gaussian noise on each coordinate of the
-    /// state a feedback law sees (m, rad, ...).
+    /// state a feedback law sees (m, rad, in each coordinate's SI unit); feedback laws only.
+    #[schemars(range(min = 0))]
     pub state_noise: f64,
-    /// Age of the state a feedback law sees, s.
+    /// Age of the state a feedback law sees, s (feedback laws only).
+    #[schemars(range(min = 0))]
     pub state_latency: f64,
-    /// Factor on the simulated wheels' radius (the model keeps the nominal one).
+    /// Factor on the simulated wheels' radius; the model and the controller keep the nominal one (wheeled models only).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub wheel_radius_scale: f64,
-    /// Factor on the friction coefficient (`sim.friction`).
+    /// Factor on every friction coefficient (`sim.friction`).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub friction_scale: f64,
-    /// Factor on every URDF link's mass and inertia.
+    /// Factor on every URDF link's mass and inertia (the model keeps the URDF's).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub mass_scale: f64,
-    /// Seed of the state noise.
+    /// Seed of the state noise (ChaCha8): the same seed gives the same run.
     pub seed: u64,
 }
 

@@ -14,6 +14,7 @@
 //! (`friction_scale = 0.3` asks that the gates hold at 0.7× friction).
 
 use crate::physics::perturb::Dimension;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// Default relative resolution of a margin: the search stops when the edge
@@ -24,42 +25,56 @@ pub const DEFAULT_SEEDS: usize = 8;
 /// Default success rate a level of a random dimension needs.
 pub const DEFAULT_SUCCESS_RATE: f64 = 0.875;
 
-/// `[margins]`.
-#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+/// `[margins]`: least robustness margins `run`/`check` search and gate (reported and
+/// baselined as `margin_<dimension>`), and how they are searched. A margin is a
+/// perturbation magnitude: the amount for latencies, lags and noise, the distance
+/// from 1 for factors.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MarginsConfig {
-    /// Least command-latency margin, s.
+    /// Least command-latency margin, s: `check` fails below it.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(min = 0))]
     pub command_latency: Option<f64>,
     /// Least actuator-lag margin, s.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(min = 0))]
     pub actuator_tau: Option<f64>,
     /// Least torque-loss margin (fraction of the torque limit).
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(min = 0), extend("exclusiveMaximum" = 1))]
     pub torque_scale: Option<f64>,
     /// Least state-noise margin (σ, m or rad).
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(min = 0))]
     pub state_noise: Option<f64>,
     /// Least state-latency margin, s.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(min = 0))]
     pub state_latency: Option<f64>,
     /// Least wheel-wear margin (fraction of the radius).
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(min = 0), extend("exclusiveMaximum" = 1))]
     pub wheel_radius_scale: Option<f64>,
     /// Least friction-loss margin (fraction of the coefficient).
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(min = 0), extend("exclusiveMaximum" = 1))]
     pub friction_scale: Option<f64>,
     /// Least added-mass margin (fraction of the masses).
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(min = 0))]
     pub mass_scale: Option<f64>,
-    /// Relative resolution of the search ([`DEFAULT_RESOLUTION`]).
+    /// Relative resolution of the search: bisect until the edge lies within margin·(1 + resolution); default 0.05.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(max = 1), extend("exclusiveMinimum" = 0))]
     pub resolution: Option<f64>,
-    /// Seeds per level of a random dimension ([`DEFAULT_SEEDS`]).
+    /// Seeds per level of a random dimension (`state_noise`); default 8.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(min = 1, max = 1000))]
     pub seeds: Option<usize>,
-    /// Success rate a random level needs ([`DEFAULT_SUCCESS_RATE`]).
+    /// Fraction of a random level's seeds that must pass; default 0.875.
     #[serde(skip_serializing_if = "Option::is_none")]
+    #[schemars(range(max = 1), extend("exclusiveMinimum" = 0))]
     pub success_rate: Option<f64>,
 }
 
