@@ -436,10 +436,18 @@ fn early_stop_families_hold_on_prefixes_of_real_runs() {
         };
         let mut sys = prep.physics().unwrap();
         let nominal = Perturbation::default();
-        let sim = replay_perturbed(sys.as_mut(), &prep.planned, &opts, &nominal, &mut |_| false, &mut |_| {})
-            .unwrap();
+        let sim = replay_perturbed(
+            sys.as_mut(),
+            &prep.planned,
+            &opts,
+            &nominal,
+            &mut |_| false,
+            &mut |_| {},
+        )
+        .unwrap();
         let full = ctx.metrics(&ctx.ideal, &sim);
-        let value = |m: &[(String, f64)], k: &str| m.iter().find(|(n, _)| n == k).map(|(_, v)| *v).unwrap();
+        let value =
+            |m: &[(String, f64)], k: &str| m.iter().find(|(n, _)| n == k).map(|(_, v)| *v).unwrap();
         let n = sim.traj.t.len();
         for cut in [n / 7, n / 3, 2 * n / 3, n - 2] {
             let part = SimTrajectory {
@@ -470,18 +478,25 @@ fn early_stop_families_hold_on_prefixes_of_real_runs() {
                     Family::FirstPassage => (p.is_nan() && (f.is_nan() || f >= t)) || p == f,
                     Family::EndOnly => continue,
                 };
-                assert!(ok, "{file}: {k} ({fam:?}) is {p} over [0, {t}] s but {f} at the end");
-                *checked.entry(match fam {
-                    Family::RunningMax => "max",
-                    Family::RunningMin => "min",
-                    _ => "first",
-                })
-                .or_default() += 1;
+                assert!(
+                    ok,
+                    "{file}: {k} ({fam:?}) is {p} over [0, {t}] s but {f} at the end"
+                );
+                *checked
+                    .entry(match fam {
+                        Family::RunningMax => "max",
+                        Family::RunningMin => "min",
+                        _ => "first",
+                    })
+                    .or_default() += 1;
             }
         }
     }
     // Every family was exercised.
-    assert!(checked.len() == 3 && checked.values().all(|&c| c >= 4), "{checked:?}");
+    assert!(
+        checked.len() == 3 && checked.values().all(|&c| c >= 4),
+        "{checked:?}"
+    );
 }
 
 /// A level stopped early breaks the same gate as the whole run would: the
@@ -502,13 +517,22 @@ fn a_run_stopped_early_breaks_what_the_whole_run_breaks() {
     let t = early.stopped_at_s.expect("stopped early");
     assert!(!early.passed && t < prep.planned.duration * 0.6, "{t}");
     let full = run_file(
-        &write(dir.path(), "w.toml", &with_perturb(&text, "torque_scale = 0.1\n")),
+        &write(
+            dir.path(),
+            "w.toml",
+            &with_perturb(&text, "torque_scale = 0.1\n"),
+        ),
         None,
     );
     assert!(!full.passed);
     for b in &early.broken {
         let v = full.metric(&b.metric).unwrap();
-        assert!(v > b.bound && v >= b.value, "{}: {v} at the end, {} early", b.metric, b.value);
+        assert!(
+            v > b.bound && v >= b.value,
+            "{}: {v} at the end, {} early",
+            b.metric,
+            b.value
+        );
     }
     assert!(full.steps > early.steps);
 }
