@@ -265,6 +265,7 @@ pub fn margin_cmd(a: &MarginArgs) -> Result<u8, Vec<Error>> {
         log_root,
         progress: false,
         pose_rate: DEFAULT_POSE_RATE,
+        keep: crate::log::Keep::default(),
     };
     // Scenarios in parallel (each with its dimensions and levels in
     // parallel): results in input order, whatever the thread count.
@@ -302,10 +303,14 @@ pub fn margin_cmd(a: &MarginArgs) -> Result<u8, Vec<Error>> {
         crate::emit(&output::text(&rows));
     }
     if a.report && !names.is_empty() {
-        let n = crate::report::write_report(&a.logs, Some(&names)).map_err(|e| vec![e])?;
+        let w = crate::report::write_report(&a.logs, Some(&names)).map_err(|e| vec![e])?;
+        for e in &w.skipped {
+            eprintln!("warning: left out of the report: {e}");
+        }
         crate::say!(
-            "report: {} ({n} scenarios)",
-            a.logs.join("index.html").display()
+            "report: {} ({} scenarios)",
+            a.logs.join("index.html").display(),
+            w.scenarios
         );
     }
     Ok(0)

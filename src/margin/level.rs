@@ -77,7 +77,7 @@ impl<'a> Ctx<'a> {
         let (_, goal) = prep.start_goal();
         let spec = metric_spec(model);
         let dt = prep.scenario.sim.dt;
-        let cmp = compare(ideal, &sim.traj, dt, spec.angular, spec.position);
+        let cmp = compare(ideal, &sim.traj, dt, spec.angular, &spec.positions);
         let mut metrics = spec.compute(&goal, ideal.last(), sim.traj.last(), &cmp);
         metrics.extend(prep.system.analysis(&goal, ideal, sim, &cmp).0);
         metrics
