@@ -12,10 +12,12 @@
 pub mod baseline;
 pub mod compare;
 pub mod error;
+pub mod gate;
 pub mod input;
 pub mod integrate;
 pub mod junit;
 pub mod log;
+pub mod margin;
 pub mod metric;
 pub mod model;
 pub mod numfmt;

@@ -106,6 +106,21 @@ enum Cmd {
         #[arg(long, value_name = "N", default_value_t = anholonomy::validate::DEFAULT_MAX_STEPS)]
         max_steps: u64,
     },
+    /// Robustness margins: for each perturbation dimension (the others
+    /// nominal), the largest perturbation at which every gate of the
+    /// scenario still holds.
+    ///
+    /// Dimensions are the keys of [sim.perturb]: command_latency,
+    /// actuator_tau, torque_scale, state_noise, state_latency,
+    /// wheel_radius_scale, friction_scale, mass_scale (only those that apply
+    /// to the scenario's system and plan). Each search brackets the edge on a
+    /// doubling ladder and bisects it to the resolution, checking on the way
+    /// that pass/fail is monotone (a non-monotone pattern is reported);
+    /// levels of a round run in parallel. Prints a table (dimension, margin,
+    /// the gate that broke first beyond it, runs used) and writes the nominal
+    /// run's logs plus LOGS/<scenario>/margins.json (every level, plotted
+    /// by `report`). Exit 0, 2 bad input (nothing run), 3 runtime failure.
+    Margin(anholonomy::margin::cli::MarginArgs),
     /// Print every key of a model's or planner's table, or of the scenario file's own
     /// tables, with its default, type and range, and description.
     ///
@@ -849,6 +864,7 @@ fn main() -> ExitCode {
             out,
         } => keys_cmd(name.as_deref(), *markdown, out.as_deref()),
         Cmd::Merge { paths, out } => merge_cmd(paths, out.as_deref()),
+        Cmd::Margin(a) => anholonomy::margin::cli::margin_cmd(a),
     };
     match res {
         Ok(code) => ExitCode::from(code),

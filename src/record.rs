@@ -72,6 +72,10 @@ pub struct SimTrajectory {
     /// Steps with the plan in force (`traj.u[..plan_steps]`); the rest
     /// settle with zero input.
     pub plan_steps: usize,
+    /// What the drives received from `traj.t[k]` on, when a perturbation
+    /// delays or lags the commands (`traj.u` is what was issued); empty
+    /// otherwise.
+    pub received: Vec<crate::model::Input>,
 }
 
 impl SimTrajectory {

@@ -8,7 +8,7 @@ use crate::integrate::{simulate_checked, Trajectory};
 use crate::log::unit::LogUnit;
 use crate::log::Keep;
 use crate::model::{KinematicModel, State};
-use crate::physics::{replay_with, ReplayError, ReplayOptions};
+use crate::physics::{replay_perturbed, ReplayError, ReplayOptions};
 use crate::plan::{ControlLaw, Plan};
 use crate::record::{RunRecord, SimTrajectory};
 use crate::verdict::Verdict;
@@ -232,15 +232,24 @@ fn run_plan(
         link_pose_every: (opts.log_root.is_some() && opts.keep == Keep::All)
             .then(|| pose_stride(opts.pose_rate, sc.sim.dt)),
     };
-    let sim = replay_with(sys.as_mut(), plan, &replay_opts, &mut |f| bar.set(f));
+    let perturb = &sc.sim.perturb;
+    let sim = replay_perturbed(
+        sys.as_mut(),
+        plan,
+        &replay_opts,
+        perturb,
+        &mut |_| false,
+        &mut |f| bar.set(f),
+    );
     bar.finish();
-    let sim = sim.map_err(|e| match e {
+    let mut sim = sim.map_err(|e| match e {
         ReplayError::Law(m) => law_error("physics", m),
         ReplayError::Diverged(message) => Error::Physics {
             path: sc.path.clone(),
             message,
         },
     })?;
+    crate::physics::perturb::add_drive_channels(&mut sim, model.input_names());
     // Labels an external law named while running, for the logs.
     let plan = &*plan.with_run_labels();
     timings.physics = t0.elapsed().as_secs_f64();
@@ -251,28 +260,10 @@ fn run_plan(
     let mut metrics = spec.compute(&goal, ideal.last(), sim.traj.last(), &cmp);
     let (extra, series) = prep.system.analysis(&goal, &ideal, &sim, &cmp);
     metrics.extend(extra);
-    let value = |k: &str| {
-        metrics
-            .iter()
-            .find(|(n, _)| n == k)
-            .map(|(_, v)| *v)
-            .unwrap_or(f64::NAN)
-    };
-    let mut failures = Vec::new();
-    for (k, limit) in &sc.thresholds {
-        let v = value(k);
-        if v.is_nan() || v > *limit {
-            let (v, limit) = crate::numfmt::breach(v, *limit);
-            failures.push(format!("{k} = {v} > {limit}"));
-        }
-    }
-    for (k, floor) in &sc.minimums {
-        let v = value(k);
-        if v.is_nan() || v < *floor {
-            let (v, floor) = crate::numfmt::breach(v, *floor);
-            failures.push(format!("{k} = {v} < {floor}"));
-        }
-    }
+    let failures = crate::gate::breaches(&sc.thresholds, &sc.minimums, &metrics)
+        .iter()
+        .map(ToString::to_string)
+        .collect::<Vec<_>>();
     timings.analysis = t0.elapsed().as_secs_f64();
     let t0 = Instant::now();
     let mut outcome = RunOutcome {
@@ -431,6 +422,8 @@ fn summary_json(
         },
         "paper": prep.system.paper(&start, &goal, plan),
         "sim_settings": sc.sim,
+        // What reality added to the physics replay (empty: nothing).
+        "perturbation": sc.sim.perturb.active_json(),
         "goal": display_state(model, &State::from_vec(sc.goal.clone())),
         "ideal": {
             "final_state": display_state(model, ideal.last()),

@@ -75,7 +75,12 @@ fn run_one_report(
             Err(e) => (Err(e), String::new()),
         }
     } else {
-        (run(prep, opts), String::new())
+        // `[margins]`: the gated margins are searched after the nominal run.
+        let res = run(prep, opts).and_then(|mut o| {
+            crate::margin::gate(prep, &mut o)?;
+            Ok(o)
+        });
+        (res, String::new())
     };
     (res, table, t0.elapsed().as_secs_f64())
 }

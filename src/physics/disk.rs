@@ -67,6 +67,12 @@ impl DiskPhysics {
         sim: &PhysicsSettings,
     ) -> Result<Self, String> {
         super::urdf::require_radius(robot, WHEEL, "the wheel", radius)?;
+        // A worn wheel (`wheel_radius_scale`): the model keeps `radius`.
+        let s = sim.wheel_radius_scale;
+        let worn =
+            (s != 1.0).then(|| super::perturb::shrink_round_collisions(robot, &[WHEEL], s, None));
+        let robot = worn.as_ref().unwrap_or(robot);
+        let radius = radius * s;
         let yaw0 = FRAC_PI_2 - start[3];
         let root = super::rapier::math::Pose::from_parts(
             vector(start[0], start[1], radius),

@@ -13,6 +13,7 @@ pub mod car;
 pub mod diff_drive;
 pub mod disk;
 pub mod mobile_manipulator;
+pub mod perturb;
 pub mod real;
 pub mod required;
 pub mod rover;
@@ -110,10 +111,27 @@ pub fn replay_with(
     opts: &ReplayOptions,
     progress: &mut dyn FnMut(f64),
 ) -> Result<SimTrajectory, ReplayError> {
+    let nominal = perturb::Perturbation::default();
+    replay_perturbed(sys, plan, opts, &nominal, &mut |_| false, progress)
+}
+
+/// [`replay_with`] under the command and observation perturbations of `p`
+/// ([`perturb::Reality`]; the world ones are in the system already), calling
+/// `stop` after every step with what was recorded so far: the run ends
+/// there when it returns true (a margin search's early stop).
+pub fn replay_perturbed(
+    sys: &mut dyn PhysicsSystem,
+    plan: &Plan,
+    opts: &ReplayOptions,
+    p: &perturb::Perturbation,
+    stop: &mut dyn FnMut(&SimTrajectory) -> bool,
+    progress: &mut dyn FnMut(f64),
+) -> Result<SimTrajectory, ReplayError> {
     let dt = opts.dt;
     let mut ctl = plan.controller();
     let n_plan = step_count(plan.duration, dt);
-    let n_settle = step_count(opts.settle, dt);
+    // Delayed commands keep arriving after the last one is sent.
+    let n_settle = step_count(opts.settle, dt) + perturb::extra_steps(p, dt);
     let n = n_plan + n_settle;
     // A feedback policy that reports `done` ends the run `settle` seconds later.
     let mut stop_at = n;
@@ -142,6 +160,7 @@ pub fn replay_with(
         return Err(ReplayError::Law(fault));
     }
     let zero = Input::zeros(held.u.len());
+    let mut reality = perturb::Reality::new(p, dt, held.u.len());
     let mut finished = false;
     // Time, state and channels of one sample (the state is the last one read back).
     let record = |out: &mut SimTrajectory, sys: &dyn PhysicsSystem, t: f64, q: State| {
@@ -165,7 +184,11 @@ pub fn replay_with(
             match &mut clock {
                 Some(clock) => {
                     if clock.due(t) {
-                        held = ctl.command(t, q);
+                        held = if reality.observes() {
+                            ctl.command(t, &reality.observe(&out.traj.q, k))
+                        } else {
+                            ctl.command(t, q)
+                        };
                         if let Some(fault) = ctl.fault() {
                             return Err(ReplayError::Law(fault));
                         }
@@ -192,7 +215,13 @@ pub fn replay_with(
         let u = if idle { &zero } else { &held.u };
         out.traj.u.push(u.clone());
         out.traj.label.push(held.label);
-        sys.apply(u);
+        if reality.acts() {
+            let received = reality.actuate(u);
+            sys.apply(&received);
+            out.received.push(received);
+        } else {
+            sys.apply(u);
+        }
         sys.step();
         out.steps += 1;
         let q = sys.state();
@@ -206,6 +235,9 @@ pub fn replay_with(
         if k % 256 == 0 {
             progress(k as f64 / n as f64);
         }
+        if stop(&out) {
+            break;
+        }
     }
     // The final pose too, so the 3D logs end where the run ends.
     let last_k = out.traj.t.len() - 1;
@@ -215,6 +247,9 @@ pub fn replay_with(
     }
     let last = out.traj.u.last().cloned().unwrap_or_else(|| held.u.clone());
     out.traj.u.push(last);
+    if let Some(r) = out.received.last().cloned() {
+        out.received.push(r);
+    }
     out.traj.label.push(held.label);
     progress(1.0);
     Ok(out)

@@ -90,6 +90,8 @@ pub struct RoverPhysics {
     /// Drives of the steering joint (u2) and the front wheel (u1 / ρ).
     steer: Drive,
     front: Drive,
+    /// Radius of the simulated wheels (the model's unless worn), m.
+    rim: f64,
     /// Unwrapped heading.
     theta: f64,
     /// Last applied input (the envelope check compares against it).
@@ -125,8 +127,15 @@ impl RoverPhysics {
                 -r, geom.l, geom.r
             ));
         }
+        // Worn wheels (`wheel_radius_scale`): all five, the chassis lower by
+        // as much; the drive still converts u1 with the model's radius.
+        let s = sim.wheel_radius_scale;
+        let worn =
+            (s != 1.0).then(|| super::perturb::shrink_round_collisions(robot, &WHEELS, s, None));
+        let robot = worn.as_ref().unwrap_or(robot);
+        let rim = rho * s;
         let root = super::rapier::math::Pose::from_parts(
-            vector(start[0], start[1], rho),
+            vector(start[0], start[1], rim),
             Rotation::from_rotation_z(real(start[2])),
         );
         let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root);
@@ -170,6 +179,7 @@ impl RoverPhysics {
             wheels,
             steer,
             front,
+            rim,
             theta: start[2],
             last_u: Input::zeros(2),
             q: State::zeros(4),
@@ -195,7 +205,7 @@ impl RoverPhysics {
     /// Contact-point velocity of wheel `i` along and across its rolling direction, m/s.
     pub fn wheel_slip(&self, i: usize) -> (f64, f64) {
         let b = &self.sim.world.bodies[self.wheels[i]];
-        let contact = b.translation() - vector(0.0, 0.0, self.geom.wheel_radius);
+        let contact = b.translation() - vector(0.0, 0.0, self.rim);
         let v = b.velocity_at_point(contact);
         // The wheel's axle is its local y axis; rolling direction = axle × z.
         let axle = *b.rotation() * Vector::Y;

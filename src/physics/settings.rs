@@ -27,6 +27,12 @@ pub struct PhysicsSettings {
     /// angle and the commanded angle ∫u dt (the integral action of a velocity
     /// servo); 0 gives a pure velocity motor.
     pub motor_angle_gain: f64,
+    /// Factor on every URDF link's mass and inertia (`[sim.perturb] mass_scale`;
+    /// the model keeps the nominal ones).
+    pub mass_scale: f64,
+    /// Factor on the simulated wheels' radius (`[sim.perturb] wheel_radius_scale`;
+    /// the model and the controller keep the nominal one). Wheeled systems only.
+    pub wheel_radius_scale: f64,
 }
 
 impl Default for PhysicsSettings {
@@ -41,6 +47,8 @@ impl Default for PhysicsSettings {
             motor_max_torque: 50.0,
             motor_gain: 1.0e6,
             motor_angle_gain: 1000.0,
+            mass_scale: 1.0,
+            wheel_radius_scale: 1.0,
         }
     }
 }

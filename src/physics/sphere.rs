@@ -60,6 +60,12 @@ impl SpherePhysics {
         sim: &PhysicsSettings,
     ) -> Result<Self, String> {
         super::urdf::require_radius(robot, BALL, "the ball", radius)?;
+        // A ball of another radius than the model's (`wheel_radius_scale`).
+        let s = sim.wheel_radius_scale;
+        let worn =
+            (s != 1.0).then(|| super::perturb::shrink_round_collisions(robot, &[BALL], s, None));
+        let robot = worn.as_ref().unwrap_or(robot);
+        let radius = radius * s;
         if start.len() != 6 {
             return Err(format!(
                 "sphere physics needs a 6-value state, got {}",

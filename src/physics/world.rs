@@ -280,7 +280,15 @@ impl SimWorld {
                 .colliders
                 .insert_with_parent(plane, ground, &mut world.bodies)
         });
-        let robot = insert_robot(&mut world, robot, opts.root_pose, s.friction);
+        // Heavier links than the model believes (`mass_scale`): the URDF's own
+        // numbers scaled, so a sweep variant and a margin level agree exactly.
+        let scaled = super::perturb::scaled_masses(robot, s.mass_scale);
+        let robot = insert_robot(
+            &mut world,
+            scaled.as_ref().unwrap_or(robot),
+            opts.root_pose,
+            s.friction,
+        );
         SimWorld {
             world,
             robot,
@@ -311,6 +319,8 @@ impl SimWorld {
     /// Insert another robot (another URDF, or a second copy of the same one)
     /// with its root link at `root_pose`; its handles are its own.
     pub fn add_robot(&mut self, robot: &Robot, _urdf_dir: &Path, root_pose: RPose) -> RobotHandles {
+        let scaled = super::perturb::scaled_masses(robot, self.settings.mass_scale);
+        let robot = scaled.as_ref().unwrap_or(robot);
         insert_robot(&mut self.world, robot, root_pose, self.settings.friction)
     }
 

@@ -13,6 +13,7 @@
 
 pub mod data;
 mod html;
+mod margins;
 mod plots;
 
 use crate::error::Error;
@@ -59,6 +60,8 @@ pub struct Loaded {
     pub data: RunData,
     /// Baseline comparison, when `check --baseline` made one.
     pub regression: Option<Vec<StoredDelta>>,
+    /// `margins.json`, when `margin` or a `[margins]` gate searched margins.
+    pub margins: Option<Value>,
 }
 
 fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, Error> {
@@ -144,11 +147,16 @@ pub fn load_dir(dir: &Path) -> Result<Loaded, Error> {
             "missing: not a finished run (interrupted, or not a log directory)",
         ));
     };
+    let margins = {
+        let p = dir.join("margins.json");
+        p.is_file().then(|| read_json::<Value>(&p)).transpose()?
+    };
     Ok(Loaded {
         name,
         dir: dir.to_path_buf(),
         data,
         regression,
+        margins,
     })
 }
 

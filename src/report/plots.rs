@@ -466,6 +466,78 @@ pub fn scatter(
     })
 }
 
+/// [`scatter`] on a logarithmic x axis (x > 0 only: a margin search's
+/// levels span decades, the edge is where they crowd).
+pub fn scatter_log_x(
+    title: &str,
+    x_desc: &str,
+    y_desc: &str,
+    pts: &[(f64, f64, bool)],
+    hline: Option<(f64, &str)>,
+) -> Res<String> {
+    let xs = pts
+        .iter()
+        .map(|p| p.0)
+        .filter(|x| *x > 0.0 && x.is_finite());
+    let (lo, hi) = xs.fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)));
+    let (x0, x1) = if lo.is_finite() && hi > 0.0 {
+        (lo / 1.5, hi * 1.5)
+    } else {
+        (1e-3, 1.0)
+    };
+    let (y0, y1) = range(pts.iter().map(|p| p.1).chain(hline.map(|h| h.0)));
+    let y1 = y1 + 0.3 * (y1 - y0);
+    svg(560, 260, |root| {
+        let mut chart = ChartBuilder::on(&root)
+            .caption(title, ("sans-serif", 15))
+            .margin(6)
+            .x_label_area_size(30)
+            .y_label_area_size(56)
+            .build_cartesian_2d((x0..x1).log_scale(), y0..y1)
+            .map_err(err)?;
+        chart
+            .configure_mesh()
+            .x_desc(x_desc)
+            .y_desc(y_desc)
+            .label_style(("sans-serif", 11))
+            .axis_desc_style(("sans-serif", 12))
+            .light_line_style(RGBColor(238, 238, 238))
+            .x_label_formatter(&|v| tick(*v))
+            .y_label_formatter(&|v| tick(*v))
+            .draw()
+            .map_err(err)?;
+        for (ok, color, name) in [(true, IDEAL, "pass"), (false, RED, "fail")] {
+            let sel: Vec<(f64, f64)> = pts
+                .iter()
+                .filter(|p| p.2 == ok && p.0 > 0.0 && p.0.is_finite() && p.1.is_finite())
+                .map(|p| (p.0, p.1))
+                .collect();
+            if sel.is_empty() {
+                continue;
+            }
+            chart
+                .draw_series(sel.into_iter().map(|p| Circle::new(p, 3, color.filled())))
+                .map_err(err)?
+                .label(name)
+                .legend(move |(x, y)| Circle::new((x + 7, y), 3, color.filled()));
+        }
+        if let Some((y, name)) = hline {
+            chart
+                .draw_series(DashedLineSeries::new(
+                    [(x0, y), (x1, y)],
+                    6,
+                    4,
+                    RED.stroke_width(1),
+                ))
+                .map_err(err)?
+                .label(name)
+                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], RED));
+        }
+        legend(&mut chart)?;
+        Ok(())
+    })
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -508,5 +580,14 @@ mod tests {
             .unwrap()
             .starts_with("<svg"));
         assert!(scatter("s", "a", "b", &[(1.0, 1.0, true)], Some((0.5, "max"))).is_ok());
+        let s = scatter_log_x(
+            "s",
+            "a",
+            "b",
+            &[(1e-6, 1.0, true), (0.1, 2.0, false), (0.0, 0.0, true)],
+            None,
+        )
+        .unwrap();
+        assert!(s.starts_with("<svg") && s.contains("fail"));
     }
 }

@@ -14,18 +14,21 @@
 mod config;
 pub mod doc;
 pub mod keypath;
+pub mod margins_config;
 pub mod schema;
 mod sweep_config;
 
 pub(crate) use config::model_system;
 pub use config::{build_system, planners_for, ModelConfig, PlannerConfig, OUTSIDE, PAIRS};
 pub use keypath::KeyPath;
+pub use margins_config::MarginsConfig;
 pub use sweep_config::{
     sweep_metric_names, variant_seed, vary_key, Dist, SweepConfig, Variant, DEFAULT_TIME_METRIC,
 };
 
 use crate::error::Error;
 use crate::input::{read_text, SCENARIO_MAX_BYTES};
+pub use crate::physics::perturb::Perturbation;
 use doc::KeyIndex;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -89,21 +92,28 @@ pub struct SimConfig {
     /// Extra simulated time after the plan ends, s (lets the body come to rest).
     #[schemars(range(min = 0))]
     pub settle: f64,
+    /// `[sim.perturb]`: what reality adds to the physics replay (all off by default).
+    pub perturb: Perturbation,
 }
 
 impl SimConfig {
-    /// The physics layer's settings (everything but `settle`, which the replay takes).
+    /// The physics layer's settings (everything but `settle` and the
+    /// command and observation perturbations, which the replay takes), with
+    /// the world perturbations of `[sim.perturb]` applied.
     pub fn physics(&self) -> crate::physics::PhysicsSettings {
+        let p = &self.perturb;
         crate::physics::PhysicsSettings {
             dt: self.dt,
             solver_iterations: self.solver_iterations,
             pgs_iterations: self.solver_pgs_iterations,
             relax_pass: self.solver_relax_pass,
-            friction: self.friction,
+            friction: self.friction * p.friction_scale,
             gravity: self.gravity,
-            motor_max_torque: self.motor_max_torque,
+            motor_max_torque: self.motor_max_torque * p.torque_scale,
             motor_gain: self.motor_gain,
             motor_angle_gain: self.motor_angle_gain,
+            mass_scale: p.mass_scale,
+            wheel_radius_scale: p.wheel_radius_scale,
         }
     }
 }
@@ -121,6 +131,7 @@ impl Default for SimConfig {
             motor_gain: 1.0e6,
             motor_angle_gain: 1000.0,
             settle: 0.0,
+            perturb: Perturbation::default(),
         }
     }
 }
@@ -164,6 +175,9 @@ struct ScenarioFile {
     /// Tolerances of the baseline comparison (`check --baseline`).
     #[serde(default)]
     regression: crate::baseline::RegressionConfig,
+    /// Least robustness margins `check` gates (searched after the nominal run).
+    #[serde(default)]
+    margins: MarginsConfig,
 }
 
 /// The verdict a scenario expects (`expect = "fails"`).
@@ -217,6 +231,8 @@ pub struct Scenario {
     pub sweep: Option<SweepConfig>,
     /// Baseline tolerance overrides (`[regression]`).
     pub regression: crate::baseline::RegressionConfig,
+    /// Margins `check` gates (`[margins]`) and how they are searched.
+    pub margins: MarginsConfig,
     /// Where each key is written, for errors found after parsing.
     #[serde(skip)]
     keys: Arc<KeyIndex>,
@@ -345,8 +361,8 @@ impl Scenario {
     }
 
     /// A sweep variant: the file with the variant's numbers written in (and
-    /// no `[sweep]`), parsed and checked like the file; the rover's σ and the
-    /// masses are the caller's ([`Variant::scale_masses`]).
+    /// no `[sweep]`), parsed and checked like the file, with the rover's σ
+    /// and the mass scale (`sim.perturb.mass_scale`) of the variant.
     pub fn variant(&self, v: &Variant) -> Result<Scenario, Error> {
         let overrides: Vec<(KeyPath, f64)> = v
             .params
@@ -361,6 +377,8 @@ impl Scenario {
         } else {
             Self::parse_with(&self.path, &self.text, &overrides)?
         };
+        // `sweep.mass_scale` is shorthand for `sim.perturb.mass_scale`.
+        sc.sim.perturb.mass_scale *= v.mass_scale;
         if let (Some(rate), ModelConfig::Rover(m)) = (v.sigma_rate, &mut sc.model) {
             m.switching = crate::systems::rover::SwitchingConfig::Telegraph { seed: v.seed, rate };
         }
@@ -561,8 +579,15 @@ impl Scenario {
                 "key `limits.max_rate[{i}]`: rates must be > 0"
             )));
         }
+        file.sim.perturb.validate().map_err(&bad)?;
+        file.margins.validate().map_err(&bad)?;
         if let Some(sw) = &file.sweep {
             sw.validate().map_err(&bad)?;
+            if !file.margins.gates().is_empty() {
+                return Err(bad(
+                    "key `margins`: a sweep's verdict is its success rate over the variants; margins are searched and gated on single runs (drop [sweep] or [margins])".into(),
+                ));
+            }
             if sw.sigma_rate.is_some() && !matches!(model, ModelConfig::Rover(_)) {
                 return Err(bad(format!(
                     "key `sweep.sigma_rate`: model `{}` has no switching signal σ (rover only)",
@@ -571,6 +596,17 @@ impl Scenario {
             }
         }
         file.regression.validate().map_err(&bad)?;
+        // Margins are coarse (a search to a resolution): their own default tolerance.
+        let mut regression = file.regression;
+        for (d, _) in file.margins.gates() {
+            regression
+                .metrics
+                .entry(MarginsConfig::metric(d))
+                .or_insert(crate::baseline::Tolerance {
+                    rel: Some(file.margins.tolerance()),
+                    abs: None,
+                });
+        }
         Ok(Scenario {
             path: path.to_path_buf(),
             name,
@@ -587,7 +623,8 @@ impl Scenario {
             thresholds: file.thresholds,
             minimums: file.minimums,
             sweep: file.sweep,
-            regression: file.regression,
+            regression,
+            margins: file.margins,
             keys: Arc::new(keys),
             text: text.into(),
         })

@@ -5,10 +5,11 @@
 //! `"planner.k1"`, `"start[2]"`) with a distribution, and the variant is
 //! parsed and range-checked like the file itself ([`super::Scenario::variant`]).
 //! `friction`, `mass_scale` and `sigma_rate` are the older shorthands:
-//! `friction = [lo, hi]` is `"sim.friction" = { uniform = [lo, hi] }` (drawn
-//! from the same stream as before, so old sweeps keep their variants),
-//! `mass_scale` scales the URDF's masses and inertias, `sigma_rate` gives the
-//! rover's ideal run a telegraph σ seeded per variant.
+//! `friction = [lo, hi]` is `"sim.friction" = { uniform = [lo, hi] }` and
+//! `mass_scale = [lo, hi]` is `"sim.perturb.mass_scale" = { uniform = [lo,
+//! hi] }` (both drawn from the same stream as before, so old sweeps keep
+//! their variants), `sigma_rate` gives the rover's ideal run a telegraph σ
+//! seeded per variant.
 
 use super::keypath::KeyPath;
 use rand::{Rng, SeedableRng};
@@ -30,7 +31,7 @@ pub struct SweepConfig {
     /// Shorthand for `"sim.friction" = { uniform = [lo, hi] }`.
     #[schemars(extend("minimum" = 0))]
     pub friction: Option<[f64; 2]>,
-    /// Range [lo, hi] of a factor applied to every link's mass and inertia (uniform).
+    /// Shorthand for `"sim.perturb.mass_scale" = { uniform = [lo, hi] }`.
     #[schemars(extend("minimum" = 0.001))]
     pub mass_scale: Option<[f64; 2]>,
     /// Rover only: the ideal run uses a telegraph σ with this rate (1/s) and the variant's seed.
@@ -166,6 +167,11 @@ impl SweepConfig {
                     "key `{key}`: `sweep.friction` already sweeps sim.friction (keep one)"
                 ));
             }
+            if kp.to_string() == "sim.perturb.mass_scale" && self.mass_scale.is_some() {
+                return Err(format!(
+                    "key `{key}`: `sweep.mass_scale` already sweeps sim.perturb.mass_scale (keep one)"
+                ));
+            }
             if kp.root() == "sweep" {
                 return Err(format!("key `{key}`: a sweep cannot vary its own table"));
             }
@@ -221,14 +227,7 @@ fn key_rng(seed: u64, path: &str) -> ChaCha8Rng {
     rng
 }
 
-/// A standard normal deviate (Box–Muller, one of the pair). Not `rand_distr`: it turns on
-/// num-traits' `libm` feature, which rebuilds nalgebra, Rapier and the Rerun SDK.
-fn standard_normal(r: &mut ChaCha8Rng) -> f64 {
-    // u1 in (0, 1], so the logarithm is finite.
-    let u1 = 1.0 - r.random::<f64>();
-    let u2 = r.random::<f64>();
-    (-2.0 * u1.ln()).sqrt() * (std::f64::consts::TAU * u2).cos()
-}
+use crate::physics::perturb::standard_normal;
 
 /// The randomised parameters of one variant.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
@@ -237,7 +236,8 @@ pub struct Variant {
     pub index: usize,
     /// Its seed.
     pub seed: u64,
-    /// Mass and inertia factor.
+    /// Mass and inertia factor (`sweep.mass_scale`, applied as
+    /// `sim.perturb.mass_scale`; 1 without the shorthand).
     pub mass_scale: f64,
     /// Telegraph rate of the ideal run's σ, when swept.
     pub sigma_rate: Option<f64>,
@@ -283,21 +283,6 @@ impl SweepConfig {
             mass_scale,
             sigma_rate: self.sigma_rate,
             params,
-        }
-    }
-}
-
-impl Variant {
-    /// Scale every link's mass and inertia by `mass_scale`.
-    pub fn scale_masses(&self, robot: &mut urdf_rs::Robot) {
-        for l in &mut robot.links {
-            l.inertial.mass.value *= self.mass_scale;
-            let i = &mut l.inertial.inertia;
-            for x in [
-                &mut i.ixx, &mut i.ixy, &mut i.ixz, &mut i.iyy, &mut i.iyz, &mut i.izz,
-            ] {
-                *x *= self.mass_scale;
-            }
         }
     }
 }

@@ -5,6 +5,7 @@ use crate::model::disk::RollingDisk;
 use crate::model::{KinematicModel, State};
 use crate::paper::{rows_from, same, PaperRow};
 use crate::physics::disk::DiskPhysics;
+use crate::physics::perturb::Dimension;
 use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
@@ -44,6 +45,12 @@ pub fn build(cfg: &DiskModelConfig, params: &StokesDiskParams) -> Result<Box<dyn
 }
 
 impl System for Disk {
+    /// The wheel rolls: its radius can wear (`wheel_radius_scale`).
+    fn perturbable(&self, plan: &Plan) -> Vec<Dimension> {
+        let mut d = Dimension::common(plan);
+        d.push(Dimension::WheelRadiusScale);
+        d
+    }
     fn model(&self) -> &dyn KinematicModel {
         &self.model
     }

@@ -49,6 +49,7 @@ use crate::integrate::Trajectory;
 use crate::metric::Direction;
 use crate::model::{KinematicModel, State};
 use crate::paper::PaperRow;
+use crate::physics::perturb::Dimension;
 use crate::physics::required::Named;
 use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
@@ -151,6 +152,14 @@ pub trait System: Send + Sync {
     /// higher-is-better, the rest lower-is-better) does not fit. Default: no declaration.
     fn metric_direction(&self, _name: &str) -> Option<Direction> {
         None
+    }
+    /// Which `[sim.perturb]` dimensions reach this system under `plan`: a
+    /// value set away from nominal for any other dimension is bad input, and
+    /// `anholonomy margin` searches these. Default: [`Dimension::common`]
+    /// (the command path, masses, friction and, for a feedback law, what it
+    /// sees); wheeled systems add [`Dimension::WheelRadiusScale`].
+    fn perturbable(&self, plan: &Plan) -> Vec<Dimension> {
+        Dimension::common(plan)
     }
     /// The paper's printed numbers next to the values `plan` computes, when the scenario
     /// poses the paper's worked example (see [`crate::paper`]). Default: none.

@@ -14,6 +14,7 @@ use crate::metric::Direction;
 use crate::model::rover::{RoverGeometry, SwitchingRover, SwitchingSignal};
 use crate::model::{Input, KinematicModel, State};
 use crate::paper::{rows_from, same, PaperRow};
+use crate::physics::perturb::Dimension;
 use crate::physics::rover::RoverPhysics;
 use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
@@ -155,6 +156,16 @@ pub fn time_to_goal(tr: &Trajectory, goal: &State, eps: f64) -> f64 {
 }
 
 impl System for Rover {
+    /// Wheeled; the open-loop replay reads no state (its plan is a held
+    /// sequence of recorded commands), so state noise and latency do not apply.
+    fn perturbable(&self, plan: &Plan) -> Vec<Dimension> {
+        let mut d = Dimension::common(plan);
+        if self.open_loop {
+            d.retain(|d| !d.observes());
+        }
+        d.push(Dimension::WheelRadiusScale);
+        d
+    }
     fn model(&self) -> &dyn KinematicModel {
         &self.model
     }

@@ -25,6 +25,7 @@ use crate::model::space_manipulator::SpaceManipulator;
 use crate::model::space_robot::{SpaceRobot, SpaceRobotModel};
 use crate::model::{KinematicModel, State};
 use crate::paper::{rows_from, same, PaperRow};
+use crate::physics::perturb::Dimension;
 use crate::physics::space_robot::SpaceRobotPhysics;
 use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
@@ -133,6 +134,12 @@ fn manipulator(r: &SpaceRobot) -> SpaceManipulator {
 }
 
 impl System for Space {
+    /// Free-floating: nothing touches anything, so friction does not apply.
+    fn perturbable(&self, plan: &Plan) -> Vec<Dimension> {
+        let mut d = Dimension::common(plan);
+        d.retain(|d| *d != Dimension::FrictionScale);
+        d
+    }
     fn model(&self) -> &dyn KinematicModel {
         &self.model
     }

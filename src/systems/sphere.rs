@@ -24,6 +24,7 @@ use crate::model::rolling_sphere::{
 };
 use crate::model::{KinematicModel, State};
 use crate::paper::{detail, rows_from, same, PaperRow};
+use crate::physics::perturb::Dimension;
 use crate::physics::sphere::SpherePhysics;
 use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
@@ -100,6 +101,12 @@ pub fn orientation_tracking(ideal: &Trajectory, sim: &Trajectory, grid: &[f64]) 
 }
 
 impl System for Sphere {
+    /// The ball is the wheel: its rolling radius can differ (`wheel_radius_scale`).
+    fn perturbable(&self, plan: &Plan) -> Vec<Dimension> {
+        let mut d = Dimension::common(plan);
+        d.push(Dimension::WheelRadiusScale);
+        d
+    }
     fn model(&self) -> &dyn KinematicModel {
         &self.quat
     }

@@ -121,6 +121,13 @@ impl Prepared {
             None => Vec::new(),
         };
         regressable.extend(sweep_metrics.iter().cloned());
+        let margin_metrics: Vec<String> = scenario
+            .margins
+            .gates()
+            .into_iter()
+            .map(|(d, _)| crate::scenario::MarginsConfig::metric(d))
+            .collect();
+        regressable.extend(margin_metrics);
         if let Some(k) = scenario.regression.unknown_metrics(&regressable).next() {
             return Err(scenario.error(format!(
                 "key `regression.metrics.{k}`: {}",
@@ -160,6 +167,7 @@ impl Prepared {
                 }
             }
         }
+        check_perturbable(&scenario, system.as_ref(), &planned)?;
         let prep = Prepared {
             scenario,
             system,
@@ -192,9 +200,7 @@ impl Prepared {
     /// A sweep variant of this scenario, validated and planned like the scenario.
     pub fn variant(&self, v: &Variant) -> Result<Prepared, Error> {
         let sc = self.scenario.variant(v)?;
-        let mut robot = self.robot.clone();
-        v.scale_masses(&mut robot);
-        Prepared::with_robot(sc, robot, self.max_steps)
+        Prepared::with_robot(sc, self.robot.clone(), self.max_steps)
     }
 
     /// The kinematic model.
@@ -225,6 +231,65 @@ impl Prepared {
     pub fn physics(&self) -> Result<Box<dyn PhysicsSystem>, Error> {
         build_physics(&self.scenario, self.system.as_ref(), &self.robot)
     }
+
+    /// The physics counterpart under other settings (a margin level's
+    /// perturbed world: [`crate::scenario::SimConfig::physics`]).
+    pub fn physics_with(
+        &self,
+        settings: &crate::physics::PhysicsSettings,
+    ) -> Result<Box<dyn PhysicsSystem>, Error> {
+        let sc = &self.scenario;
+        let dir = sc.urdf.parent().unwrap_or(Path::new("."));
+        self.system
+            .physics(&self.robot, dir, &sc.start, settings)
+            .map_err(|m| physics_error(sc, &m))
+    }
+}
+
+/// Every perturbation set in `[sim.perturb]` and every margin gated in
+/// `[margins]` must reach the system under its plan
+/// ([`System::perturbable`]).
+fn check_perturbable(sc: &Scenario, system: &dyn System, plan: &Plan) -> Result<(), Error> {
+    let applies = system.perturbable(plan);
+    let set = sc
+        .sim
+        .perturb
+        .active()
+        .into_iter()
+        .map(|d| ("sim.perturb", d));
+    let gated = sc.margins.gates().into_iter().map(|(d, _)| ("margins", d));
+    for (table, d) in set.chain(gated) {
+        if !applies.contains(&d) {
+            return Err(sc.error(format!(
+                "key `{table}.{d}`: {}",
+                not_applicable(d, sc, &applies)
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Why dimension `d` does not reach this scenario's system, and which do.
+pub fn not_applicable(
+    d: crate::physics::perturb::Dimension,
+    sc: &Scenario,
+    applies: &[crate::physics::perturb::Dimension],
+) -> String {
+    use crate::physics::perturb::Dimension as D;
+    let (model, planner) = (sc.model.kind(), sc.planner.kind());
+    let why = match d {
+        d if d.observes() => format!(
+            "it perturbs the state a feedback law sees, and the plan of `{planner}` here reads no state (open loop)"
+        ),
+        D::WheelRadiusScale => format!("model `{model}` has no wheels"),
+        D::FrictionScale => format!("nothing in the world of model `{model}` touches anything"),
+        _ => format!("model `{model}` does not take it"),
+    };
+    let names: Vec<&str> = applies.iter().map(|d| d.name()).collect();
+    format!(
+        "`{d}` does not apply: {why} (applies here: {})",
+        names.join(", ")
+    )
 }
 
 /// The step budget of one scenario: simulated time at `sim.dt` must not

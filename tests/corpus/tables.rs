@@ -438,6 +438,145 @@ pub fn cases(c: &mut Corpus) {
         );
     }
 
+    // [sim.perturb]: ranges, unknown keys, dimensions that do not apply.
+    let pert = |base: &str, body: &str| format!("{base}\n[sim.perturb]\n{body}\n");
+    for (what, line, key) in [
+        (
+            "latency negative",
+            "command_latency = -0.01",
+            "sim.perturb.command_latency",
+        ),
+        (
+            "tau negative",
+            "actuator_tau = -0.5",
+            "sim.perturb.actuator_tau",
+        ),
+        (
+            "state latency negative",
+            "state_latency = -1e-3",
+            "sim.perturb.state_latency",
+        ),
+        (
+            "noise negative",
+            "state_noise = -0.1",
+            "sim.perturb.state_noise",
+        ),
+        (
+            "torque scale zero",
+            "torque_scale = 0.0",
+            "sim.perturb.torque_scale",
+        ),
+        (
+            "mass scale negative",
+            "mass_scale = -2.0",
+            "sim.perturb.mass_scale",
+        ),
+        (
+            "friction scale zero",
+            "friction_scale = 0",
+            "sim.perturb.friction_scale",
+        ),
+        (
+            "wheel scale negative",
+            "wheel_radius_scale = -0.9",
+            "sim.perturb.wheel_radius_scale",
+        ),
+        (
+            "perturb unknown key",
+            "latency = 0.02",
+            "sim.perturb.latency",
+        ),
+        ("perturb seed float", "seed = 1.5", "sim.perturb.seed"),
+        (
+            "noise on an open-loop plan",
+            "state_noise = 0.01",
+            "sim.perturb.state_noise",
+        ),
+        (
+            "state latency on an open-loop plan",
+            "state_latency = 0.01",
+            "sim.perturb.state_latency",
+        ),
+    ] {
+        c.sc(
+            &format!("perturb {what}"),
+            pert(&d, line),
+            Some(line),
+            Some(key),
+        );
+    }
+    let ol = shipped("rover_open_loop.toml");
+    c.sc(
+        "perturb noise on the rover's open-loop replay",
+        pert(&ol, "state_noise = 0.01"),
+        Some("state_noise"),
+        Some("sim.perturb.state_noise"),
+    );
+    let space = shipped("space_robot_paper.toml");
+    for (what, line, key) in [
+        (
+            "wheel wear on the space robot",
+            "wheel_radius_scale = 0.9",
+            "sim.perturb.wheel_radius_scale",
+        ),
+        (
+            "friction on the space robot",
+            "friction_scale = 0.5",
+            "sim.perturb.friction_scale",
+        ),
+    ] {
+        c.sc(
+            &format!("perturb {what}"),
+            pert(&space, line),
+            Some(line),
+            Some(key),
+        );
+    }
+
+    // [margins]: gates on dimensions that exist and apply, search settings.
+    let mar = |base: &str, body: &str| format!("{base}\n[margins]\n{body}\n");
+    for (what, line, key) in [
+        ("unknown dimension", "latency = 0.02", "margins.latency"),
+        (
+            "negative margin",
+            "command_latency = -0.02",
+            "margins.command_latency",
+        ),
+        (
+            "factor margin of 1",
+            "friction_scale = 1.0",
+            "margins.friction_scale",
+        ),
+        ("resolution zero", "resolution = 0.0", "margins.resolution"),
+        ("seeds zero", "seeds = 0", "margins.seeds"),
+        (
+            "success rate above 1",
+            "success_rate = 1.5",
+            "margins.success_rate",
+        ),
+        (
+            "noise on an open-loop plan",
+            "state_noise = 0.01",
+            "margins.state_noise",
+        ),
+    ] {
+        c.sc(
+            &format!("margins {what}"),
+            mar(&d, line),
+            Some(line),
+            Some(key),
+        );
+    }
+    c.sc(
+        "margins on a sweep",
+        mar(
+            &shipped("rover_sweep.toml").replace("count = 100", "count = 4"),
+            "command_latency = 0.01",
+        ),
+        Some("[margins]"),
+        Some("margins"),
+    );
+
     // [thresholds].
     let thr = |body: &str| format!("{d}\n[thresholds]\n{body}\n");
     c.sc(
@@ -645,8 +784,8 @@ pub fn cases(c: &mut Corpus) {
     );
     let sr = shipped("space_robot_paper.toml");
     c.sc(
-        "sweep mass scale the space robot refuses",
-        format!("{sr}\n[sweep]\ncount = 2\nmass_scale = [0.5, 1.5]\nsuccess_metric = \"sim_goal_theta0_deg\"\ntime_metric = \"sim_goal_theta0_deg\"\nsuccess_max = 1.0\n"),
+        "sweep wheel wear the space robot lacks",
+        format!("{sr}\n[sweep]\ncount = 2\nsuccess_metric = \"sim_goal_theta0_deg\"\ntime_metric = \"sim_goal_theta0_deg\"\nsuccess_max = 1.0\n[sweep.vary]\n\"sim.perturb.wheel_radius_scale\" = {{ uniform = [0.9, 1.0] }}\n"),
         Some("[sweep]"),
         Some("sweep"),
     );

@@ -258,6 +258,15 @@ impl MobileManipulatorPhysics {
         }
         let root =
             |r: usize| rl::from_spatial(&mm::frames::<f64>(&start[DOF * r..DOF * (r + 1)]).base);
+        // Worn tyres (`wheel_radius_scale`): the drive wheels lose (1 − s)·r of
+        // radius, the casters as much, and the robot starts that much lower, level
+        // on the ground. The wheel rates still use the model's radius.
+        let wear = (1.0 - sim.wheel_radius_scale) * WHEEL_RADIUS;
+        let worn = (wear != 0.0).then(|| {
+            let tyres = ["left_wheel", "right_wheel", "caster_front", "caster_rear"];
+            super::perturb::shrink_round_collisions(robot, &tyres, 1.0, Some(wear))
+        });
+        let robot = worn.as_ref().unwrap_or(robot);
         let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root(0));
         let mut handles = vec![sw.robot.clone()];
         if k == 2 {
@@ -266,6 +275,14 @@ impl MobileManipulatorPhysics {
         let mut robots = Vec::with_capacity(k);
         for (r, h) in handles.iter().enumerate() {
             robots.push(place_robot(&mut sw, h, &start[DOF * r..DOF * (r + 1)])?);
+            if wear != 0.0 {
+                for b in &h.links {
+                    let body = &mut sw.world.bodies[*b];
+                    let mut p = *body.position();
+                    p.translation -= vector(0.0, 0.0, wear);
+                    body.set_position(p, true);
+                }
+            }
         }
         // Collision groups: each robot against the ground, the obstacles and
         // the other robot; the platform boxes also against the beam.

@@ -39,6 +39,7 @@ use crate::physics::mobile_manipulator::{
     link_visuals, robot_link_name, ArmServo, CarriedBeam, MobileManipulatorPhysics, ObstacleShape,
     Setup,
 };
+use crate::physics::perturb::Dimension;
 use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
@@ -311,6 +312,12 @@ fn along(scene: &Scene, gains: &Gains, tr: &Trajectory, samples: &[usize], name:
 }
 
 impl System for Dilf {
+    /// A differential drive: its wheels (and casters) can wear (`wheel_radius_scale`).
+    fn perturbable(&self, plan: &Plan) -> Vec<Dimension> {
+        let mut d = Dimension::common(plan);
+        d.push(Dimension::WheelRadiusScale);
+        d
+    }
     fn model(&self) -> &dyn KinematicModel {
         &self.model
     }

@@ -1,0 +1,340 @@
+//! `anholonomy margin FILE|DIR... [--dimension NAME]...`.
+
+use super::{output, Nominal, Settings, DEFAULT_BATCH};
+use crate::error::Error;
+use crate::physics::perturb::Dimension;
+use crate::runner::{RunOptions, DEFAULT_POSE_RATE};
+use crate::validate::{not_applicable, prepare_all, Call, Prepared};
+use rayon::prelude::*;
+use std::path::PathBuf;
+use std::time::Instant;
+
+/// Arguments of `anholonomy margin`.
+#[derive(clap::Args, Debug)]
+pub struct MarginArgs {
+    /// Scenario files, or directories whose *.toml files are all searched (sorted).
+    #[arg(required = true)]
+    pub paths: Vec<PathBuf>,
+    /// A dimension to search (repeat for several): command_latency,
+    /// actuator_tau, torque_scale, state_noise, state_latency,
+    /// wheel_radius_scale, friction_scale, mass_scale. Default: every
+    /// dimension that applies to the scenario.
+    #[arg(long = "dimension", value_name = "NAME")]
+    pub dimensions: Vec<String>,
+    /// Directory for the nominal run's logs and margins.json (LOGS/<scenario>/).
+    #[arg(long, default_value = "logs")]
+    pub logs: PathBuf,
+    /// Write no logs and no margins.json.
+    #[arg(long)]
+    pub no_logs: bool,
+    /// Also write the HTML report (with the pass/fail plots against each perturbation).
+    #[arg(long)]
+    pub report: bool,
+    /// Print the table as Markdown.
+    #[arg(long)]
+    pub markdown: bool,
+    /// Print the margins as JSON (an array: one margins.json per scenario) instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    /// Relative resolution: bisect until the edge lies within margin·(1 + R)
+    /// [default: the scenario's `margins.resolution`, else 0.05].
+    #[arg(long, value_name = "R")]
+    pub resolution: Option<f64>,
+    /// Seeds per level of a random dimension (state_noise)
+    /// [default: `margins.seeds`, else 8].
+    #[arg(long, value_name = "N")]
+    pub seeds: Option<usize>,
+    /// Fraction of a random level's seeds that must pass
+    /// [default: `margins.success_rate`, else 0.875].
+    #[arg(long, value_name = "F")]
+    pub success_rate: Option<f64>,
+    /// Levels run in parallel per round. It decides which levels are
+    /// probed, so the margins depend on it (within the resolution), never on
+    /// the number of threads.
+    #[arg(long, value_name = "B", default_value_t = DEFAULT_BATCH)]
+    pub batch: usize,
+    /// Print nothing on stderr while searching.
+    #[arg(long)]
+    pub quiet: bool,
+    /// Step budget per run (as for `run`).
+    #[arg(long, value_name = "N", default_value_t = crate::validate::DEFAULT_MAX_STEPS)]
+    pub max_steps: u64,
+}
+
+/// The dimensions named on the command line; an unknown name is bad input.
+fn parse_dimensions(names: &[String]) -> Result<Vec<Dimension>, Vec<Error>> {
+    let mut out = Vec::new();
+    let mut errors = Vec::new();
+    for n in names {
+        match Dimension::parse(n) {
+            Some(d) if !out.contains(&d) => out.push(d),
+            Some(_) => {}
+            None => {
+                let known: Vec<&str> = Dimension::ALL.iter().map(|d| d.name()).collect();
+                let hint = known
+                    .iter()
+                    .map(|k| (strsim::jaro_winkler(n, k), k))
+                    .max_by(|a, b| a.0.total_cmp(&b.0))
+                    .filter(|(s, _)| *s >= 0.8)
+                    .map(|(_, k)| format!(" (did you mean `{k}`?)"))
+                    .unwrap_or_default();
+                errors.push(Error::input(
+                    "--dimension",
+                    format!("unknown dimension `{n}`{hint}; known: {}", known.join(", ")),
+                ));
+            }
+        }
+    }
+    if errors.is_empty() {
+        Ok(out)
+    } else {
+        Err(errors)
+    }
+}
+
+/// The search settings: command line, else the scenario's `[margins]`, else defaults.
+fn settings(a: &MarginArgs, prep: &Prepared) -> Settings {
+    let cfg = &prep.scenario.margins;
+    Settings {
+        resolution: a.resolution.unwrap_or(cfg.resolution()),
+        seeds: a.seeds.unwrap_or(cfg.seeds()),
+        success_rate: a.success_rate.unwrap_or(cfg.success_rate()),
+        batch: a.batch,
+    }
+}
+
+fn check_options(a: &MarginArgs) -> Result<(), Vec<Error>> {
+    let bad = |opt: &str, m: String| Err(vec![Error::input(opt, m)]);
+    if let Some(r) = a.resolution {
+        if !(r > 0.0 && r <= 1.0) {
+            return bad("--resolution", format!("{r}: must be in (0, 1]"));
+        }
+    }
+    if let Some(n) = a.seeds {
+        if !(1..=1000).contains(&n) {
+            return bad("--seeds", format!("{n}: must be in 1..=1000"));
+        }
+    }
+    if let Some(f) = a.success_rate {
+        if !(f > 0.0 && f <= 1.0) {
+            return bad("--success-rate", format!("{f}: must be in (0, 1]"));
+        }
+    }
+    if !(1..=64).contains(&a.batch) {
+        return bad("--batch", format!("{}: must be in 1..=64", a.batch));
+    }
+    if a.report && a.no_logs {
+        return bad(
+            "--report",
+            "the report is written into the logs: drop --no-logs".into(),
+        );
+    }
+    Ok(())
+}
+
+/// Which dimensions to search for each scenario (None: skipped, with why).
+/// A dimension asked for that applies to no scenario of the call is bad input.
+fn plan_dimensions(
+    preps: &[Prepared],
+    asked: &[Dimension],
+) -> Result<Vec<Result<Vec<Dimension>, String>>, Vec<Error>> {
+    let mut out = Vec::new();
+    for p in preps {
+        if p.scenario.sweep.is_some() {
+            out.push(Err(
+                "sweep: its verdict is a success rate over variants; margins are searched on single runs".into(),
+            ));
+            continue;
+        }
+        let applies = p.system.perturbable(&p.planned);
+        let dims: Vec<Dimension> = if asked.is_empty() {
+            Dimension::ALL
+                .into_iter()
+                .filter(|d| applies.contains(d))
+                .collect()
+        } else {
+            asked
+                .iter()
+                .copied()
+                .filter(|d| applies.contains(d))
+                .collect()
+        };
+        out.push(Ok(dims));
+    }
+    let mut errors = Vec::new();
+    for d in asked {
+        let used = out
+            .iter()
+            .any(|r| r.as_ref().is_ok_and(|dims| dims.contains(d)));
+        if !used {
+            // Name the first scenario it could have applied to.
+            match preps.iter().find(|p| p.scenario.sweep.is_none()) {
+                Some(p) => errors.push(Error::input(
+                    &p.scenario.path,
+                    format!(
+                        "option `--dimension {d}`: {}",
+                        not_applicable(*d, &p.scenario, &p.system.perturbable(&p.planned))
+                    ),
+                )),
+                None => errors.push(Error::input(
+                    "--dimension",
+                    "every scenario of the call is a sweep: margins are searched on single runs",
+                )),
+            }
+        }
+    }
+    if errors.is_empty() {
+        Ok(out)
+    } else {
+        Err(errors)
+    }
+}
+
+/// What one scenario adds to the output.
+struct Scenario {
+    rows: Vec<output::Row>,
+    json: Option<serde_json::Value>,
+    /// Its name, when logs (and margins.json) were written.
+    logged: Option<String>,
+}
+
+/// The nominal run (with its logs) and the margins of one scenario.
+fn one(
+    a: &MarginArgs,
+    prep: &Prepared,
+    dims: &Result<Vec<Dimension>, String>,
+    opts: &RunOptions,
+) -> Result<Scenario, Error> {
+    let name = &prep.scenario.name;
+    let dims = match dims {
+        Ok(d) => d,
+        Err(why) => {
+            return Ok(Scenario {
+                rows: vec![output::skipped(name, why)],
+                json: None,
+                logged: None,
+            })
+        }
+    };
+    let t0 = Instant::now();
+    // The nominal run, with its logs: level 0 of every dimension.
+    let o = crate::runner::run(prep, opts)?;
+    let s = settings(a, prep);
+    let progress = |r: &super::DimensionResult| {
+        if !a.quiet {
+            let row = output::row(name, r);
+            eprintln!(
+                "{name}: {} margin {} ({} runs, {:.1} s CPU)",
+                row.dimension, row.margin, row.runs, r.cpu_s
+            );
+        }
+    };
+    let rep = super::margins(prep, Nominal::of(prep, &o), dims, &s, &progress);
+    let wall = t0.elapsed().as_secs_f64();
+    let logged = match &o.log_dir {
+        Some(dir) => {
+            rep.write(dir, wall).map_err(|message| Error::Log {
+                path: dir.join("margins.json"),
+                message,
+            })?;
+            Some(name.clone())
+        }
+        None => None,
+    };
+    Ok(Scenario {
+        rows: output::rows(&rep),
+        json: Some(rep.to_json(wall)),
+        logged,
+    })
+}
+
+/// `anholonomy margin`: exit 0, 2 (bad input, nothing run) or 3 (a run or
+/// the logs failed).
+pub fn margin_cmd(a: &MarginArgs) -> Result<u8, Vec<Error>> {
+    let asked = parse_dimensions(&a.dimensions)?;
+    check_options(a)?;
+    let log_root = (!a.no_logs).then(|| a.logs.clone());
+    let call = Call {
+        log_root: log_root.as_deref(),
+        sharded: false,
+        max_steps: Some(a.max_steps),
+    };
+    let preps = prepare_all(&a.paths, &call)?;
+    let plan = plan_dimensions(&preps, &asked)?;
+    let opts = RunOptions {
+        log_root,
+        progress: false,
+        pose_rate: DEFAULT_POSE_RATE,
+        keep: crate::log::Keep::default(),
+    };
+    // Scenarios in parallel (each with its dimensions and levels in
+    // parallel): results in input order, whatever the thread count.
+    let done: Vec<Result<Scenario, Error>> = preps
+        .par_iter()
+        .zip(plan.par_iter())
+        .with_max_len(1)
+        .map(|(prep, dims)| one(a, prep, dims, &opts))
+        .collect();
+    let mut rows = Vec::new();
+    let mut reports = Vec::new();
+    let mut names = Vec::new();
+    let mut errors = Vec::new();
+    for d in done {
+        match d {
+            Ok(s) => {
+                rows.extend(s.rows);
+                reports.extend(s.json);
+                names.extend(s.logged);
+            }
+            Err(e) => errors.push(e),
+        }
+    }
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    if a.json {
+        crate::say!(
+            "{}",
+            serde_json::to_string_pretty(&reports).unwrap_or_default()
+        );
+    } else if a.markdown {
+        crate::emit(&output::markdown(&rows));
+    } else {
+        crate::emit(&output::text(&rows));
+    }
+    if a.report && !names.is_empty() {
+        let w = crate::report::write_report(&a.logs, Some(&names)).map_err(|e| vec![e])?;
+        for e in &w.skipped {
+            eprintln!("warning: left out of the report: {e}");
+        }
+        crate::say!(
+            "report: {} ({} scenarios)",
+            a.logs.join("index.html").display(),
+            w.scenarios
+        );
+    }
+    Ok(0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn unknown_dimensions_are_named_with_a_hint() {
+        let e = parse_dimensions(&["latency".into(), "command_latency".into()]).unwrap_err();
+        assert_eq!(e.len(), 1);
+        let m = e[0].to_string();
+        assert!(
+            m.starts_with("--dimension: unknown dimension `latency`"),
+            "{m}"
+        );
+        assert!(m.contains("known: command_latency"), "{m}");
+        let e = parse_dimensions(&["state_nosie".into()]).unwrap_err();
+        assert!(e[0].to_string().contains("did you mean `state_noise`"));
+        assert_eq!(
+            parse_dimensions(&["mass_scale".into(), "mass_scale".into()]).unwrap(),
+            vec![Dimension::MassScale]
+        );
+    }
+}

@@ -1,0 +1,238 @@
+//! Early stop: a margin level's run ends as soon as a gate is **certain** to
+//! break, judged on the run so far. Which gates can be judged early depends
+//! on how their metric evolves as the run goes on, by family (named by the
+//! metric, [`family`]):
+//!
+//! * **running maximum** (`tracking_*_max`, `*_max`, `max_*`, `*_max_*`,
+//!   contact counts `*_contacts`, `*_violations`): the value over a prefix
+//!   can only grow, so once it is above its threshold the gate breaks. A
+//!   contact gate breaks at the first contact. Tracking errors are compared
+//!   only up to the prefix's end (both runs on the same grid), so they are
+//!   exactly the first values of the final series.
+//! * **running minimum** (a `min` or `clearance` token, e.g.
+//!   `sim_min_clearance`): can only fall, so below its minimum it breaks.
+//! * **first passage** (`*time_to_goal`): the first time within the goal
+//!   tolerance; not reached by time t with t above the threshold means it
+//!   breaks (it will be later or never).
+//! * everything else is **judged at the end**: final goal errors (after the
+//!   plan the state still moves while the drives settle, and a settle is
+//!   short: stopping there would save little and could be wrong), RMS
+//!   values, fractions of samples.
+//!
+//! Metrics of the ideal run never change with a perturbation and are never
+//! judged early. Checks cost a metric evaluation over the prefix, so they
+//! come at geometrically spaced times (0.5 s, 1 s, 2 s, …, at most about
+//! twice the cost of the final evaluation) and just after each
+//! first-passage threshold.
+
+use super::level::Ctx;
+use crate::gate::Breach;
+use crate::record::SimTrajectory;
+
+/// How a metric evolves along a run (module docs).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Family {
+    /// Can only grow.
+    RunningMax,
+    /// Can only fall.
+    RunningMin,
+    /// The first time something happens (NaN: not yet).
+    FirstPassage,
+    /// Known only at the end.
+    EndOnly,
+}
+
+/// The family of gate `metric` (a `[minimums]` gate when `minimum`).
+pub fn family(metric: &str, minimum: bool) -> Family {
+    if metric.starts_with("ideal_") {
+        return Family::EndOnly;
+    }
+    let tokens: Vec<&str> = metric.split('_').collect();
+    if minimum {
+        if tokens.iter().any(|t| matches!(*t, "min" | "clearance")) {
+            return Family::RunningMin;
+        }
+        return Family::EndOnly;
+    }
+    if metric.ends_with("time_to_goal") {
+        return Family::FirstPassage;
+    }
+    let running_max = metric.ends_with("_max")
+        || metric.starts_with("max_")
+        || metric.contains("_max_")
+        || metric.ends_with("_contacts")
+        || metric.ends_with("_violations");
+    if running_max {
+        Family::RunningMax
+    } else {
+        Family::EndOnly
+    }
+}
+
+/// Whether a gate of `family` with `bound` certainly breaks, given its
+/// value `v` over a prefix ending at `t`.
+pub fn certain(family: Family, v: f64, bound: f64, t: f64) -> bool {
+    match family {
+        Family::RunningMax => !v.is_nan() && v > bound,
+        Family::RunningMin => !v.is_nan() && v < bound,
+        Family::FirstPassage => {
+            if v.is_nan() {
+                t > bound
+            } else {
+                v > bound
+            }
+        }
+        Family::EndOnly => false,
+    }
+}
+
+/// Why a run stopped early: when, the metrics over the prefix, and the
+/// gates certain to break.
+#[derive(Debug, Clone)]
+pub struct Stopped {
+    /// Simulated time of the check, s.
+    pub t: f64,
+    /// Metrics over the prefix.
+    pub metrics: Vec<(String, f64)>,
+    /// The gates that broke for certain.
+    pub certain: Vec<Breach>,
+}
+
+/// Checks a running replay at its checkpoints.
+pub struct Monitor<'a> {
+    ctx: &'a Ctx<'a>,
+    /// Sample counts at which to check, ascending.
+    checkpoints: Vec<usize>,
+    next: usize,
+    /// Set when the run should stop.
+    pub stopped: Option<Stopped>,
+}
+
+impl<'a> Monitor<'a> {
+    /// A monitor for a run of at most `n_max` steps of `dt` (no checkpoints
+    /// when no gate of the scenario can be judged early).
+    pub fn new(ctx: &'a Ctx<'a>, n_max: usize, dt: f64) -> Monitor<'a> {
+        let mut times = Vec::new();
+        if ctx.gates.iter().any(|g| g.family != Family::EndOnly) {
+            let end = n_max as f64 * dt;
+            let mut t = 0.5;
+            while t < end {
+                times.push(t);
+                t *= 2.0;
+            }
+            for g in ctx
+                .gates
+                .iter()
+                .filter(|g| g.family == Family::FirstPassage)
+            {
+                times.push(g.bound + dt);
+            }
+        }
+        let mut checkpoints: Vec<usize> = times
+            .into_iter()
+            .map(|t| (t / dt).ceil() as usize + 1)
+            .filter(|&k| k <= n_max)
+            .collect();
+        checkpoints.sort_unstable();
+        checkpoints.dedup();
+        Monitor {
+            ctx,
+            checkpoints,
+            next: 0,
+            stopped: None,
+        }
+    }
+
+    /// Called after every step: true when the run should stop.
+    pub fn check(&mut self, sim: &SimTrajectory) -> bool {
+        let k = sim.traj.t.len();
+        if self.checkpoints.get(self.next).is_none_or(|&c| k < c) {
+            return false;
+        }
+        while self.checkpoints.get(self.next).is_some_and(|&c| c <= k) {
+            self.next += 1;
+        }
+        let pre = prefix(sim);
+        let t = pre.traj.t.last().copied().unwrap_or(0.0);
+        let ideal = self.ctx.ideal_until(t);
+        let metrics = self.ctx.metrics(&ideal, &pre);
+        let value = |m: &str| {
+            metrics
+                .iter()
+                .find(|(n, _)| n == m)
+                .map(|(_, v)| *v)
+                .unwrap_or(f64::NAN)
+        };
+        let certain: Vec<Breach> = self
+            .ctx
+            .gates
+            .iter()
+            .filter(|g| certain(g.family, value(&g.metric), g.bound, t))
+            .map(|g| Breach {
+                metric: g.metric.clone(),
+                value: value(&g.metric),
+                bound: g.bound,
+                minimum: g.minimum,
+            })
+            .collect();
+        if certain.is_empty() {
+            return false;
+        }
+        self.stopped = Some(Stopped {
+            t,
+            metrics,
+            certain,
+        });
+        true
+    }
+}
+
+/// The run so far as a finished trajectory (the last command repeated, as
+/// the replay does at the end).
+pub fn prefix(sim: &SimTrajectory) -> SimTrajectory {
+    let mut pre = SimTrajectory {
+        traj: sim.traj.clone(),
+        channels: sim.channels.clone(),
+        steps: sim.steps,
+        ..Default::default()
+    };
+    if let (Some(u), Some(l)) = (pre.traj.u.last().cloned(), pre.traj.label.last().copied()) {
+        pre.traj.u.push(u);
+        pre.traj.label.push(l);
+    }
+    pre
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn families_by_name() {
+        use Family::*;
+        for (m, min, f) in [
+            ("tracking_position_max", false, RunningMax),
+            ("tracking_theta_deg_max", false, RunningMax),
+            ("max_abs_angular_momentum", false, RunningMax),
+            ("sim_max_tilt_deg", false, RunningMax),
+            ("sim_obstacle_contacts", false, RunningMax),
+            ("sim_vdot_violations", false, RunningMax),
+            ("sim_time_to_goal", false, FirstPassage),
+            ("sim_goal_se2", false, EndOnly),
+            ("tracking_position_rms", false, EndOnly),
+            ("envelope_outside_fraction", false, EndOnly),
+            ("ideal_vdot_violations", false, EndOnly),
+            ("sim_min_clearance", true, RunningMin),
+            ("sim_robot_clearance", true, RunningMin),
+            ("sim_goal_position", true, EndOnly),
+            ("ideal_min_clearance", true, EndOnly),
+        ] {
+            assert_eq!(family(m, min), f, "{m}");
+        }
+        assert!(certain(FirstPassage, f64::NAN, 40.0, 40.1));
+        assert!(!certain(FirstPassage, f64::NAN, 40.0, 39.9));
+        assert!(!certain(FirstPassage, 12.0, 40.0, 50.0));
+        assert!(certain(RunningMax, 2.0, 1.0, 0.0) && !certain(RunningMax, 1.0, 1.0, 0.0));
+        assert!(certain(RunningMin, 0.5, 1.0, 0.0) && !certain(EndOnly, 9.0, 1.0, 9.0));
+    }
+}
