@@ -65,6 +65,19 @@ pub struct Timings {
     pub logs: f64,
     /// Everything.
     pub total: f64,
+    /// CPU time of the physics replay (its thread's, so a loaded machine
+    /// does not inflate it as it does the wall time), s; absent where the
+    /// platform does not report it ([`thread_cpu_s`]).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub physics_cpu: Option<f64>,
+}
+
+/// CPU time the calling thread has used so far, s: Linux's per-thread
+/// scheduler statistics (nanoseconds on the CPU); `None` elsewhere.
+pub fn thread_cpu_s() -> Option<f64> {
+    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
+    let ns: u64 = text.split_whitespace().next()?.parse().ok()?;
+    Some(ns as f64 * 1e-9)
 }
 
 /// Result of one scenario run.
@@ -223,6 +236,7 @@ fn run_plan(
     timings.ideal = t0.elapsed().as_secs_f64();
 
     let t0 = Instant::now();
+    let cpu0 = thread_cpu_s();
     let mut sys = prep.physics()?;
     let bar = crate::progress::Delayed::new(&sc.name, opts.progress);
     let replay_opts = ReplayOptions {
@@ -253,6 +267,7 @@ fn run_plan(
     // Labels an external law named while running, for the logs.
     let plan = &*plan.with_run_labels();
     timings.physics = t0.elapsed().as_secs_f64();
+    timings.physics_cpu = thread_cpu_s().zip(cpu0).map(|(b, a)| b - a);
 
     let t0 = Instant::now();
     let spec = metric_spec(model);
