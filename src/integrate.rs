@@ -1,5 +1,6 @@
 //! Fixed-step RK4 integration of a kinematic model under a plan (the ideal run).
 
+use crate::cancel::Cancel;
 use crate::model::{Input, KinematicModel, State};
 use crate::plan::{jump_offset, Plan};
 
@@ -103,6 +104,24 @@ fn is_jump(jumps: &[f64], t: f64) -> bool {
 /// replay does the same, so both runs see the same control timing).
 /// The run stops at the plan's duration or when a policy reports `done`.
 pub fn simulate(model: &dyn KinematicModel, plan: &Plan, q0: &State, dt: f64) -> Trajectory {
+    match simulate_until(model, plan, q0, dt, &Cancel::default()) {
+        Ok(tr) | Err(Cancelled(tr)) => tr,
+    }
+}
+
+/// A run that [`simulate_until`] stopped early because its token was
+/// cancelled, with the samples up to there.
+#[derive(Debug)]
+pub struct Cancelled(pub Trajectory);
+
+/// [`simulate`] that checks `cancel` before every step.
+pub fn simulate_until(
+    model: &dyn KinematicModel,
+    plan: &Plan,
+    q0: &State,
+    dt: f64,
+    cancel: &Cancel,
+) -> Result<Trajectory, Cancelled> {
     let mut ctl = plan.controller();
     let n = step_count(plan.duration, dt);
     let hold = plan.hold_period();
@@ -114,6 +133,9 @@ pub fn simulate(model: &dyn KinematicModel, plan: &Plan, q0: &State, dt: f64) ->
     // (it is split there) and each piece reads u strictly on its own side.
     let jumps = plan.jumps();
     for k in 0..n {
+        if cancel.is_cancelled() {
+            return Err(Cancelled(out));
+        }
         let t = k as f64 * dt;
         let cmd = match &mut clock {
             Some(clock) => {
@@ -131,7 +153,7 @@ pub fn simulate(model: &dyn KinematicModel, plan: &Plan, q0: &State, dt: f64) ->
         out.u.push(cmd.u.clone());
         out.label.push(cmd.label);
         if cmd.done {
-            return out;
+            return Ok(out);
         }
         q = match hold {
             Some(_) => rk4_step(&mut |s, x| model.velocity(s, x, &cmd.u), t, &q, dt),
@@ -178,7 +200,7 @@ pub fn simulate(model: &dyn KinematicModel, plan: &Plan, q0: &State, dt: f64) ->
     out.q.push(q);
     out.u.push(last.u);
     out.label.push(last.label);
-    out
+    Ok(out)
 }
 
 #[cfg(test)]

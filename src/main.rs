@@ -385,6 +385,7 @@ fn run_cmd(args: &RunArgs, mode: Mode) -> Result<u8, Vec<Error>> {
         log_root,
         progress: !args.quiet,
         pose_rate: args.pose_rate,
+        cancel: Default::default(),
     };
     let mut rows = Vec::new();
     let mut results: Vec<(usize, Outcome)> = Vec::new();

@@ -2,14 +2,15 @@
 //! already planned it): ideal run → physics replay → compare → thresholds →
 //! logs (one unit, [`crate::log::unit`]).
 
+use crate::cancel::Cancel;
 use crate::compare::compare;
 use crate::error::Error;
-use crate::integrate::{simulate, Trajectory};
+use crate::integrate::{simulate_until, Trajectory};
 use crate::log::unit::LogUnit;
 use crate::model::{KinematicModel, State};
-use crate::physics::{replay_with, ReplayOptions};
+use crate::physics::{replay_until, ReplayOptions};
 use crate::plan::Plan;
-use crate::record::{RunRecord, SimTrajectory};
+use crate::record::{RunRecord, Series, SimTrajectory};
 use serde::Serialize;
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -18,7 +19,7 @@ use std::time::Instant;
 pub use crate::compare::metric_spec;
 pub use crate::validate::Prepared;
 
-/// Where logs go, and whether to show progress.
+/// Where logs go, whether to show progress, and how to stop a run.
 #[derive(Debug, Clone)]
 pub struct RunOptions {
     /// Root directory for `<scenario>/run.*`; `None` writes no logs.
@@ -28,6 +29,10 @@ pub struct RunOptions {
     /// Link poses in the logs per second of simulated time (at least this
     /// many, see [`pose_stride`]); 0 logs them at every sample.
     pub pose_rate: f64,
+    /// Set from another thread to stop the run (the ideal run and the
+    /// replay check it every step; the run then fails with
+    /// [`crate::cancel::CANCELLED`]). The CLI passes the default token.
+    pub cancel: Cancel,
 }
 
 /// Default of [`RunOptions::pose_rate`], Hz: more than a viewer plays back,
@@ -108,8 +113,34 @@ fn display_state(model: &dyn KinematicModel, q: &State) -> serde_json::Value {
     serde_json::Value::Object(m)
 }
 
+/// Everything one run produced, for library callers (the Python package):
+/// the outcome, both runs, the system's series and the `summary.json` object.
+#[derive(Debug, Clone)]
+pub struct Finished {
+    /// Metrics, thresholds, timings, log directory.
+    pub outcome: RunOutcome,
+    /// The ideal kinematic run.
+    pub ideal: Trajectory,
+    /// The physics replay (with its channels).
+    pub sim: SimTrajectory,
+    /// Series the system computed from both runs (e.g. `V/ideal`).
+    pub series: Vec<Series>,
+    /// The same object as `summary.json` (also when no logs were written).
+    pub summary: serde_json::Value,
+}
+
 /// Run one scenario end to end.
 pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
+    run_inner(prep, opts, false).map(|d| d.outcome)
+}
+
+/// [`run`], keeping the trajectories, series and summary.
+pub fn run_detailed(prep: &Prepared, opts: &RunOptions) -> Result<Finished, Error> {
+    run_inner(prep, opts, true)
+}
+
+/// The pipeline; the summary is built when logs are written or `summarize`.
+fn run_inner(prep: &Prepared, opts: &RunOptions, summarize: bool) -> Result<Finished, Error> {
     let t_all = Instant::now();
     let sc = &prep.scenario;
     let model = prep.model();
@@ -120,8 +151,13 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
     let plan = &prep.planned;
     timings.plan = prep.plan_wall_s;
 
+    let cancelled = || Error::Physics {
+        path: sc.path.clone(),
+        message: crate::cancel::CANCELLED.into(),
+    };
     let t0 = Instant::now();
-    let ideal = simulate(model, plan, &start, sc.sim.dt);
+    let ideal =
+        simulate_until(model, plan, &start, sc.sim.dt, &opts.cancel).map_err(|_| cancelled())?;
     timings.ideal = t0.elapsed().as_secs_f64();
 
     let t0 = Instant::now();
@@ -136,13 +172,17 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
             .is_some()
             .then(|| pose_stride(opts.pose_rate, sc.sim.dt)),
     };
-    let sim =
-        replay_with(sys.as_mut(), plan, &replay_opts, &mut |f| bar.set(f)).map_err(|message| {
-            Error::Physics {
-                path: sc.path.clone(),
-                message,
-            }
-        })?;
+    let sim = replay_until(
+        sys.as_mut(),
+        plan,
+        &replay_opts,
+        &mut |f| bar.set(f),
+        &opts.cancel,
+    )
+    .map_err(|message| Error::Physics {
+        path: sc.path.clone(),
+        message,
+    })?;
     bar.finish();
     timings.physics = t0.elapsed().as_secs_f64();
 
@@ -208,17 +248,25 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
     outcome.timings.logs = t0.elapsed().as_secs_f64();
     // Planning happened during validation: count it in.
     outcome.timings.total = t_all.elapsed().as_secs_f64() + prep.plan_wall_s;
+    let summary = (summarize || unit.is_some())
+        .then(|| summary_json(prep, plan, &ideal, &sim, &outcome))
+        .unwrap_or_default();
     if let Some(unit) = unit {
         // The summary carries the final timings, so it is written last; then
         // the three files replace the previous run's as one unit.
-        let summary = summary_json(prep, plan, &ideal, &sim, &outcome);
         crate::log::atomic::write_atomic(&unit.dir().join("summary.json"), |w| {
             serde_json::to_writer_pretty(w, &summary).map_err(std::io::Error::other)
         })
         .map_err(log_error)?;
         outcome.log_dir = Some(unit.commit().map_err(|e| log_error(e.to_string()))?);
     }
-    Ok(outcome)
+    Ok(Finished {
+        outcome,
+        ideal,
+        sim,
+        series,
+        summary,
+    })
 }
 
 /// What one run produced, for the log writers.
@@ -227,7 +275,7 @@ struct RunData<'a> {
     ideal: &'a Trajectory,
     sim: &'a SimTrajectory,
     cmp: &'a crate::record::Comparison,
-    series: &'a [crate::record::Series],
+    series: &'a [Series],
 }
 
 fn write_logs(

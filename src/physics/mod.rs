@@ -25,6 +25,7 @@ pub mod world;
 pub use rapier3d_f64 as rapier;
 pub use settings::PhysicsSettings;
 
+use crate::cancel::Cancel;
 use crate::integrate::step_count;
 use crate::model::{Input, State};
 use crate::plan::Plan;
@@ -93,6 +94,18 @@ pub fn replay_with(
     opts: &ReplayOptions,
     progress: &mut dyn FnMut(f64),
 ) -> Result<SimTrajectory, String> {
+    replay_until(sys, plan, opts, progress, &Cancel::default())
+}
+
+/// [`replay_with`] that stops with the error [`crate::cancel::CANCELLED`]
+/// when `cancel` is set (checked before every step).
+pub fn replay_until(
+    sys: &mut dyn PhysicsSystem,
+    plan: &Plan,
+    opts: &ReplayOptions,
+    progress: &mut dyn FnMut(f64),
+    cancel: &Cancel,
+) -> Result<SimTrajectory, String> {
     let dt = opts.dt;
     let mut ctl = plan.controller();
     let n_plan = step_count(plan.duration, dt);
@@ -138,6 +151,9 @@ pub fn replay_with(
     };
     record(&mut out, sys, 0.0, q0);
     for k in 0..n {
+        if cancel.is_cancelled() {
+            return Err(crate::cancel::CANCELLED.into());
+        }
         let t = k as f64 * dt;
         let q = out.traj.q.last().expect("the start state is recorded");
         let idle = k >= n_plan || finished;
