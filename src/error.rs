@@ -36,6 +36,19 @@ pub enum Error {
         /// Reason.
         message: String,
     },
+    /// A feedback law stopped working during a run: an external law's
+    /// process could not start, died, answered garbage or too late (a
+    /// runtime failure: exit 3). `message` is one line, then the tail of the
+    /// process's stderr when it wrote any (lines starting with `  | `).
+    #[error("{path}: feedback law ({run} run): {message}")]
+    Law {
+        /// Scenario file.
+        path: PathBuf,
+        /// `ideal` or `physics`.
+        run: &'static str,
+        /// What went wrong.
+        message: String,
+    },
     /// Writing logs failed.
     #[error("{path}: writing logs: {message}")]
     Log {
@@ -60,7 +73,7 @@ impl Error {
     pub fn exit_code(&self) -> i32 {
         match self {
             Error::Input { .. } | Error::Plan { .. } => 2,
-            Error::Physics { .. } | Error::Log { .. } => 3,
+            Error::Physics { .. } | Error::Law { .. } | Error::Log { .. } => 3,
         }
     }
 }

@@ -90,11 +90,20 @@ impl SampleClock {
     }
 }
 
-/// Whether `t` is (within round-off of) one of `jumps`.
+/// Whether `t` is (within round-off of) one of `jumps` (increasing: a plan
+/// file held sample by sample has one per sample, so no linear scan).
 fn is_jump(jumps: &[f64], t: f64) -> bool {
-    jumps
-        .iter()
-        .any(|j| (j - t).abs() <= 1e-12 * t.abs().max(1.0))
+    let tol = 1e-12 * t.abs().max(1.0);
+    let i = jumps.partition_point(|j| *j < t - tol);
+    jumps.get(i).is_some_and(|j| (j - t).abs() <= tol)
+}
+
+/// The jumps of `jumps` (increasing) in [a − slack, b + slack].
+fn jumps_near(jumps: &[f64], a: f64, b: f64) -> &[f64] {
+    let slack = 1e-9 * (b - a).abs().max(1e-300) + 1e-12 * b.abs().max(1.0);
+    let lo = jumps.partition_point(|j| *j < a - slack);
+    let hi = jumps.partition_point(|j| *j <= b + slack);
+    &jumps[lo..hi.max(lo)]
 }
 
 /// Integrate `model` from `q0` under `plan` with step `dt`.
@@ -103,44 +112,86 @@ fn is_jump(jumps: &[f64], t: f64) -> bool {
 /// feedback policies are sampled every `hold_period` and held (the physics
 /// replay does the same, so both runs see the same control timing).
 /// The run stops at the plan's duration or when a policy reports `done`.
+///
+/// A controller that faults ([`crate::plan::Controller::fault`]) ends the
+/// run at the faulting sample; [`simulate_checked`] reports the fault.
+/// Built-in planners' controllers never fault.
 pub fn simulate(model: &dyn KinematicModel, plan: &Plan, q0: &State, dt: f64) -> Trajectory {
-    match simulate_until(model, plan, q0, dt, &Cancel::default()) {
-        Ok(tr) | Err(Cancelled(tr)) => tr,
-    }
+    run_ideal(model, plan, q0, dt, &Cancel::default()).0
 }
 
-/// A run that [`simulate_until`] stopped early because its token was
-/// cancelled, with the samples up to there.
-#[derive(Debug)]
-pub struct Cancelled(pub Trajectory);
+/// Why [`simulate_until`] stopped a run before its end.
+#[derive(Debug, Clone, PartialEq)]
+pub enum IdealStop {
+    /// The controller faulted ([`crate::plan::Controller::fault`]).
+    Fault(String),
+    /// The token was cancelled.
+    Cancelled,
+}
 
-/// [`simulate`] that checks `cancel` before every step.
+/// [`simulate`], or the fault of a controller that stopped working (an
+/// external law's process died, answered garbage or too late).
+pub fn simulate_checked(
+    model: &dyn KinematicModel,
+    plan: &Plan,
+    q0: &State,
+    dt: f64,
+) -> Result<Trajectory, String> {
+    simulate_until(model, plan, q0, dt, &Cancel::default()).map_err(|e| match e {
+        IdealStop::Fault(m) => m,
+        IdealStop::Cancelled => crate::cancel::CANCELLED.into(),
+    })
+}
+
+/// [`simulate_checked`] that also stops when `cancel` is set (checked
+/// before every step).
 pub fn simulate_until(
     model: &dyn KinematicModel,
     plan: &Plan,
     q0: &State,
     dt: f64,
     cancel: &Cancel,
-) -> Result<Trajectory, Cancelled> {
+) -> Result<Trajectory, IdealStop> {
+    match run_ideal(model, plan, q0, dt, cancel) {
+        (tr, None) => Ok(tr),
+        (_, Some(stop)) => Err(stop),
+    }
+}
+
+/// The ideal run and why it stopped early, if it did (a fault ends it at
+/// the faulting sample, without applying its command).
+fn run_ideal(
+    model: &dyn KinematicModel,
+    plan: &Plan,
+    q0: &State,
+    dt: f64,
+    cancel: &Cancel,
+) -> (Trajectory, Option<IdealStop>) {
     let mut ctl = plan.controller();
     let n = step_count(plan.duration, dt);
     let hold = plan.hold_period();
     let mut out = Trajectory::default();
     let mut q = q0.clone();
     let mut held = ctl.command(0.0, &q);
+    if let Some(fault) = ctl.fault() {
+        return (out, Some(IdealStop::Fault(fault)));
+    }
     let mut clock = hold.map(|p| SampleClock::new(p, dt));
     // Open-loop u(t) may jump at segment joins: no RK4 step straddles one
     // (it is split there) and each piece reads u strictly on its own side.
     let jumps = plan.jumps();
     for k in 0..n {
         if cancel.is_cancelled() {
-            return Err(Cancelled(out));
+            return (out, Some(IdealStop::Cancelled));
         }
         let t = k as f64 * dt;
         let cmd = match &mut clock {
             Some(clock) => {
                 if clock.due(t) {
                     held = ctl.command(t, &q);
+                    if let Some(fault) = ctl.fault() {
+                        return (out, Some(IdealStop::Fault(fault)));
+                    }
                 }
                 held.clone()
             }
@@ -153,7 +204,7 @@ pub fn simulate_until(
         out.u.push(cmd.u.clone());
         out.label.push(cmd.label);
         if cmd.done {
-            return Ok(out);
+            return (out, None);
         }
         q = match hold {
             Some(_) => rk4_step(&mut |s, x| model.velocity(s, x, &cmd.u), t, &q, dt),
@@ -167,7 +218,8 @@ pub fn simulate_until(
                 let mut cuts = vec![t];
                 // Jumps on the grid itself are the pieces' ends already.
                 let inside = |j: f64| !is_jump(&[t, t + dt], j) && j > t && j < t + dt;
-                cuts.extend(jumps.iter().copied().filter(|&j| inside(j)));
+                let near = jumps_near(&jumps, t, t + dt);
+                cuts.extend(near.iter().copied().filter(|&j| inside(j)));
                 cuts.push(t + dt);
                 let mut x = q;
                 for w in cuts.windows(2) {
@@ -196,11 +248,14 @@ pub fn simulate_until(
     }
     let t_end = n as f64 * dt;
     let last = ctl.command(t_end, &q);
+    if let Some(fault) = ctl.fault() {
+        return (out, Some(IdealStop::Fault(fault)));
+    }
     out.t.push(t_end);
     out.q.push(q);
     out.u.push(last.u);
     out.label.push(last.label);
-    Ok(out)
+    (out, None)
 }
 
 #[cfg(test)]

@@ -35,6 +35,14 @@ pub struct Command {
 pub trait Controller: Send {
     /// The command at time `t` with measured state `q`.
     fn command(&mut self, t: f64, q: &State) -> Command;
+    /// Why the controller stopped working, once it has (an external law's
+    /// process died, answered garbage or too late; a caller's law raised).
+    /// The runs ask after every command and end with a runtime failure
+    /// (exit 3) carrying this message; the command that came with the fault
+    /// is never applied. Built-in controllers never fail: `None`.
+    fn fault(&self) -> Option<String> {
+        None
+    }
 }
 
 /// Builds fresh controller instances (a feedback policy may keep internal
@@ -42,6 +50,46 @@ pub trait Controller: Send {
 pub trait PolicyFactory: Send + Sync {
     /// A new controller, in its initial state.
     fn start(&self) -> Box<dyn Controller>;
+    /// Label names for policies that name their labels while running (an
+    /// external law sends strings): index i names label i of the commands
+    /// issued so far, by every controller of this factory. `None`: the plan's
+    /// own [`Plan::labels`] are complete (every built-in policy).
+    fn labels(&self) -> Option<Vec<String>> {
+        None
+    }
+}
+
+/// Label names interned while running, shared by the controllers of one
+/// factory (see [`PolicyFactory::labels`]). Indices never change once given,
+/// so a label index in a trajectory stays valid; the ideal run interns
+/// before the physics run, so the table is the same on every run.
+#[derive(Debug, Default)]
+pub struct LabelTable(std::sync::Mutex<Vec<String>>);
+
+impl LabelTable {
+    /// A table holding `names` (indices 0..).
+    pub fn new(names: Vec<String>) -> LabelTable {
+        LabelTable(std::sync::Mutex::new(names))
+    }
+
+    /// The index of `name`, added when new; `None` when the table already
+    /// holds `max` names and `name` is not one of them.
+    pub fn intern(&self, name: &str, max: usize) -> Option<usize> {
+        let mut names = self.0.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(i) = names.iter().position(|n| n == name) {
+            return Some(i);
+        }
+        if names.len() >= max {
+            return None;
+        }
+        names.push(name.to_string());
+        Some(names.len() - 1)
+    }
+
+    /// The names so far.
+    pub fn names(&self) -> Vec<String> {
+        self.0.lock().unwrap_or_else(|e| e.into_inner()).clone()
+    }
 }
 
 /// Open-loop command u(t) plus the label in force at t.
@@ -52,6 +100,15 @@ pub type OpenLoopFn = dyn Fn(f64) -> (Input, usize) + Send + Sync;
 pub enum ControlLaw {
     /// A fixed u(t), evaluated continuously (at every integrator stage).
     OpenLoop(Arc<OpenLoopFn>),
+    /// A fixed u(t) that jumps at known times, e.g. a zero-order hold of
+    /// samples (plan files): evaluated like [`ControlLaw::OpenLoop`], with the
+    /// jumps declared instead of found at segment joins.
+    Piecewise {
+        /// u(t) and the label in force (right-continuous at the jumps).
+        u: Arc<OpenLoopFn>,
+        /// Jump times in (0, duration), increasing.
+        jumps: Arc<[f64]>,
+    },
     /// A feedback law u = k(t, q), sampled every `period` seconds and held.
     Feedback {
         /// Creates controller instances.
@@ -90,28 +147,72 @@ impl Controller for OpenLoopController {
 }
 
 impl Plan {
+    /// A feedback plan: `factory`'s controllers sampled every `period` s and
+    /// held, for at most `horizon` s (less when a controller reports `done`).
+    /// `labels` may be empty when the factory names its labels while running
+    /// ([`PolicyFactory::labels`]).
+    pub fn feedback(
+        labels: Vec<String>,
+        factory: Arc<dyn PolicyFactory>,
+        period: f64,
+        horizon: f64,
+        details: serde_json::Value,
+    ) -> Plan {
+        Plan {
+            labels,
+            segments: Vec::new(),
+            duration: horizon,
+            law: ControlLaw::Feedback { factory, period },
+            details,
+        }
+    }
+
     /// A fresh controller for one run.
     pub fn controller(&self) -> Box<dyn Controller> {
         match &self.law {
-            ControlLaw::OpenLoop(f) => Box::new(OpenLoopController(f.clone())),
+            ControlLaw::OpenLoop(f) | ControlLaw::Piecewise { u: f, .. } => {
+                Box::new(OpenLoopController(f.clone()))
+            }
             ControlLaw::Feedback { factory, .. } => factory.start(),
+        }
+    }
+
+    /// The plan with the label names its policy has used so far (see
+    /// [`PolicyFactory::labels`]): for the logs, after the runs. Borrowed
+    /// when the plan's own labels are complete.
+    pub fn with_run_labels(&self) -> std::borrow::Cow<'_, Plan> {
+        let ControlLaw::Feedback { factory, .. } = &self.law else {
+            return std::borrow::Cow::Borrowed(self);
+        };
+        match factory.labels() {
+            Some(labels) => std::borrow::Cow::Owned(Plan {
+                labels,
+                ..self.clone()
+            }),
+            None => std::borrow::Cow::Borrowed(self),
         }
     }
 
     /// Sample-and-hold period for feedback laws; `None` for continuous open-loop commands.
     pub fn hold_period(&self) -> Option<f64> {
         match &self.law {
-            ControlLaw::OpenLoop(_) => None,
+            ControlLaw::OpenLoop(_) | ControlLaw::Piecewise { .. } => None,
             ControlLaw::Feedback { period, .. } => Some(*period),
         }
     }
 
-    /// Times in (0, duration) where an open-loop u(t) jumps: segment joins
-    /// whose one-sided limits differ (relative 1e-9). Empty for feedback
-    /// laws (their holds are the sample grid itself).
+    /// Times in (0, duration) where an open-loop u(t) jumps, increasing:
+    /// the declared jumps of a [`ControlLaw::Piecewise`] law, else segment
+    /// joins whose one-sided limits differ (relative 1e-9). Empty for
+    /// feedback laws (their holds are the sample grid itself).
     pub fn jumps(&self) -> Vec<f64> {
-        let ControlLaw::OpenLoop(f) = &self.law else {
-            return Vec::new();
+        let f = match &self.law {
+            ControlLaw::OpenLoop(f) => f,
+            ControlLaw::Piecewise { jumps, .. } => {
+                let inside = |j: &&f64| **j > 0.0 && **j < self.duration;
+                return jumps.iter().filter(inside).copied().collect();
+            }
+            ControlLaw::Feedback { .. } => return Vec::new(),
         };
         let mut out: Vec<f64> = Vec::new();
         for s in &self.segments {
@@ -140,6 +241,11 @@ impl Plan {
         match self.hold_period() {
             Some(p) => serde_json::json!({
                 "kind": "held", "hold_period_s": p, "details": self.details,
+            }),
+            // A held file plan jumps at (nearly) every sample: the count, not
+            // the list (the samples are `/plan/command` itself).
+            None if matches!(self.law, ControlLaw::Piecewise { .. }) => serde_json::json!({
+                "kind": "continuous", "jump_count": self.jumps().len(), "details": self.details,
             }),
             None => serde_json::json!({
                 "kind": "continuous", "jumps_s": self.jumps(), "details": self.details,

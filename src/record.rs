@@ -69,6 +69,9 @@ pub struct SimTrajectory {
     pub channels: Vec<(String, Vec<f64>)>,
     /// Number of physics steps taken.
     pub steps: usize,
+    /// Steps with the plan in force (`traj.u[..plan_steps]`); the rest
+    /// settle with zero input.
+    pub plan_steps: usize,
 }
 
 impl SimTrajectory {

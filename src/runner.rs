@@ -5,11 +5,11 @@
 use crate::cancel::Cancel;
 use crate::compare::compare;
 use crate::error::Error;
-use crate::integrate::{simulate_until, Trajectory};
+use crate::integrate::{simulate_until, IdealStop, Trajectory};
 use crate::log::unit::LogUnit;
 use crate::model::{KinematicModel, State};
-use crate::physics::{replay_until, ReplayOptions};
-use crate::plan::Plan;
+use crate::physics::{replay_until, ReplayError, ReplayOptions};
+use crate::plan::{ControlLaw, Plan};
 use crate::record::{RunRecord, Series, SimTrajectory};
 use serde::Serialize;
 use serde_json::json;
@@ -127,29 +127,119 @@ pub struct Finished {
     pub series: Vec<Series>,
     /// The same object as `summary.json` (also when no logs were written).
     pub summary: serde_json::Value,
+    /// The plan's label names (with those a feedback law named while running).
+    pub labels: Vec<String>,
 }
 
 /// Run one scenario end to end.
 pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
-    run_inner(prep, opts, false).map(|d| d.outcome)
+    // Planned by the validation pass.
+    run_plan(prep, &prep.planned, prep.plan_wall_s, opts, false).map(|d| d.outcome)
 }
 
 /// [`run`], keeping the trajectories, series and summary.
 pub fn run_detailed(prep: &Prepared, opts: &RunOptions) -> Result<Finished, Error> {
-    run_inner(prep, opts, true)
+    run_plan(prep, &prep.planned, prep.plan_wall_s, opts, true)
+}
+
+/// Run a prepared scenario with a plan the caller supplies instead of the
+/// one its planner made: the same ideal run, physics replay, comparison,
+/// thresholds and logs as [`run`].
+///
+/// This is how a feedback law from outside the scenario file runs (the
+/// Python package's `run(scenario, law=callable, period=...)`): wrap it in a
+/// [`crate::plan::PolicyFactory`] whose controllers answer
+/// [`crate::plan::Controller::command`] (and report failures through
+/// [`crate::plan::Controller::fault`], which ends the run with
+/// [`Error::Law`], exit 3), then
+///
+/// ```ignore
+/// let plan = Plan::feedback(Vec::new(), factory, period, horizon, json!({}));
+/// let outcome = runner::run_with_plan(&prep, &plan, &opts)?;
+/// ```
+///
+/// The law is sampled exactly as an external law of `[planner] kind =
+/// "external"` is: at t = j · period on the `sim.dt` grid (the first at 0),
+/// held in between, one controller per run (ideal first, then physics), the
+/// run ending at `horizon` or `settle` seconds after a command with `done`.
+/// The controller sees the same `t` and state values an external process is
+/// sent (the JSON numbers round-trip exactly), so a deterministic law gives
+/// bit-identical results in process and through the protocol. A factory
+/// that names labels while running returns them from
+/// [`crate::plan::PolicyFactory::labels`] (see [`crate::plan::LabelTable`]).
+///
+/// Bad plans are bad input (exit 2) naming the scenario: a hold period that
+/// is not a positive number, a non-finite or negative duration, or one over
+/// the scenario's step budget.
+pub fn run_with_plan(prep: &Prepared, plan: &Plan, opts: &RunOptions) -> Result<RunOutcome, Error> {
+    check_plan(prep, plan)?;
+    run_plan(prep, plan, 0.0, opts, false).map(|d| d.outcome)
+}
+
+/// [`run_with_plan`], keeping the trajectories, series and summary.
+pub fn run_with_plan_detailed(
+    prep: &Prepared,
+    plan: &Plan,
+    opts: &RunOptions,
+) -> Result<Finished, Error> {
+    check_plan(prep, plan)?;
+    run_plan(prep, plan, 0.0, opts, true)
+}
+
+/// A caller's plan against the scenario: what [`run_with_plan`] refuses.
+fn check_plan(prep: &Prepared, plan: &Plan) -> Result<(), Error> {
+    let sc = &prep.scenario;
+    if let ControlLaw::Feedback { period, .. } = &plan.law {
+        if !(period.is_finite() && *period > 0.0) {
+            return Err(Error::input(
+                &sc.path,
+                format!("feedback law: period must be a number > 0 s, got {period}"),
+            ));
+        }
+    }
+    if !(plan.duration.is_finite() && plan.duration >= 0.0) {
+        return Err(Error::input(
+            &sc.path,
+            format!(
+                "plan: duration must be a number >= 0 s, got {}",
+                plan.duration
+            ),
+        ));
+    }
+    let steps = crate::integrate::step_count(plan.duration + sc.sim.settle, sc.sim.dt) as u64;
+    if steps > prep.max_steps {
+        return Err(Error::input(
+            &sc.path,
+            format!(
+                "plan: {} s and settling at sim.dt = {} s is {steps} steps, over the budget of {} steps",
+                plan.duration, sc.sim.dt, prep.max_steps
+            ),
+        ));
+    }
+    Ok(())
 }
 
 /// The pipeline; the summary is built when logs are written or `summarize`.
-fn run_inner(prep: &Prepared, opts: &RunOptions, summarize: bool) -> Result<Finished, Error> {
+fn run_plan(
+    prep: &Prepared,
+    plan: &Plan,
+    plan_wall_s: f64,
+    opts: &RunOptions,
+    summarize: bool,
+) -> Result<Finished, Error> {
     let t_all = Instant::now();
     let sc = &prep.scenario;
     let model = prep.model();
     let (start, goal) = prep.start_goal();
-    let mut timings = Timings::default();
-
-    // Planned by the validation pass.
-    let plan = &prep.planned;
-    timings.plan = prep.plan_wall_s;
+    let mut timings = Timings {
+        plan: plan_wall_s,
+        ..Default::default()
+    };
+    let law_error = |run: &'static str, message: String| Error::Law {
+        path: sc.path.clone(),
+        run,
+        message,
+    };
 
     let cancelled = || Error::Physics {
         path: sc.path.clone(),
@@ -157,7 +247,10 @@ fn run_inner(prep: &Prepared, opts: &RunOptions, summarize: bool) -> Result<Fini
     };
     let t0 = Instant::now();
     let ideal =
-        simulate_until(model, plan, &start, sc.sim.dt, &opts.cancel).map_err(|_| cancelled())?;
+        simulate_until(model, plan, &start, sc.sim.dt, &opts.cancel).map_err(|e| match e {
+            IdealStop::Fault(m) => law_error("ideal", m),
+            IdealStop::Cancelled => cancelled(),
+        })?;
     timings.ideal = t0.elapsed().as_secs_f64();
 
     let t0 = Instant::now();
@@ -178,12 +271,18 @@ fn run_inner(prep: &Prepared, opts: &RunOptions, summarize: bool) -> Result<Fini
         &replay_opts,
         &mut |f| bar.set(f),
         &opts.cancel,
-    )
-    .map_err(|message| Error::Physics {
-        path: sc.path.clone(),
-        message,
-    })?;
+    );
     bar.finish();
+    let sim = sim.map_err(|e| match e {
+        ReplayError::Law(m) => law_error("physics", m),
+        ReplayError::Diverged(message) => Error::Physics {
+            path: sc.path.clone(),
+            message,
+        },
+        ReplayError::Cancelled => cancelled(),
+    })?;
+    // Labels an external law named while running, for the logs.
+    let plan = &*plan.with_run_labels();
     timings.physics = t0.elapsed().as_secs_f64();
 
     let t0 = Instant::now();
@@ -247,7 +346,7 @@ fn run_inner(prep: &Prepared, opts: &RunOptions, summarize: bool) -> Result<Fini
     };
     outcome.timings.logs = t0.elapsed().as_secs_f64();
     // Planning happened during validation: count it in.
-    outcome.timings.total = t_all.elapsed().as_secs_f64() + prep.plan_wall_s;
+    outcome.timings.total = t_all.elapsed().as_secs_f64() + plan_wall_s;
     let summary = (summarize || unit.is_some())
         .then(|| summary_json(prep, plan, &ideal, &sim, &outcome))
         .unwrap_or_default();
@@ -266,6 +365,7 @@ fn run_inner(prep: &Prepared, opts: &RunOptions, summarize: bool) -> Result<Fini
         sim,
         series,
         summary,
+        labels: plan.labels.clone(),
     })
 }
 

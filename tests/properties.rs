@@ -108,7 +108,7 @@ fn dopri(f: &dyn Fn(f64, &[f64]) -> Vec<f64>, mut y: Vec<f64>, t0: f64, t1: f64)
 /// The open-loop command u(t) of a plan.
 fn command(plan: &Plan) -> impl Fn(f64) -> Input + '_ {
     match &plan.law {
-        ControlLaw::OpenLoop(f) => move |t| f(t).0,
+        ControlLaw::OpenLoop(f) | ControlLaw::Piecewise { u: f, .. } => move |t| f(t).0,
         ControlLaw::Feedback { .. } => panic!("open-loop planners only"),
     }
 }
@@ -184,6 +184,7 @@ fn justified(e: &PlanError) -> Result<(), TestCaseError> {
     let reason = match e {
         PlanError::InvalidParameter { reason, .. } => reason.clone(),
         PlanError::Unreachable(m) | PlanError::NoConvergence(m) => m.clone(),
+        PlanError::File(f) => f.message.clone(),
     };
     prop_assert!(reason.trim().len() > 10, "refusal without a reason: {e:?}");
     Ok(())

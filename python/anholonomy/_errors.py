@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import List, Optional
+from typing import Optional
 
 
 class AnholonomyError(Exception):
@@ -23,8 +23,6 @@ class InputError(AnholonomyError, ValueError):
     line: Optional[int]
     #: The scenario key (or argument) at fault, e.g. ``sim.friction``.
     key: Optional[str]
-    #: The other errors of the same validation pass, as the CLI prints them.
-    others: List[str]
 
     def __init__(
         self,
@@ -37,7 +35,6 @@ class InputError(AnholonomyError, ValueError):
         self.file = file
         self.line = line
         self.key = key
-        self.others = []
 
     def __reduce__(self):  # keeps file, line and key through pickling
         return (type(self), (str(self), self.file, self.line, self.key))

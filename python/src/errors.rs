@@ -13,11 +13,11 @@ use std::path::Path;
 static INPUT_ERROR: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 static RUNTIME_FAILURE: PyOnceLock<Py<PyType>> = PyOnceLock::new();
 
-fn raise(
-    py: Python<'_>,
+fn raise<'py>(
+    py: Python<'py>,
     cell: &PyOnceLock<Py<PyType>>,
     name: &str,
-    args: impl for<'py> IntoPyObject<'py, Target = pyo3::types::PyTuple>,
+    args: impl pyo3::call::PyCallArgs<'py>,
 ) -> PyErr {
     let made = cell
         .import(py, "anholonomy._errors", name)
@@ -64,21 +64,5 @@ pub fn to_py(py: Python<'_>, e: &Error) -> PyErr {
             path, line, key, ..
         } => input_error(py, e.to_string(), Some(path), *line, Some(key.clone())),
         other => runtime_failure(py, other.to_string()),
-    }
-}
-
-/// The first of several validation errors, with the others in its text (as
-/// the CLI prints them, one per line).
-pub fn first_of(py: Python<'_>, errors: &[Error]) -> PyErr {
-    match errors {
-        [] => runtime_failure(py, "no error".into()),
-        [one] => to_py(py, one),
-        [first, rest @ ..] => {
-            let err = to_py(py, first);
-            let more: Vec<String> = rest.iter().map(|e| e.to_string()).collect();
-            let value = err.value(py);
-            let _ = value.setattr("others", more);
-            err
-        }
     }
 }

@@ -1,35 +1,43 @@
-//! A feedback law written in Python, u = law(t, q), as a [`PolicyFactory`]:
-//! sampled every `period` seconds on the ideal and on the simulated state,
-//! exactly where the harness samples any feedback law (and where it sends
-//! an external law its JSON line), and held in between.
+//! A feedback law written in Python, u = law(t, q), as a [`PolicyFactory`]
+//! run by [`anholonomy::runner::run_with_plan_detailed`]: sampled every
+//! `period` seconds on the ideal and on the simulated state, exactly where
+//! the harness sends an external law (`[planner] kind = "external"`) its
+//! JSON line, and held in between.
 //!
 //! The runs happen without the GIL; each sample attaches to the
 //! interpreter, calls the law with `t` (float) and `q` (a fresh numpy
-//! array, so a law may keep it) and reads u back. When the law raises, or
-//! returns something that is not u, the exception is kept, the run is
-//! stopped (its token cancelled) and the caller raises that exception.
+//! array, so a law may keep it) and reads the answer: u as a sequence or
+//! array, or a dict like the external protocol's answer (`{"u": [...],
+//! "label": "...", "done": false}`). When the law raises or answers
+//! something that is not an input, the controller faults (the run ends at
+//! that sample, the command unused) and the caller raises the exception.
 
 use crate::errors::runtime_failure;
 use anholonomy::cancel::Cancel;
 use anholonomy::model::{Input, State};
-use anholonomy::plan::{Command, Controller, PolicyFactory};
+use anholonomy::plan::{Command, Controller, LabelTable, PolicyFactory};
+use anholonomy::planner::external::protocol::MAX_LABELS;
 use numpy::{AllowTypeChange, PyArray1, PyArrayLike1, PyArrayMethods};
 use pyo3::prelude::*;
-use pyo3::types::{PyFloat, PyInt, PyList, PyTuple};
+use pyo3::types::{PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::Instant;
 
+/// Label of commands whose answer names none.
+pub const DEFAULT_LABEL: &str = "python";
+
 /// What the runs of one call share with the caller.
 pub struct Shared {
-    /// The first exception a law raised (or a bad return value's error).
+    /// The first exception a law raised (or a bad answer's error).
     pub error: Mutex<Option<PyErr>>,
-    /// Cancelled when the law fails, or on Ctrl-C.
+    /// Cancelled on Ctrl-C (checked by the runs at every step, and before
+    /// each call of the law).
     pub cancel: Cancel,
     /// Law calls, both runs.
     pub calls: AtomicU64,
     /// Wall time of those calls, ns: attaching to the interpreter, the
-    /// array, the call and reading u back (the per-sample overhead).
+    /// array, the call and reading the answer (the per-sample overhead).
     pub nanos: AtomicU64,
 }
 
@@ -43,10 +51,9 @@ impl Shared {
         }
     }
 
-    fn fail(&self, e: PyErr) {
+    fn keep(&self, e: PyErr) {
         let mut slot = self.error.lock().unwrap_or_else(|p| p.into_inner());
         slot.get_or_insert(e);
-        self.cancel.cancel();
     }
 
     /// The law's exception, if it failed.
@@ -56,11 +63,12 @@ impl Shared {
 }
 
 /// The factory: one controller per run (ideal, physics), all calling the
-/// same Python object.
+/// same Python object and naming labels in one table.
 pub struct PyLaw {
     law: Arc<Py<PyAny>>,
     inputs: &'static [&'static str],
     shared: Arc<Shared>,
+    labels: Arc<LabelTable>,
 }
 
 impl PyLaw {
@@ -69,6 +77,7 @@ impl PyLaw {
             law: Arc::new(law),
             inputs,
             shared,
+            labels: Arc::new(LabelTable::default()),
         }
     }
 }
@@ -79,8 +88,13 @@ impl PolicyFactory for PyLaw {
             law: self.law.clone(),
             inputs: self.inputs,
             shared: self.shared.clone(),
-            failed: false,
+            labels: self.labels.clone(),
+            fault: None,
         })
+    }
+
+    fn labels(&self) -> Option<Vec<String>> {
+        Some(self.labels.names())
     }
 }
 
@@ -88,7 +102,15 @@ struct PyController {
     law: Arc<Py<PyAny>>,
     inputs: &'static [&'static str],
     shared: Arc<Shared>,
-    failed: bool,
+    labels: Arc<LabelTable>,
+    fault: Option<String>,
+}
+
+/// A law's answer.
+struct Answer {
+    u: Input,
+    label: Option<String>,
+    done: bool,
 }
 
 impl Controller for PyController {
@@ -98,49 +120,101 @@ impl Controller for PyController {
             label: 0,
             done: true,
         };
-        if self.failed || self.shared.cancel.is_cancelled() {
+        if self.fault.is_some() {
+            return stop;
+        }
+        if self.shared.cancel.is_cancelled() {
+            self.fault = Some(anholonomy::cancel::CANCELLED.into());
             return stop;
         }
         let t0 = Instant::now();
-        let res = Python::attach(|py| call(py, &self.law, self.inputs, t, q));
-        let ns = t0.elapsed().as_nanos() as u64;
+        let res = Python::attach(|py| {
+            call(py, &self.law, self.inputs, t, q).and_then(|a| {
+                let name = a.label.as_deref().unwrap_or(DEFAULT_LABEL);
+                let label = self.labels.intern(name, MAX_LABELS).ok_or_else(|| {
+                    runtime_failure(
+                        py,
+                        format!("feedback law: more than {MAX_LABELS} distinct labels (`{name}` is one too many)"),
+                    )
+                })?;
+                Ok(Command {
+                    u: a.u,
+                    label,
+                    done: a.done,
+                })
+            })
+            .map_err(|e| {
+                let text = e.to_string();
+                (e, text)
+            })
+        });
         self.shared.calls.fetch_add(1, Ordering::Relaxed);
+        let ns = t0.elapsed().as_nanos() as u64;
         self.shared.nanos.fetch_add(ns, Ordering::Relaxed);
         match res {
-            Ok(u) => Command {
-                u,
-                label: 0,
-                done: false,
-            },
-            Err(e) => {
-                self.failed = true;
-                self.shared.fail(e);
+            Ok(c) => c,
+            Err((e, text)) => {
+                self.shared.keep(e);
+                self.fault = Some(text);
                 stop
             }
         }
     }
+
+    fn fault(&self) -> Option<String> {
+        self.fault.clone()
+    }
 }
 
-/// One sample: u = law(t, q), checked.
+/// One sample: the law's answer, checked.
 fn call(
     py: Python<'_>,
     law: &Py<PyAny>,
     inputs: &[&str],
     t: f64,
     q: &State,
-) -> PyResult<Input> {
+) -> PyResult<Answer> {
     let arr = PyArray1::from_slice(py, q.as_slice());
     let r = law.bind(py).call1((t, arr))?;
-    let u = extract_u(&r).map_err(|what| {
+    let bad = |what: String| {
         runtime_failure(
             py,
             format!(
-                "feedback law: law(t, q) returned {what} at t = {t} s; expected a sequence of {} numbers ({})",
+                "feedback law: law(t, q) returned {what} at t = {t} s; expected {} numbers ({}), or a dict {{\"u\": [...], \"label\": str, \"done\": bool}}",
                 inputs.len(),
                 inputs.join(", ")
             ),
         )
-    })?;
+    };
+    let (u, label, done) = match r.cast::<PyDict>() {
+        Ok(d) => {
+            for k in d.keys() {
+                let known = k
+                    .extract::<String>()
+                    .is_ok_and(|k| matches!(k.as_str(), "u" | "label" | "done"));
+                if !known {
+                    return Err(bad(format!("a dict with the key {}", k.repr()?)));
+                }
+            }
+            let u = d
+                .get_item("u")?
+                .ok_or_else(|| bad("a dict without the key 'u'".into()))?;
+            let label = match d.get_item("label")? {
+                None => None,
+                Some(l) if l.is_none() => None,
+                Some(l) if l.is_instance_of::<PyString>() => Some(l.extract::<String>()?),
+                Some(l) => return Err(bad(format!("a label that is a {}", type_name(&l)))),
+            };
+            let done = match d.get_item("done")? {
+                None => false,
+                Some(x) => x
+                    .extract::<bool>()
+                    .map_err(|_| bad(format!("`done` that is a {}", type_name(&x))))?,
+            };
+            (extract_u(&u).map_err(&bad)?, label, done)
+        }
+        Err(_) => (extract_u(&r).map_err(&bad)?, None, false),
+    };
     if u.len() != inputs.len() {
         return Err(runtime_failure(
             py,
@@ -161,12 +235,23 @@ fn call(
             ),
         ));
     }
-    Ok(Input::from_vec(u))
+    Ok(Answer {
+        u: Input::from_vec(u),
+        label,
+        done,
+    })
 }
 
-/// The numbers of a law's return value: a float64 numpy array and lists or
-/// tuples of numbers directly, anything else numpy converts to a 1-D float
-/// array; else what it was, for the message.
+fn type_name(r: &Bound<'_, PyAny>) -> String {
+    r.get_type()
+        .name()
+        .map(|n| n.to_string())
+        .unwrap_or_else(|_| "?".into())
+}
+
+/// The numbers of u: a float64 numpy array and lists or tuples of numbers
+/// directly, anything else numpy converts to a 1-D float array; else what
+/// it was, for the message.
 fn extract_u(r: &Bound<'_, PyAny>) -> Result<Vec<f64>, String> {
     if let Ok(a) = r.cast::<PyArray1<f64>>() {
         if let Ok(s) = a.readonly().as_slice() {
@@ -178,14 +263,11 @@ fn extract_u(r: &Bound<'_, PyAny>) -> Result<Vec<f64>, String> {
             return Ok(v);
         }
     }
-    let type_name = || {
-        r.get_type()
-            .name()
-            .map(|n| n.to_string())
-            .unwrap_or_else(|_| "?".into())
-    };
     if r.is_instance_of::<PyFloat>() || r.is_instance_of::<PyInt>() || r.is_none() {
-        return Err(format!("a single {}", type_name()));
+        return Err(format!("a single {}", type_name(r)));
+    }
+    if r.is_instance_of::<PyString>() {
+        return Err("a str".into());
     }
     match r.extract::<PyArrayLike1<'_, f64, AllowTypeChange>>() {
         Ok(a) => Ok(a.as_array().to_vec()),
@@ -195,7 +277,7 @@ fn extract_u(r: &Bound<'_, PyAny>) -> Result<Vec<f64>, String> {
                 .ok()
                 .map(|s| format!(" of shape {s}"))
                 .unwrap_or_default();
-            Err(format!("a {}{shape}", type_name()))
+            Err(format!("a {}{shape}", type_name(r)))
         }
     }
 }

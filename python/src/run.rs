@@ -10,8 +10,9 @@ use crate::law::{PyLaw, Shared};
 use crate::scenario::Scenario;
 use anholonomy::cancel::Cancel;
 use anholonomy::integrate::Trajectory;
-use anholonomy::plan::{ControlLaw, Plan};
-use anholonomy::runner::{run_detailed, Finished, RunOptions, RunOutcome};
+use anholonomy::plan::Plan;
+use anholonomy::runner::{run_detailed, run_with_plan_detailed, Finished, RunOptions, RunOutcome};
+use anholonomy::scenario::PlannerConfig;
 use anholonomy::validate::Prepared;
 use anholonomy::Error;
 use numpy::{PyArray1, PyArrayMethods};
@@ -36,8 +37,7 @@ fn interruptible<T: Send>(
     work: impl FnOnce() -> T + Send,
 ) -> PyResult<T> {
     let (tx, rx) = mpsc::channel();
-    let mut signal: Option<PyErr> = None;
-    let out = std::thread::scope(|s| {
+    let (out, signal) = std::thread::scope(|s| {
         // The main thread's stack size: runs on the CLI's main thread get as much.
         let spawned = std::thread::Builder::new()
             .name("anholonomy-run".into())
@@ -54,21 +54,24 @@ fn interruptible<T: Send>(
                 "cannot start the run's thread: {e}"
             )));
         }
-        py.detach(|| loop {
-            match rx.recv_timeout(SIGNAL_POLL) {
-                Ok(v) => return Ok(Some(v)),
-                // The worker panicked: the scope re-raises the panic.
-                Err(RecvTimeoutError::Disconnected) => return Ok(None),
-                Err(RecvTimeoutError::Timeout) => {
-                    if signal.is_none() {
-                        if let Err(e) = Python::attach(|py| py.check_signals()) {
-                            signal = Some(e);
-                            cancel.cancel();
+        Ok(py.detach(move || {
+            let mut signal: Option<PyErr> = None;
+            loop {
+                match rx.recv_timeout(SIGNAL_POLL) {
+                    Ok(v) => return (Some(v), signal),
+                    // The worker panicked: the scope re-raises the panic.
+                    Err(RecvTimeoutError::Disconnected) => return (None, signal),
+                    Err(RecvTimeoutError::Timeout) => {
+                        if signal.is_none() {
+                            if let Err(e) = Python::attach(|py| py.check_signals()) {
+                                signal = Some(e);
+                                cancel.cancel();
+                            }
                         }
                     }
                 }
             }
-        })
+        }))
     })?;
     match (signal, out) {
         (Some(e), _) => Err(e),
@@ -146,17 +149,17 @@ fn run_one(prep: &Prepared, opts: &RunOptions) -> Result<Ran, Error> {
     }
 }
 
-/// A feedback-law variant of a prepared scenario: the same model, physics,
-/// start, goal, thresholds and logs, with `law` sampled every `period` s
-/// for at most `horizon` s instead of the scenario's planner.
-fn with_law(
+/// The plan of a Python law: `law` sampled every `period` s for at most
+/// `horizon` s (defaults: an external law's `planner.period` and
+/// `planner.horizon`, else the scenario's plan duration).
+fn law_plan(
     py: Python<'_>,
     prep: &Prepared,
     law: Py<PyAny>,
-    period: f64,
-    horizon: f64,
+    period: Option<f64>,
+    horizon: Option<f64>,
     shared: Arc<Shared>,
-) -> PyResult<Prepared> {
+) -> PyResult<Plan> {
     let sc = &prep.scenario;
     let bad = |key: &str, m: String| {
         input_error(py, format!("{key}: {m}"), None, None, Some(key.into()))
@@ -167,6 +170,19 @@ fn with_law(
             "the scenario has a [sweep] table, whose variants run its planner: run the law on variants made with `replace`".into(),
         ));
     }
+    let external = match &sc.planner {
+        PlannerConfig::External(p) => Some(p),
+        _ => None,
+    };
+    let Some(period) = period.or(external.map(|p| p.period)) else {
+        return Err(bad(
+            "period",
+            "a feedback law needs its sample period, s".into(),
+        ));
+    };
+    let horizon = horizon
+        .or(external.map(|p| p.horizon))
+        .unwrap_or(prep.planned.duration);
     if !(period.is_finite() && period > 0.0) {
         return Err(bad("period", format!("{period} s: must be a finite time > 0")));
     }
@@ -186,27 +202,15 @@ fn with_law(
             ),
         ));
     }
-    let system = anholonomy::scenario::build_system(&sc.model, &sc.planner)
-        .map_err(|m| to_py(py, &sc.error(m)))?;
-    let inputs = system.model().input_names();
-    let plan = Plan {
-        labels: vec!["law".into()],
-        segments: Vec::new(),
-        duration: horizon,
-        law: ControlLaw::Feedback {
-            factory: Arc::new(PyLaw::new(law, inputs, shared)),
-            period,
-        },
-        details: serde_json::json!({ "law": "python", "period_s": period }),
-    };
-    Ok(Prepared {
-        scenario: sc.clone(),
-        system,
-        robot: prep.robot.clone(),
-        planned: plan,
-        plan_wall_s: 0.0,
-        max_steps: prep.max_steps,
-    })
+    let inputs = prep.model().input_names();
+    let details = serde_json::json!({ "law": "python", "period_s": period });
+    Ok(Plan::feedback(
+        Vec::new(),
+        Arc::new(PyLaw::new(law, inputs, shared)),
+        period,
+        horizon,
+        details,
+    ))
 }
 
 /// Run one scenario (a sweep runs its variants), optionally with a Python
@@ -226,21 +230,8 @@ pub fn run<'py>(
     check_logs(py, logs.as_deref(), &[&scenario.prep.scenario.name])?;
     let cancel = Cancel::new();
     let shared = Arc::new(Shared::new(cancel.clone()));
-    let (prep, is_law) = match law {
-        Some(law) => {
-            let Some(period) = period else {
-                return Err(input_error(
-                    py,
-                    "period: a feedback law needs its sample period, s".into(),
-                    None,
-                    None,
-                    Some("period".into()),
-                ));
-            };
-            let horizon = horizon.unwrap_or(scenario.prep.planned.duration);
-            let p = with_law(py, &scenario.prep, law, period, horizon, shared.clone())?;
-            (Arc::new(p), true)
-        }
+    let plan = match law {
+        Some(law) => Some(law_plan(py, &scenario.prep, law, period, horizon, shared.clone())?),
         None => {
             if period.is_some() || horizon.is_some() {
                 return Err(input_error(
@@ -251,17 +242,21 @@ pub fn run<'py>(
                     Some(if period.is_some() { "period" } else { "horizon" }.into()),
                 ));
             }
-            (scenario.prep.clone(), false)
+            None
         }
     };
+    let prep = &scenario.prep;
     let opts = options(logs, pose_rate, &cancel);
-    let res = interruptible(py, &cancel, || run_one(&prep, &opts))?;
+    let res = interruptible(py, &cancel, || match &plan {
+        Some(plan) => run_with_plan_detailed(prep, plan, &opts).map(|f| Ran::Run(Box::new(f))),
+        None => run_one(prep, &opts),
+    })?;
     if let Some(e) = shared.take_error() {
         return Err(e);
     }
     let ran = res.map_err(|e| to_py(py, &e))?;
-    let d = ran_dict(py, &prep, &ran)?;
-    if is_law {
+    let d = ran_dict(py, prep, plan.as_ref().unwrap_or(&prep.planned), &ran)?;
+    if plan.is_some() {
         use std::sync::atomic::Ordering::Relaxed;
         d.set_item("planner", "python")?;
         d.set_item("law_calls", shared.calls.load(Relaxed))?;
@@ -322,7 +317,7 @@ pub fn run_many<'py>(
     let mut first_err: Option<PyErr> = None;
     for (i, r) in ran {
         match r {
-            Ok(r) => out.append(ran_dict(py, &preps[i], &r)?)?,
+            Ok(r) => out.append(ran_dict(py, &preps[i], &preps[i].planned, &r)?)?,
             Err(e) => {
                 let err = to_py(py, &e);
                 if return_exceptions {
@@ -376,7 +371,12 @@ fn outcome_items(d: &Bound<'_, PyDict>, o: &RunOutcome) -> PyResult<()> {
     Ok(())
 }
 
-fn ran_dict<'py>(py: Python<'py>, prep: &Prepared, ran: &Ran) -> PyResult<Bound<'py, PyDict>> {
+fn ran_dict<'py>(
+    py: Python<'py>,
+    prep: &Prepared,
+    plan: &Plan,
+    ran: &Ran,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     let model = prep.model();
     d.set_item("state_names", model.state_names().to_vec())?;
@@ -401,8 +401,7 @@ fn ran_dict<'py>(py: Python<'py>, prep: &Prepared, ran: &Ran) -> PyResult<Bound<
             d.set_item("kind", "run")?;
             outcome_items(&d, &f.outcome)?;
             d.set_item("summary", json_to_py(py, &f.summary)?)?;
-            let plan = &prep.planned;
-            d.set_item("labels", &plan.labels)?;
+            d.set_item("labels", &f.labels)?;
             d.set_item("ideal", traj_dict(py, &f.ideal, n, m)?)?;
             d.set_item("sim", traj_dict(py, &f.sim.traj, n, m)?)?;
             let channels = PyDict::new(py);

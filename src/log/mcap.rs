@@ -748,7 +748,7 @@ fn plan_metadata(rec: &RunRecord<'_>) -> BTreeMap<String, String> {
         "command".into(),
         c["kind"].as_str().unwrap_or("continuous").to_string(),
     );
-    for key in ["hold_period_s", "jumps_s", "details"] {
+    for key in ["hold_period_s", "jumps_s", "jump_count", "details"] {
         if !c[key].is_null() {
             m.insert(key.into(), c[key].to_string());
         }

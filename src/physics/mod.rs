@@ -65,6 +65,20 @@ pub struct ReplayOptions {
     pub link_pose_every: Option<usize>,
 }
 
+/// Why a replay stopped before its end.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ReplayError {
+    /// The simulation produced a non-finite state.
+    #[error("{0}")]
+    Diverged(String),
+    /// The controller faulted ([`crate::plan::Controller::fault`]).
+    #[error("{0}")]
+    Law(String),
+    /// The caller's token was cancelled ([`replay_until`]).
+    #[error("run cancelled")]
+    Cancelled,
+}
+
 /// Replay `plan` on `sys` for its duration plus `settle` seconds (zero input),
 /// or until `settle` seconds after a feedback policy reports `done`; calling `progress(fraction)` now and then.
 ///
@@ -77,7 +91,7 @@ pub fn replay(
     dt: f64,
     settle: f64,
     progress: &mut dyn FnMut(f64),
-) -> Result<SimTrajectory, String> {
+) -> Result<SimTrajectory, ReplayError> {
     let opts = ReplayOptions {
         dt,
         settle,
@@ -93,19 +107,19 @@ pub fn replay_with(
     plan: &Plan,
     opts: &ReplayOptions,
     progress: &mut dyn FnMut(f64),
-) -> Result<SimTrajectory, String> {
+) -> Result<SimTrajectory, ReplayError> {
     replay_until(sys, plan, opts, progress, &Cancel::default())
 }
 
-/// [`replay_with`] that stops with the error [`crate::cancel::CANCELLED`]
-/// when `cancel` is set (checked before every step).
+/// [`replay_with`] that stops with [`ReplayError::Cancelled`] when `cancel`
+/// is set (checked before every step).
 pub fn replay_until(
     sys: &mut dyn PhysicsSystem,
     plan: &Plan,
     opts: &ReplayOptions,
     progress: &mut dyn FnMut(f64),
     cancel: &Cancel,
-) -> Result<SimTrajectory, String> {
+) -> Result<SimTrajectory, ReplayError> {
     let dt = opts.dt;
     let mut ctl = plan.controller();
     let n_plan = step_count(plan.duration, dt);
@@ -134,6 +148,9 @@ pub fn replay_until(
     let mut clock = hold.map(|p| crate::integrate::SampleClock::new(p, dt));
     let q0 = sys.state();
     let mut held = ctl.command(0.0, &q0);
+    if let Some(fault) = ctl.fault() {
+        return Err(ReplayError::Law(fault));
+    }
     let zero = Input::zeros(held.u.len());
     let mut finished = false;
     // Time, state and channels of one sample (the state is the last one read back).
@@ -152,7 +169,7 @@ pub fn replay_until(
     record(&mut out, sys, 0.0, q0);
     for k in 0..n {
         if cancel.is_cancelled() {
-            return Err(crate::cancel::CANCELLED.into());
+            return Err(ReplayError::Cancelled);
         }
         let t = k as f64 * dt;
         let q = out.traj.q.last().expect("the start state is recorded");
@@ -162,6 +179,9 @@ pub fn replay_until(
                 Some(clock) => {
                     if clock.due(t) {
                         held = ctl.command(t, q);
+                        if let Some(fault) = ctl.fault() {
+                            return Err(ReplayError::Law(fault));
+                        }
                     }
                 }
                 None => held = ctl.command(t + 0.5 * dt, q),
@@ -174,6 +194,10 @@ pub fn replay_until(
             break;
         }
         finished |= held.done;
+        if !idle {
+            // The plan was in force for this step (settling applies zero).
+            out.plan_steps = k + 1;
+        }
         let u = if idle { &zero } else { &held.u };
         out.traj.u.push(u.clone());
         out.traj.label.push(held.label);
@@ -182,10 +206,10 @@ pub fn replay_until(
         out.steps += 1;
         let q = sys.state();
         if q.iter().any(|v| !v.is_finite()) {
-            return Err(format!(
+            return Err(ReplayError::Diverged(format!(
                 "simulation diverged (non-finite state) at t = {:.3} s",
                 t + dt
-            ));
+            )));
         }
         record(&mut out, sys, (k + 1) as f64 * dt, q);
         if k % 256 == 0 {

@@ -3,6 +3,9 @@
 
 pub mod dilf;
 pub mod endogenous;
+pub mod external;
+pub mod file;
+pub mod json_numbers;
 pub mod rover_primitives;
 pub mod sphere_geometric;
 pub mod sphere_triangle;
@@ -28,6 +31,34 @@ pub enum PlanError {
     /// An iterative planner stopped without converging.
     #[error("planner did not converge: {0}")]
     NoConvergence(String),
+    /// A file the planner reads (a plan file) is unusable: bad input in
+    /// that file, reported against it (`FILE:LINE: message`), not against
+    /// the scenario.
+    #[error("{0}")]
+    File(Box<FileProblem>),
+}
+
+/// What is wrong where in a file a planner reads.
+#[derive(Debug, Error, Clone, PartialEq)]
+#[error("{}{}: {message}", .path.display(), .line.map(|l| format!(":{l}")).unwrap_or_default())]
+pub struct FileProblem {
+    /// The file at fault.
+    pub path: std::path::PathBuf,
+    /// 1-based line (a CSV row, a JSON value), when known.
+    pub line: Option<usize>,
+    /// One line naming the column or key.
+    pub message: String,
+}
+
+impl PlanError {
+    /// A [`PlanError::File`].
+    pub fn file(path: std::path::PathBuf, line: Option<usize>, message: String) -> PlanError {
+        PlanError::File(Box::new(FileProblem {
+            path,
+            line,
+            message,
+        }))
+    }
 }
 
 /// `Ok` when `ok`, else [`PlanError::InvalidParameter`] naming the parameter.

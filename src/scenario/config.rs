@@ -8,6 +8,8 @@
 
 use crate::planner::dilf::DilfParams;
 use crate::planner::endogenous::EndogenousParams;
+use crate::planner::external::ExternalParams;
+use crate::planner::file::FilePlanParams;
 use crate::planner::rover_primitives::RoverPrimitiveParams;
 use crate::planner::sphere_geometric::SphereGeometricParams;
 use crate::planner::sphere_triangle::SphereTriangleParams;
@@ -15,6 +17,7 @@ use crate::planner::stokes_disk::StokesDiskParams;
 use crate::planner::stokes_space::StokesSpaceParams;
 use crate::systems::dilf::MobileManipulatorConfig;
 use crate::systems::disk::DiskModelConfig;
+use crate::systems::own_plan::{self, Source};
 use crate::systems::rover::RoverConfig;
 use crate::systems::space_robot::{SpacePlanner, SpaceRobotConfig};
 use crate::systems::sphere::{SphereConfig, SpherePlanner};
@@ -59,9 +62,19 @@ pub enum PlannerConfig {
     SphereTriangle(SphereTriangleParams),
     /// Seed 004 dipolar inverse Lyapunov function, feedback law of Eq. 18.
     Dilf(DilfParams),
+    /// A plan read from a CSV, JSON or MCAP file (any model).
+    File(FilePlanParams),
+    /// A feedback law in another process, spoken to over stdin/stdout (any model).
+    External(ExternalParams),
 }
 
-/// Which planners plan for which model (`model kind`, `planner kinds`).
+/// Planner kinds that plan for every model: the plan comes from outside
+/// the harness (see [`crate::systems::own_plan`]).
+pub const OUTSIDE: [&str; 2] = ["file", "external"];
+
+/// Which built-in planners plan for which model (`model kind`, `planner
+/// kinds`); the [`OUTSIDE`] kinds plan for every model besides. A model
+/// without a planner of its own has an empty list.
 pub const PAIRS: [(&str, &[&str]); 5] = [
     ("rolling_disk", &["stokes_disk"]),
     ("space_robot", &["stokes_space", "endogenous"]),
@@ -126,7 +139,7 @@ impl ModelConfig {
 
 impl PlannerConfig {
     /// Every planner `kind`.
-    pub const KINDS: [&'static str; 7] = [
+    pub const KINDS: [&'static str; 9] = [
         "stokes_disk",
         "stokes_space",
         "endogenous",
@@ -134,6 +147,8 @@ impl PlannerConfig {
         "sphere_geometric",
         "sphere_triangle",
         "dilf",
+        "file",
+        "external",
     ];
 
     /// The `kind` string.
@@ -146,6 +161,18 @@ impl PlannerConfig {
             PlannerConfig::SphereGeometric(_) => "sphere_geometric",
             PlannerConfig::SphereTriangle(_) => "sphere_triangle",
             PlannerConfig::Dilf(_) => "dilf",
+            PlannerConfig::File(_) => "file",
+            PlannerConfig::External(_) => "external",
+        }
+    }
+
+    /// Paths in the planner's parameters are relative to `dir`, the
+    /// scenario file's directory (a plan file, an external law's directory).
+    pub(crate) fn set_base(&mut self, dir: &Path) {
+        match self {
+            PlannerConfig::File(p) => p.base = dir.to_path_buf(),
+            PlannerConfig::External(p) => p.base = dir.to_path_buf(),
+            _ => {}
         }
     }
 
@@ -162,6 +189,8 @@ impl PlannerConfig {
             "sphere_geometric" => PlannerConfig::SphereGeometric(de(table)?),
             "sphere_triangle" => PlannerConfig::SphereTriangle(de(table)?),
             "dilf" => PlannerConfig::Dilf(de(table)?),
+            "file" => PlannerConfig::File(de(table)?),
+            "external" => PlannerConfig::External(de(table)?),
             _ => return Ok(None),
         }))
     }
@@ -169,11 +198,43 @@ impl PlannerConfig {
 
 /// The system for a model and planner: each system gets its own typed
 /// configuration. A planner that does not fit the model is a user error
-/// naming `planner.kind` and the planners that do fit.
+/// naming `planner.kind` and the planners that do fit. A plan file or an
+/// external law wraps the model's own system ([`own_plan`]).
 pub fn build_system(
     model: &ModelConfig,
     planner: &PlannerConfig,
 ) -> Result<Box<dyn System>, String> {
+    let source = match planner {
+        PlannerConfig::File(p) => Source::File(p.clone()),
+        PlannerConfig::External(p) => Source::External(p.clone()),
+        _ => return builtin_system(model, planner),
+    };
+    own_plan::wrap(model_system(model, planner)?, source)
+}
+
+/// The system of `model` for a plan from outside: built with its first
+/// built-in planner (per [`PAIRS`]) at that planner's defaults; the wrapper
+/// replaces only `plan` (metrics that read planner parameters, e.g. the
+/// rover's ε in `*_time_to_goal`, see those defaults). A model without a
+/// built-in planner is built with the `outside` planner itself: its arm in
+/// [`builtin_system`] accepts any planner.
+fn model_system(model: &ModelConfig, outside: &PlannerConfig) -> Result<Box<dyn System>, String> {
+    let first = PAIRS
+        .iter()
+        .find(|(m, _)| *m == model.kind())
+        .and_then(|(_, p)| p.first());
+    let Some(kind) = first else {
+        return builtin_system(model, outside);
+    };
+    let empty = Spanned::new(0..0, DeValue::Table(toml::de::DeTable::new()));
+    let defaults = PlannerConfig::parse(kind, empty)
+        .map_err(|e| format!("planner `{kind}` has no defaults: {e}"))?
+        .ok_or_else(|| format!("unknown planner `{kind}` in PAIRS"))?;
+    builtin_system(model, &defaults)
+}
+
+/// The system for a model and one of its built-in planners.
+fn builtin_system(model: &ModelConfig, planner: &PlannerConfig) -> Result<Box<dyn System>, String> {
     use ModelConfig as M;
     use PlannerConfig as P;
     match (model, planner) {
@@ -196,20 +257,31 @@ pub fn build_system(
     }
 }
 
-/// Whether the planner `kind` plans for the model `kind` (per [`PAIRS`]).
+/// Whether the planner `kind` plans for the model `kind` (per [`PAIRS`];
+/// the [`OUTSIDE`] kinds plan for every model).
 pub fn plans_for(model: &str, planner: &str) -> bool {
     PAIRS
         .iter()
-        .any(|(m, p)| *m == model && p.contains(&planner))
+        .any(|(m, p)| *m == model && (p.contains(&planner) || OUTSIDE.contains(&planner)))
+}
+
+/// The planner kinds that plan for `model`: its own, then [`OUTSIDE`].
+pub fn planners_for(model: &str) -> Vec<&'static str> {
+    let own = PAIRS.iter().find(|(m, _)| *m == model).map(|(_, p)| *p);
+    own.unwrap_or_default()
+        .iter()
+        .chain(OUTSIDE.iter())
+        .copied()
+        .collect()
 }
 
 /// The error for a planner that does not plan for the model.
 pub(crate) fn mismatch(model: &str, planner: &str) -> String {
-    let fits = PAIRS
-        .iter()
-        .find(|(m, _)| *m == model)
-        .map(|(_, p)| p.join(" or "))
-        .unwrap_or_default();
+    let fits = planners_for(model);
+    let fits = match fits.split_last() {
+        Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
+        _ => fits.join(""),
+    };
     format!("key `planner.kind`: `{planner}` does not plan for model `{model}` (use {fits})")
 }
 
@@ -240,12 +312,24 @@ mod tests {
                 ModelConfig::parse(k, v).unwrap().unwrap()
             })
             .collect();
+        // The outside kinds need a file / a program that exist.
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("p.csv"), "t,x\n").unwrap();
         let planners: Vec<PlannerConfig> = PlannerConfig::KINDS
             .iter()
-            .map(|k| PlannerConfig::parse(k, table(k, "")).unwrap().unwrap())
+            .map(|k| {
+                let params = match *k {
+                    "file" => "path = \"p.csv\"",
+                    "external" => "command = [\"sh\"]\nperiod = 0.1\nhorizon = 1.0",
+                    _ => "",
+                };
+                let mut p = PlannerConfig::parse(k, table(k, params)).unwrap().unwrap();
+                p.set_base(dir.path());
+                p
+            })
             .collect();
         for m in &models {
-            let fits = PAIRS.iter().find(|(k, _)| *k == m.kind()).unwrap().1;
+            let fits = planners_for(m.kind());
             for p in &planners {
                 let r = build_system(m, p);
                 assert_eq!(

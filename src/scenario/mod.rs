@@ -16,7 +16,7 @@ pub mod doc;
 pub mod keypath;
 mod sweep_config;
 
-pub use config::{build_system, ModelConfig, PlannerConfig, PAIRS};
+pub use config::{build_system, planners_for, ModelConfig, PlannerConfig, OUTSIDE, PAIRS};
 pub use keypath::KeyPath;
 pub use sweep_config::{sweep_metric_names, variant_seed, vary_key, Dist, SweepConfig, Variant};
 
@@ -466,7 +466,7 @@ impl Scenario {
         let model = ModelConfig::parse(&model_kind, model)
             .map_err(serde)?
             .ok_or_else(|| bad(format!("key `model.kind`: unknown model `{model_kind}`")))?;
-        let planner = PlannerConfig::parse(&planner_kind, planner)
+        let mut planner = PlannerConfig::parse(&planner_kind, planner)
             .map_err(serde)?
             .ok_or_else(|| {
                 bad(format!(
@@ -496,6 +496,7 @@ impl Scenario {
             }
         };
         let base = path.parent().unwrap_or(Path::new("."));
+        planner.set_base(base);
         let system = build_system(&model, &planner).map_err(&bad)?;
         // start/goal are written in the system's file chart (usually the model state).
         let chart = system.file_model();

@@ -32,6 +32,7 @@
 
 pub mod dilf;
 pub mod disk;
+pub mod own_plan;
 pub mod rover;
 pub mod space_robot;
 pub mod sphere;

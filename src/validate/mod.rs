@@ -281,7 +281,7 @@ fn plan_error_key(sc: &Scenario, e: &PlanError) -> String {
             }
         }
         PlanError::Unreachable(_) => "goal".into(),
-        PlanError::NoConvergence(_) => "planner".into(),
+        PlanError::NoConvergence(_) | PlanError::File(_) => "planner".into(),
     }
 }
 
@@ -296,6 +296,14 @@ fn make_plan(sc: &Scenario, system: &dyn System) -> Result<Plan, Error> {
         step: sc.sim.dt,
     };
     let plan_error = |source: PlanError| {
+        // A bad plan file is reported at its own row, like a bad URDF.
+        if let PlanError::File(f) = source {
+            return Error::Input {
+                path: f.path,
+                line: f.line,
+                message: f.message,
+            };
+        }
         let key = plan_error_key(sc, &source);
         Error::Plan {
             path: sc.path.clone(),

@@ -1,0 +1,296 @@
+//! `[planner] kind = "external"`: a feedback law in another process.
+//!
+//! The harness starts `command` once per run (the ideal run and the
+//! physics run each their own process) in the scenario's directory, and
+//! exchanges one line of JSON per control sample ([`protocol`]): every
+//! `period` seconds it sends the time and the state and waits up to
+//! `timeout` seconds for the input, which it holds until the next sample.
+//! The run ends at `horizon`, or when an answer says `done`.
+//!
+//! A law that cannot start, exits early, answers garbage or the wrong
+//! number of inputs, or does not answer in time ends the run as a runtime
+//! failure ([`crate::plan::Controller::fault`], exit 3) with one line and
+//! the tail of its stderr; the process is always killed and reaped.
+//! Whether the program exists and is executable is checked up front, with
+//! the scenario (bad input, exit 2).
+
+pub mod process;
+pub mod protocol;
+
+use crate::model::{Input, State};
+use crate::plan::{Command, Controller, LabelTable, Plan, PolicyFactory};
+use process::{describe, Failure, LawProcess};
+use protocol::Answer;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+use std::time::Duration;
+
+/// Default of `timeout`, s.
+pub const DEFAULT_TIMEOUT: f64 = 5.0;
+
+fn default_timeout() -> f64 {
+    DEFAULT_TIMEOUT
+}
+
+/// `[planner] kind = "external"`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct ExternalParams {
+    /// Program and arguments, e.g. `["python3", "law.py"]`; run in the
+    /// scenario's directory (so relative paths are relative to the scenario).
+    pub command: Vec<String>,
+    /// Control period, s: the law is asked every `period` and its input held.
+    pub period: f64,
+    /// Longest run, s (it ends earlier when the law answers `done`).
+    pub horizon: f64,
+    /// Longest wait for one answer, s (the first includes the process's start).
+    #[serde(default = "default_timeout")]
+    pub timeout: f64,
+    /// The scenario file's directory (set by the scenario layer).
+    #[serde(skip)]
+    pub base: PathBuf,
+}
+
+impl ExternalParams {
+    /// The directory the law runs in.
+    pub fn dir(&self) -> PathBuf {
+        if self.base.as_os_str().is_empty() {
+            PathBuf::from(".")
+        } else {
+            self.base.clone()
+        }
+    }
+
+    /// Every check that needs no process: numbers, and that the program
+    /// exists and is executable. Errors name the key.
+    pub fn check(&self) -> Result<PathBuf, String> {
+        for (key, v) in [("period", self.period), ("horizon", self.horizon)] {
+            if !(v.is_finite() && v > 0.0) {
+                return Err(format!(
+                    "key `planner.{key}`: must be a number > 0 s, got {v}"
+                ));
+            }
+        }
+        if !(self.timeout.is_finite() && self.timeout > 0.0 && self.timeout <= 3600.0) {
+            return Err(format!(
+                "key `planner.timeout`: must be in (0, 3600] s, got {}",
+                self.timeout
+            ));
+        }
+        let Some(program) = self.command.first() else {
+            return Err(
+                "key `planner.command`: must name a program, e.g. [\"python3\", \"law.py\"]".into(),
+            );
+        };
+        if let Some(a) = self.command.iter().find(|a| a.contains('\0')) {
+            return Err(format!("key `planner.command`: {a:?} contains a NUL byte"));
+        }
+        resolve_program(program, &self.dir()).map_err(|m| format!("key `planner.command`: {m}"))
+    }
+}
+
+/// Whether `p` is a regular file the user may execute.
+fn executable(p: &Path) -> bool {
+    let Ok(meta) = std::fs::metadata(p) else {
+        return false;
+    };
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        meta.is_file() && meta.permissions().mode() & 0o111 != 0
+    }
+    #[cfg(not(unix))]
+    {
+        meta.is_file()
+    }
+}
+
+/// The program to start: a path (with a `/`) relative to `dir`, or a name
+/// looked up on `PATH` as the shell would.
+pub fn resolve_program(program: &str, dir: &Path) -> Result<PathBuf, String> {
+    if program.is_empty() {
+        return Err("the program name is empty".into());
+    }
+    if program.contains('/') || program.contains(std::path::MAIN_SEPARATOR) {
+        let p = dir.join(program);
+        if !p.exists() {
+            return Err(format!("program not found: {}", p.display()));
+        }
+        if !executable(&p) {
+            return Err(format!(
+                "program is not an executable file: {} (for a script, name its interpreter first, e.g. [\"python3\", \"{program}\"])",
+                p.display()
+            ));
+        }
+        return std::path::absolute(&p).map_err(|e| format!("{}: {e}", p.display()));
+    }
+    let path = std::env::var_os("PATH").unwrap_or_default();
+    std::env::split_paths(&path)
+        .map(|d| d.join(program))
+        .find(|p| executable(p))
+        .ok_or_else(|| format!("program `{program}` not found on PATH"))
+}
+
+/// What every controller of one law shares.
+struct Law {
+    program: PathBuf,
+    command: Vec<String>,
+    dir: PathBuf,
+    timeout: Duration,
+    state_names: Vec<&'static str>,
+    input_names: Vec<&'static str>,
+    labels: LabelTable,
+}
+
+/// Starts one law process per run.
+pub struct ExternalFactory(Arc<Law>);
+
+impl PolicyFactory for ExternalFactory {
+    fn start(&self) -> Box<dyn Controller> {
+        let law = self.0.clone();
+        let (proc, fault) = match LawProcess::start(&law.program, &law.command[1..], &law.dir) {
+            Ok(p) => (Some(p), None),
+            Err(e) => (
+                None,
+                Some(format!("cannot start `{}`: {e}", law.command.join(" "))),
+            ),
+        };
+        Box::new(ExternalController {
+            m: law.input_names.len(),
+            law,
+            proc,
+            fault,
+            sample: 0,
+            buf: Vec::with_capacity(256),
+        })
+    }
+
+    fn labels(&self) -> Option<Vec<String>> {
+        Some(self.0.labels.names())
+    }
+}
+
+/// Why an exchange failed.
+enum Why {
+    Exited,
+    Timeout,
+    Bad(String),
+}
+
+/// One run's law process.
+pub struct ExternalController {
+    law: Arc<Law>,
+    proc: Option<LawProcess>,
+    fault: Option<String>,
+    sample: usize,
+    m: usize,
+    buf: Vec<u8>,
+}
+
+impl ExternalController {
+    /// The id of the law's process (`None` if it could not start).
+    pub fn process_id(&self) -> Option<u32> {
+        self.proc.as_ref().map(LawProcess::id)
+    }
+
+    /// Record the fault of sample `k` at `t`: the process is stopped (a
+    /// law that closed its output gets a second to exit, any other is killed
+    /// at once) and its stderr tail appended.
+    fn fail(&mut self, k: usize, t: f64, why: Why) -> Command {
+        let at = format!("sample {k} (t = {t} s)");
+        let (status, killed, tail) = match self.proc.as_mut() {
+            Some(p) => {
+                let grace = match why {
+                    Why::Exited => Duration::from_secs(1),
+                    _ => Duration::ZERO,
+                };
+                let (status, killed) = p.stop(grace);
+                (status, killed, p.stderr_tail())
+            }
+            None => (None, false, String::new()),
+        };
+        let killed_note = if killed { "; the law was killed" } else { "" };
+        let what = match why {
+            Why::Exited => format!("the law {} before answering {at}", describe(status, killed)),
+            Why::Timeout => format!(
+                "no answer to {at} within {} s (planner.timeout){killed_note}",
+                self.law.timeout.as_secs_f64()
+            ),
+            Why::Bad(m) => format!("bad answer to {at}: {m}{killed_note}"),
+        };
+        self.fault = Some(format!("`{}`: {what}{tail}", self.law.command.join(" ")));
+        self.zero()
+    }
+
+    fn zero(&self) -> Command {
+        Command {
+            u: Input::zeros(self.m),
+            label: 0,
+            done: true,
+        }
+    }
+}
+
+impl Controller for ExternalController {
+    fn command(&mut self, t: f64, q: &State) -> Command {
+        if self.fault.is_some() {
+            return self.zero();
+        }
+        let k = self.sample;
+        self.sample += 1;
+        let Some(proc) = self.proc.as_mut() else {
+            return self.zero();
+        };
+        self.buf.clear();
+        let names = (k == 0).then_some(self.law.state_names.as_slice());
+        protocol::write_request(&mut self.buf, t, q.as_slice(), names);
+        let timeout = self.law.timeout;
+        match proc.exchange(&self.buf, timeout) {
+            Ok(line) => match Answer::parse(&line, &self.law.input_names)
+                .and_then(|a| a.command(&self.law.labels))
+            {
+                Ok(c) => c,
+                Err(m) => self.fail(k, t, Why::Bad(m)),
+            },
+            Err(Failure::Exited) => self.fail(k, t, Why::Exited),
+            Err(Failure::Timeout) => self.fail(k, t, Why::Timeout),
+            Err(Failure::Line(m)) => self.fail(k, t, Why::Bad(m)),
+        }
+    }
+
+    fn fault(&self) -> Option<String> {
+        self.fault.clone()
+    }
+}
+
+/// The plan: `params`' law for a model with these state and input names.
+/// `program` is the resolved program ([`ExternalParams::check`]).
+pub fn plan(
+    params: &ExternalParams,
+    program: PathBuf,
+    state_names: &[&'static str],
+    input_names: &[&'static str],
+) -> Plan {
+    let law = Law {
+        program,
+        command: params.command.clone(),
+        dir: params.dir(),
+        timeout: Duration::from_secs_f64(params.timeout),
+        state_names: state_names.to_vec(),
+        input_names: input_names.to_vec(),
+        labels: LabelTable::default(),
+    };
+    let details = serde_json::json!({
+        "command": params.command,
+        "period_s": params.period,
+        "timeout_s": params.timeout,
+    });
+    Plan::feedback(
+        Vec::new(),
+        Arc::new(ExternalFactory(Arc::new(law))),
+        params.period,
+        params.horizon,
+        details,
+    )
+}

@@ -1,0 +1,437 @@
+//! `[planner] kind = "file"`: a plan read from a file, for any model.
+//!
+//! Three formats, chosen by the file's extension:
+//!
+//! * `.csv`: a header row `t` followed by the model's input names in any
+//!   order (and optionally `label`), then one row per sample ([`csv`]);
+//! * `.json`: `{"t": [...], "u": {"<input>": [...], ...}}`, optionally
+//!   `"label": [...]` ([`json`]);
+//! * `.mcap`: the `/plan/command` messages of another run's `run.mcap` (or
+//!   another topic of the same form, `topic = "/sim/command"`), so a logged
+//!   plan replays on a changed model or settings ([`mcap`]).
+//!
+//! Every sample is checked before anything runs: `t` starts at 0 and
+//! increases strictly, every value is finite, every input has a column and
+//! no column is unknown; a bad value is reported at its file, row (line) and
+//! column. The last sample's `t` is the plan's duration. Between samples u
+//! is held (`hold = "zero_order"`, the default: u(t) = u_i on [t_i,
+//! t_{i+1}), a jump at every change) or interpolated (`hold = "linear"`).
+//! The ideal run integrates the held u exactly (its steps are split at the
+//! jumps); the physics applies u at each step's midpoint, so samples on the
+//! `sim.dt` grid make both runs apply the same value over every step.
+
+pub mod csv;
+pub mod json;
+pub mod mcap;
+
+use crate::model::Input;
+use crate::plan::{ControlLaw, Plan, Segment};
+use crate::planner::PlanError;
+use serde::{Deserialize, Serialize};
+use std::path::{Path, PathBuf};
+use std::sync::Arc;
+
+/// Largest CSV or JSON plan file read, bytes.
+pub const TEXT_MAX_BYTES: u64 = 256 << 20;
+/// Largest MCAP file read, bytes (a run's whole log, of which one topic is used).
+pub const MCAP_MAX_BYTES: u64 = 4 << 30;
+/// The MCAP topic read by default.
+pub const DEFAULT_TOPIC: &str = "/plan/command";
+
+/// What happens between two samples.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum Hold {
+    /// u(t) = u_i on [t_i, t_{i+1}): a digital controller's output.
+    #[default]
+    ZeroOrder,
+    /// u(t) interpolated linearly between samples.
+    Linear,
+}
+
+impl Hold {
+    /// The name as written in scenario files.
+    pub fn name(self) -> &'static str {
+        match self {
+            Hold::ZeroOrder => "zero_order",
+            Hold::Linear => "linear",
+        }
+    }
+}
+
+/// `[planner] kind = "file"`.
+#[derive(Debug, Clone, Deserialize, Serialize)]
+#[serde(deny_unknown_fields)]
+pub struct FilePlanParams {
+    /// The plan file (`.csv`, `.json` or `.mcap`), relative to the scenario file.
+    pub path: PathBuf,
+    /// Between samples: `zero_order` (default) or `linear`.
+    #[serde(default)]
+    pub hold: Hold,
+    /// MCAP only: the topic to read (default `/plan/command`; `/sim/command`
+    /// holds what the physics applied).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub topic: Option<String>,
+    /// Directory `path` is relative to (the scenario's; set by the scenario layer).
+    #[serde(skip)]
+    pub base: PathBuf,
+}
+
+/// The plan file's format.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Format {
+    /// Comma-separated values with a header.
+    Csv,
+    /// A JSON object of arrays.
+    Json,
+    /// A run log.
+    Mcap,
+}
+
+impl FilePlanParams {
+    /// The file, resolved against the scenario's directory.
+    pub fn file(&self) -> PathBuf {
+        self.base.join(&self.path)
+    }
+
+    /// The format from the extension; errors name `planner.path` or `planner.topic`.
+    pub fn format(&self) -> Result<Format, String> {
+        let ext = self
+            .path
+            .extension()
+            .map(|e| e.to_string_lossy().to_ascii_lowercase());
+        let format = match ext.as_deref() {
+            Some("csv") => Format::Csv,
+            Some("json") => Format::Json,
+            Some("mcap") => Format::Mcap,
+            other => {
+                return Err(format!(
+                    "key `planner.path`: {}: unknown plan file format{} (use a .csv, .json or .mcap file)",
+                    self.path.display(),
+                    other.map(|e| format!(" `.{e}`")).unwrap_or_default()
+                ))
+            }
+        };
+        if self.topic.is_some() && format != Format::Mcap {
+            return Err(
+                "key `planner.topic`: only MCAP plan files have topics (drop it)".to_string(),
+            );
+        }
+        if let Some(t) = &self.topic {
+            if t.is_empty() {
+                return Err("key `planner.topic`: must not be empty".to_string());
+            }
+        }
+        Ok(format)
+    }
+
+    /// The checks that need no file: format, and that the file exists.
+    pub fn check(&self) -> Result<(), String> {
+        self.format()?;
+        let f = self.file();
+        if !f.exists() {
+            return Err(format!(
+                "key `planner.path`: file not found: {}",
+                f.display()
+            ));
+        }
+        Ok(())
+    }
+}
+
+/// Where a value was read, for messages: the line (CSV row, JSON token) and
+/// what names it (`` column `v` ``, `` key `t[3]` ``, `` message 4 ``).
+#[derive(Debug, Clone)]
+pub struct At {
+    /// 1-based line, when the format has lines.
+    pub line: Option<usize>,
+    /// The column or key.
+    pub what: String,
+}
+
+/// Samples read from a plan file, before they become a [`Plan`].
+#[derive(Debug, Clone, Default)]
+pub struct Samples {
+    /// Sample times, s.
+    pub t: Vec<f64>,
+    /// Inputs, row-major: `m` values per sample in the model's input order.
+    pub u: Vec<f64>,
+    /// Label index per sample (into `labels`).
+    pub label: Vec<usize>,
+    /// Label names, in order of first use.
+    pub labels: Vec<String>,
+}
+
+/// Checks and collects samples; every error names the file and where.
+pub struct Reader<'a> {
+    file: &'a Path,
+    input_names: &'a [&'a str],
+    out: Samples,
+}
+
+impl<'a> Reader<'a> {
+    /// A reader for `file`, whose inputs are `input_names`.
+    pub fn new(file: &'a Path, input_names: &'a [&'a str]) -> Reader<'a> {
+        Reader {
+            file,
+            input_names,
+            out: Samples::default(),
+        }
+    }
+
+    /// The error for a problem at `at`.
+    pub fn error(&self, at: &At, message: impl std::fmt::Display) -> PlanError {
+        let message = if at.what.is_empty() {
+            message.to_string()
+        } else {
+            format!("{}: {message}", at.what)
+        };
+        PlanError::file(self.file.to_path_buf(), at.line, message)
+    }
+
+    /// An error about the whole file (no line).
+    pub fn file_error(&self, message: impl std::fmt::Display) -> PlanError {
+        self.error(
+            &At {
+                line: None,
+                what: String::new(),
+            },
+            message,
+        )
+    }
+
+    /// Append one sample: time `t` (read at `t_at`), inputs in model order
+    /// (each read at `u_at[i]`), and its label.
+    pub fn push(
+        &mut self,
+        t: f64,
+        t_at: &At,
+        u: &[f64],
+        u_at: &dyn Fn(usize) -> At,
+        label: Option<&str>,
+    ) -> Result<(), PlanError> {
+        if !t.is_finite() {
+            return Err(self.error(t_at, format!("{t} is not a finite time")));
+        }
+        match self.out.t.last() {
+            None if t != 0.0 => {
+                return Err(self.error(
+                    t_at,
+                    format!("the first sample must be at t = 0, not {t}"),
+                ))
+            }
+            Some(&prev) if t <= prev => {
+                return Err(self.error(
+                    t_at,
+                    format!("{t} does not come after the previous sample's {prev} (t must increase strictly)"),
+                ))
+            }
+            _ => {}
+        }
+        for (i, v) in u.iter().enumerate() {
+            if !v.is_finite() {
+                return Err(self.error(&u_at(i), format!("{v} is not a finite number")));
+            }
+        }
+        let name = label.unwrap_or("file");
+        let idx = match self.out.labels.iter().position(|l| l == name) {
+            Some(i) => i,
+            None => {
+                self.out.labels.push(name.to_string());
+                self.out.labels.len() - 1
+            }
+        };
+        self.out.t.push(t);
+        self.out.u.extend_from_slice(u);
+        self.out.label.push(idx);
+        Ok(())
+    }
+
+    /// The samples, once there are at least two (a start and an end).
+    pub fn finish(self) -> Result<Samples, PlanError> {
+        if self.out.t.len() < 2 {
+            return Err(self.file_error(format!(
+                "{} sample{}: a plan needs at least two (t = 0 and its end, which is its duration)",
+                self.out.t.len(),
+                if self.out.t.len() == 1 { "" } else { "s" }
+            )));
+        }
+        Ok(self.out)
+    }
+
+    /// The model's input names.
+    pub fn input_names(&self) -> &[&str] {
+        self.input_names
+    }
+}
+
+/// Read and check the plan file of `params` for a model with `input_names`.
+pub fn read(params: &FilePlanParams, input_names: &[&str]) -> Result<Samples, PlanError> {
+    let file = params.file();
+    let format = params.format().map_err(|m| PlanError::InvalidParameter {
+        name: "path".into(),
+        reason: m,
+    })?;
+    let reader = Reader::new(&file, input_names);
+    match format {
+        Format::Csv => csv::read(reader),
+        Format::Json => json::read(reader),
+        Format::Mcap => mcap::read(reader, params.topic.as_deref().unwrap_or(DEFAULT_TOPIC)),
+    }
+}
+
+/// The plan of `params` for a model with `input_names`.
+pub fn plan(params: &FilePlanParams, input_names: &[&str]) -> Result<Plan, PlanError> {
+    let samples = read(params, input_names)?;
+    let mut details = serde_json::json!({
+        "file": params.path,
+        "hold": params.hold.name(),
+        "samples": samples.t.len(),
+    });
+    if let Some(t) = &params.topic {
+        details["topic"] = serde_json::json!(t);
+    }
+    Ok(samples.into_plan(input_names.len(), params.hold, details))
+}
+
+impl Samples {
+    /// The plan: u(t) held or interpolated between the samples, labels held,
+    /// one segment per run of equal labels, duration = the last sample's t.
+    pub fn into_plan(self, m: usize, hold: Hold, details: serde_json::Value) -> Plan {
+        let n = self.t.len();
+        let duration = self.t[n - 1];
+        let mut segments: Vec<Segment> = Vec::new();
+        for (i, &l) in self.label.iter().enumerate().take(n - 1) {
+            match segments.last_mut() {
+                Some(s) if s.label == l => s.end = self.t[i + 1],
+                _ => segments.push(Segment {
+                    label: l,
+                    start: self.t[i],
+                    end: self.t[i + 1],
+                }),
+            }
+        }
+        // Jumps of a held u: where a sample differs from the one before.
+        let jumps: Arc<[f64]> = (1..n - 1)
+            .filter(|&i| self.u[i * m..(i + 1) * m] != self.u[(i - 1) * m..i * m])
+            .map(|i| self.t[i])
+            .collect();
+        let labels = self.labels.clone();
+        let s2 = Arc::new(self);
+        // The sample in force at t (the first before t = 0).
+        let row = |s: &Samples, t: f64| s.t.partition_point(|&ti| ti <= t).saturating_sub(1);
+        let law = match hold {
+            Hold::ZeroOrder => {
+                let f = move |t: f64| {
+                    let i = row(&s2, t);
+                    (
+                        Input::from_column_slice(&s2.u[i * m..(i + 1) * m]),
+                        s2.label[i],
+                    )
+                };
+                ControlLaw::Piecewise {
+                    u: Arc::new(f),
+                    jumps,
+                }
+            }
+            Hold::Linear => {
+                let f = move |t: f64| {
+                    let i = row(&s2, t);
+                    let a = &s2.u[i * m..(i + 1) * m];
+                    let u = match s2.t.get(i + 1) {
+                        // At a sample itself the sample exactly (w = 0).
+                        Some(&t1) if t > s2.t[i] => {
+                            let w = (t - s2.t[i]) / (t1 - s2.t[i]);
+                            let b = &s2.u[(i + 1) * m..(i + 2) * m];
+                            Input::from_iterator(m, a.iter().zip(b).map(|(x, y)| x + (y - x) * w))
+                        }
+                        _ => Input::from_column_slice(a),
+                    };
+                    (u, s2.label[i])
+                };
+                ControlLaw::Piecewise {
+                    u: Arc::new(f),
+                    jumps: Arc::new([]),
+                }
+            }
+        };
+        Plan {
+            labels,
+            segments,
+            duration,
+            law,
+            details,
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn samples(t: &[f64], u: &[f64]) -> Samples {
+        Samples {
+            t: t.to_vec(),
+            u: u.to_vec(),
+            label: vec![0; t.len()],
+            labels: vec!["file".into()],
+        }
+    }
+
+    #[test]
+    fn zero_order_hold_is_right_continuous_and_jumps_where_u_changes() {
+        let p = samples(&[0.0, 0.5, 1.0, 2.0], &[1.0, 1.0, 3.0, 9.0]).into_plan(
+            1,
+            Hold::ZeroOrder,
+            serde_json::Value::Null,
+        );
+        assert_eq!(p.duration, 2.0);
+        // 0.5 repeats the value before: no jump there.
+        assert_eq!(p.jumps(), vec![1.0]);
+        let mut c = p.controller();
+        let q = crate::model::State::zeros(1);
+        let u = |c: &mut Box<dyn crate::plan::Controller>, t: f64| c.command(t, &q).u[0];
+        assert_eq!(u(&mut c, 0.0), 1.0);
+        assert_eq!(u(&mut c, 0.999), 1.0);
+        assert_eq!(u(&mut c, 1.0), 3.0);
+        assert_eq!(u(&mut c, 1.999), 3.0);
+        assert_eq!(u(&mut c, 2.0), 9.0);
+    }
+
+    #[test]
+    fn linear_hold_interpolates_and_hits_samples_exactly() {
+        let p = samples(&[0.0, 0.1, 0.3], &[0.1, 0.7, -0.2]).into_plan(
+            1,
+            Hold::Linear,
+            serde_json::Value::Null,
+        );
+        assert!(p.jumps().is_empty());
+        let mut c = p.controller();
+        let q = crate::model::State::zeros(1);
+        for (t, want) in [
+            (0.0, 0.1),
+            (0.1, 0.7),
+            (0.3, -0.2),
+            (0.05, 0.4),
+            (0.2, 0.25),
+        ] {
+            let got = c.command(t, &q).u[0];
+            assert!((got - want).abs() < 1e-15, "t = {t}: {got} vs {want}");
+        }
+        assert_eq!(c.command(0.1, &q).u[0].to_bits(), 0.7f64.to_bits());
+    }
+
+    #[test]
+    fn segments_follow_label_runs() {
+        let mut s = samples(&[0.0, 1.0, 2.0, 3.0], &[0.0; 4]);
+        s.labels = vec!["a".into(), "b".into()];
+        s.label = vec![0, 0, 1, 0];
+        let p = s.into_plan(1, Hold::ZeroOrder, serde_json::Value::Null);
+        let segs: Vec<(usize, f64, f64)> = p
+            .segments
+            .iter()
+            .map(|s| (s.label, s.start, s.end))
+            .collect();
+        assert_eq!(segs, vec![(0, 0.0, 2.0), (1, 2.0, 3.0)]);
+    }
+}
