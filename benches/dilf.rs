@@ -144,6 +144,7 @@ fn full_run(c: &mut Criterion) {
         progress: false,
         pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
         cancel: Default::default(),
+        keep: anholonomy::log::Keep::All,
     };
     let mut g = c.benchmark_group("dilf_single_door_full_run");
     g.sample_size(10);

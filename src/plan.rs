@@ -45,6 +45,52 @@ pub trait Controller: Send {
     }
 }
 
+/// A controller asked at most once per sample: a call with the same `t`
+/// and state (bit for bit) as the one before gets the same command again
+/// without asking the inner controller. The runs ask a feedback law twice
+/// at t = 0 (to start, then as the first sample); a law outside the harness
+/// (an external process, a Python callable) sees each sample once.
+pub struct OncePerSample<C> {
+    inner: C,
+    last: Option<(u64, Vec<u64>, Command)>,
+}
+
+impl<C: Controller> OncePerSample<C> {
+    /// Wrap `inner`.
+    pub fn new(inner: C) -> Self {
+        OncePerSample { inner, last: None }
+    }
+
+    /// The wrapped controller.
+    pub fn inner(&self) -> &C {
+        &self.inner
+    }
+}
+
+impl<C: Controller> Controller for OncePerSample<C> {
+    fn command(&mut self, t: f64, q: &State) -> Command {
+        let same = |(tb, qb, _): &(u64, Vec<u64>, Command)| {
+            *tb == t.to_bits()
+                && qb.len() == q.len()
+                && qb.iter().zip(q.iter()).all(|(a, b)| *a == b.to_bits())
+        };
+        if let Some(last) = self.last.as_ref().filter(|l| same(l)) {
+            return last.2.clone();
+        }
+        let c = self.inner.command(t, q);
+        self.last = Some((
+            t.to_bits(),
+            q.iter().map(|v| v.to_bits()).collect(),
+            c.clone(),
+        ));
+        c
+    }
+
+    fn fault(&self) -> Option<String> {
+        self.inner.fault()
+    }
+}
+
 /// Builds fresh controller instances (a feedback policy may keep internal
 /// state, so the ideal run and the physics run each get their own).
 pub trait PolicyFactory: Send + Sync {
@@ -106,7 +152,7 @@ pub enum ControlLaw {
     Piecewise {
         /// u(t) and the label in force (right-continuous at the jumps).
         u: Arc<OpenLoopFn>,
-        /// Jump times in (0, duration), increasing.
+        /// Jump times in (0, duration], increasing.
         jumps: Arc<[f64]>,
     },
     /// A feedback law u = k(t, q), sampled every `period` seconds and held.
@@ -202,14 +248,17 @@ impl Plan {
     }
 
     /// Times in (0, duration) where an open-loop u(t) jumps, increasing:
-    /// the declared jumps of a [`ControlLaw::Piecewise`] law, else segment
-    /// joins whose one-sided limits differ (relative 1e-9). Empty for
-    /// feedback laws (their holds are the sample grid itself).
+    /// segment joins whose one-sided limits differ (relative 1e-9), or the
+    /// declared jumps of a [`ControlLaw::Piecewise`] law (in (0, duration]:
+    /// a held plan may jump at its end, where the last step must still read
+    /// the value before). Empty for feedback laws (their holds are the
+    /// sample grid itself).
     pub fn jumps(&self) -> Vec<f64> {
         let f = match &self.law {
             ControlLaw::OpenLoop(f) => f,
+            // A held plan's last sample can be a jump: the run ends there.
             ControlLaw::Piecewise { jumps, .. } => {
-                let inside = |j: &&f64| **j > 0.0 && **j < self.duration;
+                let inside = |j: &&f64| **j > 0.0 && **j <= self.duration;
                 return jumps.iter().filter(inside).copied().collect();
             }
             ControlLaw::Feedback { .. } => return Vec::new(),

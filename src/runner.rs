@@ -7,10 +7,12 @@ use crate::compare::compare;
 use crate::error::Error;
 use crate::integrate::{simulate_until, IdealStop, Trajectory};
 use crate::log::unit::LogUnit;
+use crate::log::Keep;
 use crate::model::{KinematicModel, State};
 use crate::physics::{replay_until, ReplayError, ReplayOptions};
 use crate::plan::{ControlLaw, Plan};
 use crate::record::{RunRecord, Series, SimTrajectory};
+use crate::verdict::Verdict;
 use serde::Serialize;
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -33,6 +35,8 @@ pub struct RunOptions {
     /// replay check it every step; the run then fails with
     /// [`crate::cancel::CANCELLED`]). The CLI passes the default token.
     pub cancel: Cancel,
+    /// Which files the log directory keeps.
+    pub keep: Keep,
 }
 
 /// Default of [`RunOptions::pose_rate`], Hz: more than a viewer plays back,
@@ -77,6 +81,12 @@ pub struct RunOutcome {
     pub planner: String,
     /// All thresholds met.
     pub passed: bool,
+    /// PASS, FAIL, XFAIL or XPASS: `passed` against the scenario's `expect`.
+    pub verdict: Verdict,
+    /// `expect = "fails"`: the scenario's reason.
+    pub expect_reason: Option<String>,
+    /// Whether the `tracking_*` metrics mean anything (see [`tracking_meaningful`]).
+    pub tracking_meaningful: bool,
     /// Broken thresholds, human-readable.
     pub failures: Vec<String>,
     /// Metric name → value.
@@ -97,6 +107,16 @@ impl RunOutcome {
             .find(|(n, _)| n == name)
             .map(|(_, v)| *v)
     }
+}
+
+/// Why the `tracking_*` metrics of a run mean nothing, when they do not.
+pub const TRACKING_NOT_MEANINGFUL: &str = "not meaningful: a feedback policy closes the loop on each run's own state, so the runs reach the goal at different times and differ sample by sample whatever the physics";
+
+/// Whether the `tracking_*` metrics (simulated − ideal at equal times) mean
+/// anything: only when both runs execute the same commands, i.e. the system
+/// says its plan's commands depend on time alone ([`crate::systems::System::same_commands`]).
+pub fn tracking_meaningful(prep: &Prepared) -> bool {
+    prep.system.same_commands(&prep.planned)
 }
 
 /// State in display units (angles in degrees) as a JSON object.
@@ -164,7 +184,9 @@ pub fn run_detailed(prep: &Prepared, opts: &RunOptions) -> Result<Finished, Erro
 /// run ending at `horizon` or `settle` seconds after a command with `done`.
 /// The controller sees the same `t` and state values an external process is
 /// sent (the JSON numbers round-trip exactly), so a deterministic law gives
-/// bit-identical results in process and through the protocol. A factory
+/// bit-identical results in process and through the protocol; wrap it in
+/// [`crate::plan::OncePerSample`] as the external law is, so that it is
+/// asked once per sample (the runs ask twice at t = 0) like the process. A factory
 /// that names labels while running returns them from
 /// [`crate::plan::PolicyFactory::labels`] (see [`crate::plan::LabelTable`]).
 ///
@@ -260,9 +282,7 @@ fn run_plan(
         dt: sc.sim.dt,
         settle: sc.sim.settle,
         // Only the 3D logs read link poses, at their own rate.
-        link_pose_every: opts
-            .log_root
-            .is_some()
+        link_pose_every: (opts.log_root.is_some() && opts.keep == Keep::All)
             .then(|| pose_stride(opts.pose_rate, sc.sim.dt)),
     };
     let sim = replay_until(
@@ -287,7 +307,7 @@ fn run_plan(
 
     let t0 = Instant::now();
     let spec = metric_spec(model);
-    let cmp = compare(&ideal, &sim.traj, sc.sim.dt, spec.angular, spec.position);
+    let cmp = compare(&ideal, &sim.traj, sc.sim.dt, spec.angular, &spec.positions);
     let mut metrics = spec.compute(&goal, ideal.last(), sim.traj.last(), &cmp);
     let (extra, series) = prep.system.analysis(&goal, &ideal, &sim, &cmp);
     metrics.extend(extra);
@@ -319,6 +339,10 @@ fn run_plan(
         name: sc.name.clone(),
         planner: sc.planner.kind().into(),
         passed: failures.is_empty(),
+        verdict: Verdict::of(failures.is_empty(), sc.expect_fails.is_some()),
+        expect_reason: sc.expect_fails.clone(),
+        // The plan run, which may be a caller's ([`run_with_plan`]).
+        tracking_meaningful: prep.system.same_commands(plan),
         failures,
         metrics,
         steps: sim.steps,
@@ -339,7 +363,7 @@ fn run_plan(
                 cmp: &cmp,
                 series: &series,
             };
-            write_logs(prep, &run, &outcome, unit.dir(), &goal).map_err(log_error)?;
+            write_logs(prep, &run, &outcome, unit.dir(), &goal, opts.keep).map_err(log_error)?;
             Some(unit)
         }
         None => None,
@@ -347,12 +371,13 @@ fn run_plan(
     outcome.timings.logs = t0.elapsed().as_secs_f64();
     // Planning happened during validation: count it in.
     outcome.timings.total = t_all.elapsed().as_secs_f64() + plan_wall_s;
-    let summary = (summarize || unit.is_some())
+    let mut summary = (summarize || unit.is_some())
         .then(|| summary_json(prep, plan, &ideal, &sim, &outcome))
         .unwrap_or_default();
     if let Some(unit) = unit {
         // The summary carries the final timings, so it is written last; then
         // the three files replace the previous run's as one unit.
+        summary["logs_kept"] = json!(opts.keep.as_str());
         crate::log::atomic::write_atomic(&unit.dir().join("summary.json"), |w| {
             serde_json::to_writer_pretty(w, &summary).map_err(std::io::Error::other)
         })
@@ -384,7 +409,11 @@ fn write_logs(
     outcome: &RunOutcome,
     dir: &Path,
     goal: &State,
+    keep: Keep,
 ) -> Result<(), String> {
+    if keep == Keep::Summary {
+        return Ok(());
+    }
     let RunData {
         plan,
         ideal,
@@ -418,6 +447,9 @@ fn write_logs(
     };
     // The writers are independent (each file from the same record): on two
     // cores a single run's logs take the longer writer's time, not the sum.
+    if keep == Keep::Report {
+        return crate::report::data::write(&dir.join("series.json"), &rec);
+    }
     let (mcap, rest) = rayon::join(
         || crate::log::mcap::write_mcap(&dir.join("run.mcap"), &rec).map_err(|e| e.to_string()),
         || {
@@ -451,6 +483,11 @@ fn summary_json(
         "file": sc.path,
         "description": sc.description,
         "passed": o.passed,
+        "verdict": o.verdict,
+        "expect": {
+            "fails": sc.expect_fails.is_some(),
+            "reason": sc.expect_fails,
+        },
         "failures": o.failures,
         "thresholds": sc.thresholds,
         "minimums": sc.minimums,
@@ -480,6 +517,12 @@ fn summary_json(
             "final_segment": final_segment(plan, &sim.traj),
         },
         "metrics": o.metrics.iter().cloned().collect::<std::collections::BTreeMap<_, _>>(),
+        // Metric families whose numbers mean nothing for this run, and why.
+        "not_meaningful": if o.tracking_meaningful {
+            json!({})
+        } else {
+            json!({ "tracking": TRACKING_NOT_MEANINGFUL })
+        },
         "sim_steps": o.steps,
         // Everything that depends on the clock, and only that, sits here: the
         // rest of the summary is identical across runs.

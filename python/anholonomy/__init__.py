@@ -225,6 +225,9 @@ class Result:
     #: How often a Python law was called (both runs); its calls' wall time
     #: is ``timings["law"]``, s.
     law_calls: int = 0
+    #: ``PASS``, ``FAIL``, ``XFAIL`` or ``XPASS``: ``passed`` against the
+    #: scenario's ``expect = "fails"`` (as the CLI's table prints it).
+    verdict: str = "PASS"
 
     def __repr__(self) -> str:
         verdict = "passed" if self.passed else f"failed: {'; '.join(self.failures)}"
@@ -283,6 +286,7 @@ class Result:
             input_names=inputs,
             table=d.get("table", ""),
             law_calls=d.get("law_calls", 0),
+            verdict=d["verdict"],
         )
 
 

@@ -15,7 +15,7 @@
 use crate::errors::runtime_failure;
 use anholonomy::cancel::Cancel;
 use anholonomy::model::{Input, State};
-use anholonomy::plan::{Command, Controller, LabelTable, PolicyFactory};
+use anholonomy::plan::{Command, Controller, LabelTable, OncePerSample, PolicyFactory};
 use anholonomy::planner::external::protocol::MAX_LABELS;
 use numpy::{AllowTypeChange, PyArray1, PyArrayLike1, PyArrayMethods};
 use pyo3::prelude::*;
@@ -84,13 +84,16 @@ impl PyLaw {
 
 impl PolicyFactory for PyLaw {
     fn start(&self) -> Box<dyn Controller> {
-        Box::new(PyController {
+        // Asked once per sample, as an external law is (the runs ask twice
+        // at t = 0): a law that counts its calls or keeps state sees the
+        // same sequence both ways.
+        Box::new(OncePerSample::new(PyController {
             law: self.law.clone(),
             inputs: self.inputs,
             shared: self.shared.clone(),
             labels: self.labels.clone(),
             fault: None,
-        })
+        }))
     }
 
     fn labels(&self) -> Option<Vec<String>> {

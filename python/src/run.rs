@@ -131,6 +131,7 @@ fn options(logs: Option<PathBuf>, pose_rate: f64, cancel: &Cancel) -> RunOptions
         progress: false,
         pose_rate,
         cancel: cancel.clone(),
+        keep: anholonomy::log::Keep::All,
     }
 }
 
@@ -358,6 +359,7 @@ fn outcome_items(d: &Bound<'_, PyDict>, o: &RunOutcome) -> PyResult<()> {
     d.set_item("name", &o.name)?;
     d.set_item("planner", &o.planner)?;
     d.set_item("passed", o.passed)?;
+    d.set_item("verdict", o.verdict.as_str())?;
     d.set_item("failures", &o.failures)?;
     let metrics = PyDict::new(py);
     for (k, v) in &o.metrics {

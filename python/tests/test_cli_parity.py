@@ -35,7 +35,7 @@ def test_disk_paper_metrics_equal_the_clis_exactly(cli, tmp_path):
     assert set(r.metrics) == set(want)
     for k, v in want.items():
         assert same_number(r.metrics[k], v), (k, r.metrics[k], v)
-    assert r.passed == cli_summary["passed"]
+    assert r.passed == cli_summary["passed"] and r.verdict == cli_summary["verdict"]
     assert list(r.failures) == cli_summary["failures"]
     assert r.steps == cli_summary["sim_steps"]
     # The summary is the CLI's, but for the wall times.
@@ -44,6 +44,8 @@ def test_disk_paper_metrics_equal_the_clis_exactly(cli, tmp_path):
     for s in (ours, theirs):
         s.pop("wall_time_s")
         s.pop("file")
+    # Which log files the CLI kept: only in a written summary.
+    assert theirs.pop("logs_kept") == "all" and "logs_kept" not in ours
     assert json.loads(json.dumps(ours)) == theirs
 
 

@@ -10,6 +10,7 @@
 //! | topic | encoding / schema | one message per | content |
 //! |---|---|---|---|
 //! | `/plan/command` | json / jsonschema `anholonomy.Command` | ideal sample | inputs applied from `t` on (right limit at a jump) |
+//! | `/sim/command` | json / jsonschema `anholonomy.Command` | sim step with the plan in force, and its end | inputs the physics applied over the step from `t` on; the last message, at the plan's end, holds zeros (settling) |
 //! | `/ideal/state` | json / jsonschema `anholonomy.State` | ideal sample | ideal (RK4) state |
 //! | `/sim/state` | json / jsonschema `anholonomy.State` | sim sample | state read back from physics |
 //! | `/sim/channels` | json / jsonschema `anholonomy.SimChannels` | sim sample | extra physics measurements (slip, momentum, ...), when the system has any |
@@ -73,18 +74,24 @@ pub fn write_mcap(path: &Path, rec: &RunRecord<'_>) -> Result<(), LogError> {
     write_atomically(path, |tmp| write_file(tmp, rec))
 }
 
+/// The first I/O error of a [`Latched`] writer, readable after the writer
+/// has been handed to (and lost in) a failed MCAP writer.
+type FirstError = std::sync::Arc<std::sync::Mutex<Option<io::Error>>>;
+
 /// A writer that remembers the first I/O error: the foxglove sink reports
-/// per-message write errors only as log warnings.
+/// per-message write errors only as log warnings, and after one it fails with
+/// "attempted another write after a write method failed", which hides the
+/// cause (e.g. "No space left on device").
 struct Latched<W> {
     inner: W,
-    err: Option<io::Error>,
+    err: FirstError,
 }
 
 impl<W> Latched<W> {
     fn latch<T>(&mut self, r: io::Result<T>) -> io::Result<T> {
         if let Err(e) = &r {
-            if self.err.is_none() {
-                self.err = Some(io::Error::new(e.kind(), e.to_string()));
+            if let Ok(mut first) = self.err.lock() {
+                first.get_or_insert_with(|| io::Error::new(e.kind(), e.to_string()));
             }
         }
         r
@@ -115,14 +122,20 @@ fn write_file(tmp: &Path, rec: &RunRecord<'_>) -> Result<(), LogError> {
         path: tmp.to_path_buf(),
         source,
     };
-    let fg_err = |source: FoxgloveError| LogError::Mcap {
-        path: tmp.to_path_buf(),
-        source,
+    let first: FirstError = Default::default();
+    let latched = || first.lock().ok().and_then(|mut e| e.take());
+    // An SDK error that follows an I/O error is reported as that I/O error.
+    let fg_err = |source: FoxgloveError| match latched() {
+        Some(e) => io_err("cannot write", e),
+        None => LogError::Mcap {
+            path: tmp.to_path_buf(),
+            source,
+        },
     };
     let file = File::create(tmp).map_err(|e| io_err("cannot create", e))?;
     let writer = Latched {
         inner: BufWriter::with_capacity(1 << 20, file),
-        err: None,
+        err: first.clone(),
     };
 
     let ctx = Context::new();
@@ -148,9 +161,11 @@ fn write_file(tmp: &Path, rec: &RunRecord<'_>) -> Result<(), LogError> {
     });
     // Always close (flushes and finishes the file) before reporting errors.
     let closed = handle.close().map_err(fg_err);
-    logged?;
+    if let Err(e) = logged {
+        return Err(latched().map_or(e, |io| io_err("cannot write", io)));
+    }
     let writer = closed?;
-    if let Some(e) = writer.err {
+    if let Some(e) = latched() {
         return Err(io_err("cannot write", e));
     }
     let file = writer
@@ -271,6 +286,9 @@ fn json_channel(
 enum Ev {
     Series(usize, usize),
     Command(usize),
+    /// A step of the physics run while the plan was in force (the one at
+    /// `plan_steps` marks its end).
+    SimCommand(usize),
     Ideal(usize),
     Sim(usize),
     Channels(usize),
@@ -290,12 +308,23 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
     if rec.comparison.position_error.is_some() {
         error_names.push(Cow::Borrowed("position"));
     }
+    for r in 1..=rec.comparison.robot_position_error.len() {
+        error_names.push(Cow::Owned(format!("position_{r}")));
+    }
 
     let ch_cmd = json_channel(
         ctx,
         "/plan/command",
         "anholonomy.Command",
         "Plan inputs applied from t on (ideal run)",
+        &input_names,
+        tmp,
+    )?;
+    let ch_sim_cmd = json_channel(
+        ctx,
+        "/sim/command",
+        "anholonomy.Command",
+        "Inputs the physics applied from t on (zero from the plan's end: settling)",
         &input_names,
         tmp,
     )?;
@@ -376,6 +405,11 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
         evs.push((nanos(t), Ev::Command(k)));
         evs.push((nanos(t), Ev::Ideal(k)));
     }
+    // Steps while the plan was in force, then the plan's end (a zero).
+    let plan_end = sim.plan_steps.min(sim.traj.t.len().saturating_sub(1));
+    for (k, &t) in sim.traj.t.iter().enumerate().take(plan_end + 1) {
+        evs.push((nanos(t), Ev::SimCommand(k)));
+    }
     for (k, &t) in sim.traj.t.iter().enumerate() {
         evs.push((nanos(t), Ev::Sim(k)));
         if ch_chan.is_some() {
@@ -407,6 +441,7 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
     let keys_error_names = Keys::new(&error_names);
     let mut buf: Vec<u8> = Vec::with_capacity(512);
     let mut err_row = vec![0.0; error_names.len()];
+    let zeros = vec![0.0; input_names.len()];
     let json_err = |source| LogError::Json {
         path: tmp.to_path_buf(),
         source,
@@ -438,6 +473,21 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
                     values: ideal.u[k].as_slice(),
                 };
                 emit(&ch_cmd, ns, &msg)?;
+            }
+            Ev::SimCommand(k) => {
+                let seg = segment_name(rec.labels, sim.traj.label[k]);
+                let values = if k < plan_end {
+                    sim.traj.u[k].as_slice()
+                } else {
+                    &zeros
+                };
+                let msg = JsonMsg {
+                    t: sim.traj.t[k],
+                    segment: &seg,
+                    keys: &keys_input_names,
+                    values,
+                };
+                emit(&ch_sim_cmd, ns, &msg)?;
             }
             Ev::Ideal(k) => {
                 let seg = segment_name(rec.labels, ideal.label[k]);
@@ -479,6 +529,11 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
                 }
                 if let Some(p) = &cmp.position_error {
                     err_row[state_names.len()] = p[k];
+                }
+                // Per-robot position errors (several robots) come last.
+                let first = err_row.len() - cmp.robot_position_error.len();
+                for (slot, series) in err_row[first..].iter_mut().zip(&cmp.robot_position_error) {
+                    *slot = series[k];
                 }
                 let seg = match label_at(ideal, t) {
                     Some(l) => segment_name(rec.labels, l),

@@ -12,6 +12,7 @@ pub mod beam;
 pub mod disk;
 pub mod mobile_manipulator;
 pub mod real;
+pub mod required;
 pub mod rover;
 pub mod settings;
 pub mod space_robot;
@@ -80,7 +81,9 @@ pub enum ReplayError {
 }
 
 /// Replay `plan` on `sys` for its duration plus `settle` seconds (zero input),
-/// or until `settle` seconds after a feedback policy reports `done`; calling `progress(fraction)` now and then.
+/// or until `settle` seconds after a feedback policy reports `done` (that
+/// command is not applied: zero input from its sample on); calling
+/// `progress(fraction)` now and then.
 ///
 /// Open-loop commands are applied at the step midpoint (so each step advances
 /// the joints by the exact integral of u to second order); feedback laws are
@@ -194,6 +197,10 @@ pub fn replay_until(
             break;
         }
         finished |= held.done;
+        // A command that says `done` is not applied: the run settles from
+        // its sample on, as the ideal run ends there (every built-in
+        // policy's `done` command is zero anyway).
+        let idle = idle || finished;
         if !idle {
             // The plan was in force for this step (settling applies zero).
             out.plan_steps = k + 1;

@@ -236,7 +236,9 @@ mod tests {
         let mut bits = 0x9E37_79B9_7F4A_7C15u64;
         for _ in 0..20_000 {
             // Random mantissas, binary exponents within 2^±60.
-            bits = bits.wrapping_mul(6364136223846793005).wrapping_add(1442695040888963407);
+            bits = bits
+                .wrapping_mul(6364136223846793005)
+                .wrapping_add(1442695040888963407);
             let exp = 1023 - 60 + (bits >> 57) % 120;
             let x = f64::from_bits((exp << 52) | (bits & ((1 << 52) - 1)));
             let text = format!("[{x:?}]");

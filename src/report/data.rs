@@ -14,8 +14,9 @@ use std::path::Path;
 
 /// Format version of `series.json`.
 pub const FORMAT: u32 = 1;
-/// Buckets of the min/max decimation.
-pub const BUCKETS: usize = 400;
+/// Buckets of the min/max decimation: about one minimum and one maximum per
+/// two pixels of the report's 485-pixel plot area, which keeps every spike.
+pub const BUCKETS: usize = 250;
 /// Largest number of points of a planar path.
 pub const PATH_POINTS: usize = 1500;
 
@@ -204,6 +205,9 @@ impl SeriesFile {
             .collect();
         if let Some(p) = &c.position_error {
             errors.push(series("position", &c.t, |k| p[k]));
+        }
+        for (r, p) in c.robot_position_error.iter().enumerate() {
+            errors.push(series(&format!("position_{}", r + 1), &c.t, |k| p[k]));
         }
         SeriesFile {
             format: FORMAT,

@@ -160,6 +160,7 @@ fn run_variant(prep: &Prepared, cfg: &SweepConfig, v: &Variant, cancel: &Cancel)
         progress: false,
         pose_rate: 0.0,
         cancel: cancel.clone(),
+        keep: crate::log::Keep::All,
     };
     let res = prep
         .variant(v)
@@ -174,7 +175,7 @@ fn run_variant(prep: &Prepared, cfg: &SweepConfig, v: &Variant, cancel: &Cancel)
                 variant: v,
                 success: final_error.is_some_and(|e| e <= cfg.success_max),
                 final_error,
-                time_to_goal: finite(o.metric(&cfg.time_metric)),
+                time_to_goal: cfg.time_metric.as_ref().and_then(|m| finite(o.metric(m))),
                 steps: o.steps,
                 error: None,
                 metrics: Metrics(&o.metrics),
@@ -439,6 +440,9 @@ pub fn run_sweep_report(
         name: sc.name.clone(),
         planner: sc.planner.kind().into(),
         passed: sum.failures.is_empty(),
+        verdict: crate::verdict::Verdict::of(sum.failures.is_empty(), sc.expect_fails.is_some()),
+        expect_reason: sc.expect_fails.clone(),
+        tracking_meaningful: true,
         failures: sum.failures,
         metrics: sum.metrics,
         steps: sum.steps,

@@ -31,6 +31,7 @@ pub fn run_prepared(prep: &Prepared, logs: Option<&Path>) -> RunOutcome {
         progress: false,
         pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
         cancel: Default::default(),
+        keep: anholonomy::log::Keep::All,
     };
     run(prep, &opts).unwrap()
 }

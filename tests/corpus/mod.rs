@@ -137,6 +137,7 @@ pub fn no_line(file: &str) -> Shape {
 }
 
 mod files;
+mod own_plan;
 mod runaway;
 mod tables;
 
@@ -145,6 +146,7 @@ pub fn corpus() -> Vec<Case> {
     let mut c = Corpus(Vec::new());
     tables::cases(&mut c);
     files::cases(&mut c);
+    own_plan::cases(&mut c);
     runaway::cases(&mut c);
     c.0
 }

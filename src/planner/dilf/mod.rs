@@ -7,7 +7,9 @@
 //! * [`point_world`]: H0, T, the switches, H1 and H2 as printed (Eqs. 6–9);
 //! * [`potential`]: V (Eq. 15) and f (Eq. 17), exact gradients by dual numbers;
 //! * [`adjoint`]: the same gradient by hand-written adjoints (the fast path);
-//! * [`control`]: Eq. 18.
+//! * [`control`]: Eq. 18;
+//! * [`stall`]: the law's progress: the `stalled` stop and the hand-over to
+//!   the final alignment (ours).
 //!
 //! The planner's output is a feedback policy ([`crate::plan::ControlLaw::Feedback`]):
 //! the harness evaluates it on the ideal state and, in physics, on the
@@ -20,6 +22,7 @@ pub mod guard;
 pub mod object;
 pub mod point_world;
 pub mod potential;
+pub mod stall;
 
 use crate::model::mobile_manipulator::{DOF, INPUTS};
 use crate::model::{Input, State};
@@ -27,18 +30,23 @@ use crate::plan::{Command, ControlLaw, Controller, Plan, PolicyFactory};
 use crate::planner::{check_param, PlanError};
 use control::{Branch, Gains};
 use potential::{DipoleProduct, GoalFrame, Scene, SingularityEnclosure, Warm};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
+use stall::{Progress, StallParams, Verdict};
 use std::sync::Arc;
 
 /// When the task counts as done.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct Tolerance {
     /// Platform position error, m.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub position: f64,
     /// Platform heading error, degrees.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub heading_deg: f64,
     /// Every joint's error, degrees.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub joint_deg: f64,
 }
 
@@ -70,43 +78,55 @@ impl Tolerance {
     }
 }
 
-/// `[planner] kind = "dilf"`.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+/// Seed 004 dipolar inverse Lyapunov function: the feedback law of Eq. 18
+/// (a feedback policy).
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DilfParams {
     /// λ of the analytic switches (Eqs. 6, 8).
     #[serde(default = "default_lambda")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub lambda: f64,
     /// The exponent k_v of Eq. 15 (larger: obstacles felt less far away).
     #[serde(default = "default_kv_exponent")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub kv_exponent: f64,
     /// The speed gain k_v of Eq. 18a.
     #[serde(default = "default_kv_gain")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub kv_gain: f64,
     /// k_o of Eq. 18b.
     #[serde(default = "default_ko")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub ko: f64,
     /// K_a of Eq. 18c: one gain per joint.
     #[serde(default = "default_ka")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub ka: [f64; 6],
     /// Largest platform speed, m/s.
     #[serde(default = "default_max_speed")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub max_speed: f64,
     /// Largest platform turn rate, rad/s.
     #[serde(default = "default_max_turn_rate")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub max_turn_rate: f64,
     /// Largest joint rate, rad/s.
     #[serde(default = "default_max_joint_rate")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub max_joint_rate: f64,
     /// Hold the heading while the platform's planar field is below this
     /// fraction of ‖f‖ (θ_d is undefined there; 0 disables).
     #[serde(default = "default_deadzone")]
+    #[schemars(range(min = 0), extend("exclusiveMaximum" = 1))]
     pub heading_deadzone: f64,
     /// The policy is evaluated every `period` seconds and held in between.
     #[serde(default = "default_period")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub period: f64,
     /// Run length if the goal is never reached, s.
     #[serde(default = "default_horizon")]
+    #[schemars(range(max = 100000), extend("exclusiveMinimum" = 0))]
     pub horizon: f64,
     /// Coordinates of the arm parts' goal points.
     #[serde(default)]
@@ -115,8 +135,9 @@ pub struct DilfParams {
     /// [`DipoleProduct`]): `"geometric_mean"` (default) or `"printed"`.
     #[serde(default)]
     pub dipole: DipoleProduct,
-    /// p of the field f = (Σ‖h2‖²)^p ∂V/∂q; Eq. 17 prints p = 2 (see the README).
+    /// p of the field f = (Σ‖h2‖²)^p ∂V/∂q; Eq. 17 prints p = 2 (the research notes on seed 004 discuss it).
     #[serde(default = "default_field_power")]
+    #[schemars(extend("exclusiveMinimum" = 1.5))]
     pub field_power: f64,
     /// Singularity enclosures (Eq. 13).
     #[serde(default)]
@@ -129,6 +150,10 @@ pub struct DilfParams {
     /// more (ours: Eq. 18 is a continuous-time law, sampled here).
     #[serde(default = "default_hold_guard")]
     pub hold_guard: bool,
+    /// When the law counts as stalled, and the hand-over to the final
+    /// alignment ([`stall`]).
+    #[serde(default)]
+    pub stall: StallParams,
 }
 
 fn default_hold_guard() -> bool {
@@ -222,6 +247,12 @@ impl DilfParams {
                 .all(|v| pos(*v)),
             "every tolerance must be > 0",
         )?;
+        if let Err((name, reason)) = self.stall.check() {
+            return Err(PlanError::InvalidParameter {
+                name: name.into(),
+                reason: reason.into(),
+            });
+        }
         Ok(())
     }
 
@@ -261,10 +292,16 @@ fn labels(robots: usize) -> Vec<String> {
             "singular",
             "solver failure",
             "overstrained",
+            "stalled",
         ]
         .map(String::from),
     );
     out
+}
+
+/// Index of a plan label (e.g. `"stalled"`) for `robots` robots.
+pub fn label_index(robots: usize, name: &str) -> Option<usize> {
+    labels(robots).iter().position(|l| l == name)
 }
 
 struct Policy {
@@ -274,6 +311,7 @@ struct Policy {
     /// Hold period, s, and whether the hold guard acts.
     period: f64,
     hold_guard: bool,
+    stall: StallParams,
 }
 
 struct DilfController {
@@ -284,10 +322,51 @@ struct DilfController {
     /// Number of branch combinations (3^k): the guarded ones follow, then
     /// "converged" at 2 · combos.
     combos: usize,
+    /// The law's progress (stall stop, hand-over).
+    progress: Progress,
+    /// Per robot: turning in place to its goal heading (Eq. 18 suspended).
+    aligning: Vec<bool>,
+}
+
+impl DilfController {
+    /// Which robots turn in place from this sample on: those within half the
+    /// position tolerance; those already turning, while within the whole
+    /// tolerance; and, when the law has made no progress for
+    /// `handover_time`, every robot within the tolerance. `Err(())` when it
+    /// has made none for `stall.time`: the run ends.
+    fn hand_over(&mut self, t: f64, q: &[f64], v: f64) -> Result<(), ()> {
+        let p = &self.policy;
+        let goal = &p.scene.goal;
+        let dist = |r: usize| {
+            let i = DOF * r;
+            (q[i] - goal[i]).hypot(q[i + 1] - goal[i + 1])
+        };
+        let tolerance = p.tolerance.position;
+        for (r, a) in self.aligning.iter_mut().enumerate() {
+            let d = dist(r);
+            *a = d <= p.gains.goal_lock_radius || (*a && d <= tolerance);
+        }
+        // The in-place turn is progress while a heading is still off.
+        let heading = (0..self.aligning.len())
+            .filter(|&r| self.aligning[r])
+            .map(|r| crate::compare::wrap_angle(q[DOF * r + 2] - goal[DOF * r + 2]).abs())
+            .filter(|h| *h > p.tolerance.heading_deg.to_radians())
+            .reduce(f64::max);
+        match self.progress.observe(t, v, heading) {
+            Verdict::Stalled => return Err(()),
+            Verdict::HandOver => {
+                for (r, a) in self.aligning.iter_mut().enumerate() {
+                    *a |= dist(r) <= tolerance;
+                }
+            }
+            Verdict::Moving => {}
+        }
+        Ok(())
+    }
 }
 
 impl Controller for DilfController {
-    fn command(&mut self, _t: f64, q: &State) -> Command {
+    fn command(&mut self, t: f64, q: &State) -> Command {
         let p = &self.policy;
         let robots = p.scene.robots;
         let stop = |label: usize| Command {
@@ -316,7 +395,12 @@ impl Controller for DilfController {
         if e.overstrained() {
             return stop(done + 4);
         }
-        let (mut u, branches) = control::control(q, &f, &p.scene.goal, &p.gains);
+        if self.hand_over(t, q, e.v).is_err() {
+            return stop(done + 5);
+        }
+        let p = &self.policy;
+        let (mut u, branches) =
+            control::control_aligning(q, &f, &p.scene.goal, &p.gains, &self.aligning);
         let mut label = branches
             .iter()
             .enumerate()
@@ -345,6 +429,8 @@ impl PolicyFactory for Factory {
             warm: self.0.scene.warm(),
             guard_warm: self.0.scene.warm(),
             combos: 3usize.pow(self.0.scene.robots as u32),
+            progress: Progress::new(self.0.stall),
+            aligning: vec![false; self.0.scene.robots],
         })
     }
 }
@@ -417,6 +503,7 @@ pub fn plan(scene: Arc<Scene>, start: &State, params: &DilfParams) -> Result<Pla
         tolerance: params.tolerance,
         period: params.period,
         hold_guard: params.hold_guard,
+        stall: params.stall,
     };
     Ok(Plan {
         labels,

@@ -18,9 +18,10 @@ pub mod process;
 pub mod protocol;
 
 use crate::model::{Input, State};
-use crate::plan::{Command, Controller, LabelTable, Plan, PolicyFactory};
+use crate::plan::{Command, Controller, LabelTable, OncePerSample, Plan, PolicyFactory};
 use process::{describe, Failure, LawProcess};
 use protocol::Answer;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -33,19 +34,25 @@ fn default_timeout() -> f64 {
     DEFAULT_TIMEOUT
 }
 
-/// `[planner] kind = "external"`.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+/// A feedback law in another process, for any model: asked for the input
+/// every `period` with one JSON line (see the external-law protocol).
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ExternalParams {
     /// Program and arguments, e.g. `["python3", "law.py"]`; run in the
     /// scenario's directory (so relative paths are relative to the scenario).
+    /// A program that does not exist or is not executable is bad input.
     pub command: Vec<String>,
     /// Control period, s: the law is asked every `period` and its input held.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub period: f64,
     /// Longest run, s (it ends earlier when the law answers `done`).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub horizon: f64,
-    /// Longest wait for one answer, s (the first includes the process's start).
+    /// Longest wait for one answer, s (the first includes the process's
+    /// start); a law that does not answer in time ends the run (exit 3).
     #[serde(default = "default_timeout")]
+    #[schemars(extend("exclusiveMinimum" = 0), range(max = 3600))]
     pub timeout: f64,
     /// The scenario file's directory (set by the scenario layer).
     #[serde(skip)]
@@ -156,14 +163,14 @@ impl PolicyFactory for ExternalFactory {
                 Some(format!("cannot start `{}`: {e}", law.command.join(" "))),
             ),
         };
-        Box::new(ExternalController {
+        Box::new(OncePerSample::new(ExternalController {
             m: law.input_names.len(),
             law,
             proc,
             fault,
             sample: 0,
             buf: Vec::with_capacity(256),
-        })
+        }))
     }
 
     fn labels(&self) -> Option<Vec<String>> {

@@ -32,7 +32,7 @@ pub fn read(mut r: Reader<'_>, topic: &str) -> Result<Samples, PlanError> {
         return Err(r.file_error("empty file: expected a run.mcap"));
     }
     let stream = mcap::MessageStream::new(&bytes)
-        .map_err(|e| r.file_error(format!("not an MCAP file: {e}")))?;
+        .map_err(|e| r.file_error(format!("not a readable MCAP file: {e}")))?;
     let names: Vec<String> = r.input_names().iter().map(|s| s.to_string()).collect();
     let mut topics: Vec<String> = Vec::new();
     let mut u = vec![0.0; names.len()];

@@ -27,6 +27,7 @@ pub mod mcap;
 use crate::model::Input;
 use crate::plan::{ControlLaw, Plan, Segment};
 use crate::planner::PlanError;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
@@ -39,7 +40,7 @@ pub const MCAP_MAX_BYTES: u64 = 4 << 30;
 pub const DEFAULT_TOPIC: &str = "/plan/command";
 
 /// What happens between two samples.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Hold {
     /// u(t) = u_i on [t_i, t_{i+1}): a digital controller's output.
@@ -59,17 +60,21 @@ impl Hold {
     }
 }
 
-/// `[planner] kind = "file"`.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+/// A plan read from a file (CSV, JSON or a run's MCAP log), for any model:
+/// open-loop inputs held or interpolated between samples.
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FilePlanParams {
-    /// The plan file (`.csv`, `.json` or `.mcap`), relative to the scenario file.
+    /// The plan file, relative to the scenario file: `.csv` (header `t` and the
+    /// model's input names), `.json` (`{"t": [...], "u": {"name": [...]}}`) or a
+    /// run's `run.mcap`. `t` starts at 0 and increases strictly; its last value
+    /// is the plan's duration.
     pub path: PathBuf,
-    /// Between samples: `zero_order` (default) or `linear`.
+    /// What the input does between two samples.
     #[serde(default)]
     pub hold: Hold,
-    /// MCAP only: the topic to read (default `/plan/command`; `/sim/command`
-    /// holds what the physics applied).
+    /// MCAP files only: the topic to read; unset reads `/plan/command` (the
+    /// plan), `/sim/command` holds what the physics applied.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub topic: Option<String>,
     /// Directory `path` is relative to (the scenario's; set by the scenario layer).
@@ -311,8 +316,10 @@ impl Samples {
                 }),
             }
         }
-        // Jumps of a held u: where a sample differs from the one before.
-        let jumps: Arc<[f64]> = (1..n - 1)
+        // Jumps of a held u: where a sample differs from the one before,
+        // the last one included (the run ends there, so the step before it
+        // must read the held value up to its end, not the last sample's).
+        let jumps: Arc<[f64]> = (1..n)
             .filter(|&i| self.u[i * m..(i + 1) * m] != self.u[(i - 1) * m..i * m])
             .map(|i| self.t[i])
             .collect();
@@ -386,8 +393,8 @@ mod tests {
             serde_json::Value::Null,
         );
         assert_eq!(p.duration, 2.0);
-        // 0.5 repeats the value before: no jump there.
-        assert_eq!(p.jumps(), vec![1.0]);
+        // 0.5 repeats the value before: no jump there; the end is one.
+        assert_eq!(p.jumps(), vec![1.0, 2.0]);
         let mut c = p.controller();
         let q = crate::model::State::zeros(1);
         let u = |c: &mut Box<dyn crate::plan::Controller>, t: f64| c.command(t, &q).u[0];

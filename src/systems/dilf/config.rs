@@ -5,11 +5,12 @@
 use crate::model::ellipsoid::Superellipsoid;
 use crate::physics::beam::BeamOptions;
 use crate::physics::mobile_manipulator::ArmServo;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
 /// One obstacle as written in the scenario.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ObstacleConfig {
     /// Name (unique; used in messages and logs).
@@ -17,9 +18,11 @@ pub struct ObstacleConfig {
     /// Centre, m.
     pub center: [f64; 3],
     /// Semi-axes a, b, c, m (> 0).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub semi_axes: [f64; 3],
     /// Exponent n ≥ ½ (1: ellipsoid; large: box-like).
     #[serde(default = "one")]
+    #[schemars(range(min = 0.5, max = 32))]
     pub exponent: f64,
     /// Orientation, URDF roll-pitch-yaw in degrees.
     #[serde(default)]
@@ -44,38 +47,48 @@ impl ObstacleConfig {
 
 /// `[model.beam]`: the deformable beam two robots carry (seed 004 §II, §VI).
 /// Defaults: a 10 mm pultruded GFRP rod ([`crate::model::beam::GFRP_ROD_10MM`]).
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct BeamConfig {
     /// Young's modulus E, Pa.
     #[serde(default = "default_e")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub youngs_modulus: f64,
     /// Shear modulus G, Pa.
     #[serde(default = "default_g")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub shear_modulus: f64,
     /// Density, kg/m³.
     #[serde(default = "default_rho")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub density: f64,
     /// Outer diameter of the solid round section, m.
     #[serde(default = "default_diameter")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub diameter: f64,
     /// Rest length between the grasps, m; default: their distance at the start
     /// (the beam is straight there). Given, it must match that distance.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub length: Option<f64>,
     /// q_F of Eq. 5, the bound on ‖q_f‖∞ (m and rad, SI reading of the paper's units).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub max_deformation: f64,
     /// Bound on the grasps' stretch or shortening along the beam, m
     /// (ours; none by default: Eq. 5 alone). See `Carried::with_max_stretch`.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub max_stretch: Option<f64>,
     /// Ellipsoids along the beam (obstacles of the robot parts).
     #[serde(default = "default_segments")]
+    #[schemars(range(min = 1, max = 64))]
     pub segments: usize,
     /// Their cross semi-axes, m (the rod's radius plus a margin).
     #[serde(default = "default_beam_radius")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub radius: f64,
     /// Compliant joints of the physics beam's chain (even, 2..=40; N + 1
     /// rigid segments, see `physics::beam`).
     #[serde(default = "default_physics_segments")]
+    #[schemars(range(min = 2, max = 40))]
     pub physics_segments: usize,
 }
 
@@ -152,14 +165,17 @@ impl BeamConfig {
     }
 }
 
-/// `[model] kind = "mobile_manipulator"`.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+/// Mobile manipulators (seed 004): differential-drive platforms with PUMA 560
+/// arms among superellipsoid obstacles; one robot, or two carrying a
+/// deformable beam.
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MobileManipulatorConfig {
     /// URDF file (one robot), relative to the scenario file.
     pub urdf: PathBuf,
     /// Number of robots (1, or 2 carrying `[model.beam]`).
     #[serde(default = "one_robot")]
+    #[schemars(range(min = 1, max = 2))]
     pub robots: usize,
     /// The beam two robots carry (required with `robots = 2`).
     pub beam: Option<BeamConfig>,
@@ -173,7 +189,7 @@ pub struct MobileManipulatorConfig {
 
 /// `[model.arm_servo]`: the arms' joint servos in physics (the planner is
 /// kinematic and does not see them).
-#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize, JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ArmServoConfig {
     /// Stiff position servos tracking the integral of the commanded rates
@@ -183,8 +199,10 @@ pub enum ArmServoConfig {
     /// Joint-space impedance with gravity compensation.
     Impedance {
         /// K per joint, N m/rad (> 0).
+        #[schemars(extend("exclusiveMinimum" = 0))]
         stiffness: [f64; 6],
         /// D per joint, N m s/rad (≥ 0).
+        #[schemars(extend("minimum" = 0))]
         damping: [f64; 6],
     },
 }
