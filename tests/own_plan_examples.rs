@@ -56,7 +56,10 @@ fn the_minimal_clients_pass() {
     let built = built_example("minimal_client");
     std::fs::write(
         d.join(&rust),
-        text.replace(shipped, &format!("command = [{:?}]", built.display().to_string())),
+        text.replace(
+            shipped,
+            &format!("command = [{:?}]", built.display().to_string()),
+        ),
     )
     .unwrap();
     let out = cli(d, &["check", ex, "--logs", "logs", "--quiet"]);
@@ -73,10 +76,9 @@ fn the_minimal_clients_pass() {
         assert!((a - b).abs() <= 1e-12, "{k}: {a} vs {b}");
     }
     // The law said done at 3 s.
-    let s: serde_json::Value = serde_json::from_slice(
-        &std::fs::read(d.join("logs/disk_heading/summary.json")).unwrap(),
-    )
-    .unwrap();
+    let s: serde_json::Value =
+        serde_json::from_slice(&std::fs::read(d.join("logs/disk_heading/summary.json")).unwrap())
+            .unwrap();
     assert_eq!(s["ideal"]["end_time_s"], 3.0);
 }
 
@@ -90,7 +92,11 @@ fn the_logged_plan_replays_with_the_same_metrics() {
     let example = "examples/replay_logged_plan/rover_open_loop_replay.toml";
     workspace(
         d,
-        &["models/rover.urdf", "scenarios/rover_open_loop.toml", example],
+        &[
+            "models/rover.urdf",
+            "scenarios/rover_open_loop.toml",
+            example,
+        ],
     );
     for args in [
         &["run", "scenarios/rover_open_loop.toml", "--quiet"][..],
@@ -157,5 +163,8 @@ fn the_plan_file_example_passes() {
     let out = cli(d, &["check", ex, "--quiet"]);
     assert_eq!(out.status.code(), Some(2));
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(err.contains("disk_turn.csv:3: column `alpha_rate`"), "{err}");
+    assert!(
+        err.contains("disk_turn.csv:3: column `alpha_rate`"),
+        "{err}"
+    );
 }

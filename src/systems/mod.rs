@@ -136,7 +136,11 @@ pub trait System: Send + Sync {
     /// something only then). Default: open-loop plans yes; feedback policies no
     /// (each run closes the loop on its own state and reaches the goal at its own time).
     fn same_commands(&self, plan: &Plan) -> bool {
-        matches!(plan.law, crate::plan::ControlLaw::OpenLoop(_))
+        use crate::plan::ControlLaw;
+        matches!(
+            plan.law,
+            ControlLaw::OpenLoop(_) | ControlLaw::Piecewise { .. }
+        )
     }
     /// Which way one of this system's metrics regresses, when the harness convention
     /// ([`Direction::conventional`]: `min`/`clearance`/`margin` tokens and success rates are

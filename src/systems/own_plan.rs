@@ -8,6 +8,7 @@ use super::System;
 use crate::integrate::Trajectory;
 use crate::metric::Direction;
 use crate::model::{KinematicModel, State};
+use crate::physics::required::Named;
 use crate::physics::{PhysicsSettings, PhysicsSystem};
 use crate::plan::{Limits, Plan};
 use crate::planner::external::{self, ExternalParams};
@@ -85,6 +86,11 @@ impl System for OwnPlan {
             }
         }
     }
+    fn urdf_names(&self) -> Vec<Named> {
+        self.inner.urdf_names()
+    }
+    // No `same_commands`: the default (open-loop and held plan files yes,
+    // external feedback laws no), not the inner system's (about its own planner).
     fn physics(
         &self,
         robot: &urdf_rs::Robot,

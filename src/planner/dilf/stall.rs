@@ -22,20 +22,24 @@
 //!   keeps aligning while it stays within the tolerance (in physics its
 //!   axle drifts by millimetres while it turns).
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// `[planner.stall]`: when the law counts as stalled.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct StallParams {
     /// No progress for this long ends the run with the label `stalled`, s;
     /// 0 disables the stop (the run goes on to the horizon).
+    #[schemars(range(min = 0))]
     pub time: f64,
     /// Relative rise of V (and relative fall of the aligning platforms'
     /// heading error) that counts as progress.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub gain: f64,
     /// No progress for this long hands a platform within the position
     /// tolerance over to the final alignment, s.
+    #[schemars(range(min = 0))]
     pub handover_time: f64,
 }
 
