@@ -30,7 +30,7 @@ def same_metrics(a, b) -> bool:
 
 
 def test_path_text_and_dict_load_the_same_scenario(disk):
-    assert repr(disk) == f"Scenario('disk_paper', model='rolling_disk', planner='stokes_disk', file='{DISK_PATH}')"
+    assert repr(disk) == f'Scenario("disk_paper", model="rolling_disk", planner="stokes_disk", file="{DISK_PATH}")'
     from_str_path = anholonomy.load(str(DISK_PATH))
     from_text = anholonomy.load(DISK_PATH.read_text(), path=DISK_PATH)
     from_dict = anholonomy.load(DISK_DICT, path=SCENARIOS / "disk_dict.toml")
@@ -64,7 +64,7 @@ def test_replace_makes_variants_with_sweep_key_paths(disk):
     # Changes chain, later ones win.
     w = v.replace({"sim.settle": 0.25})
     assert w.to_dict()["sim"]["settle"] == 0.25 and w.to_dict()["sim"]["solver_iterations"] == 2
-    assert anholonomy.run(w).sim.t[-1] == pytest.approx(disk.duration + 0.25)
+    assert anholonomy.run(w).sim.t[-1] == pytest.approx(w.duration + 0.25)
     # A replaced float that is a whole number stays a float (sim.dt is a float).
     assert disk.replace({"sim.settle": 1.0}).to_dict()["sim"]["settle"] == 1.0
 
