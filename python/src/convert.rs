@@ -57,9 +57,10 @@ pub fn py_to_toml(v: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::Value> {
     }
     if v.hasattr("__fspath__")? {
         let s = v.call_method0("__fspath__")?;
-        return Ok(toml::Value::String(s.extract().map_err(|_| {
-            bad("a path that is not text".into())
-        })?));
+        return Ok(toml::Value::String(
+            s.extract()
+                .map_err(|_| bad("a path that is not text".into()))?,
+        ));
     }
     if let Ok(d) = v.cast::<PyDict>() {
         let mut t = toml::Table::new();
@@ -80,23 +81,24 @@ pub fn py_to_toml(v: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::Value> {
     if v.hasattr("__index__")? && !v.hasattr("__len__")? {
         return Ok(toml::Value::Integer(v.extract()?));
     }
-    let items: Vec<Bound<'_, PyAny>> = if v.is_instance_of::<PyList>() || v.is_instance_of::<PyTuple>() {
-        v.try_iter()?.collect::<PyResult<_>>()?
-    } else if v.hasattr("tolist")? {
-        // numpy arrays and scalars: their Python values.
-        let l = v.call_method0("tolist")?;
-        if !l.is_instance_of::<PyList>() {
-            return py_to_toml(&l, key);
-        }
-        l.try_iter()?.collect::<PyResult<_>>()?
-    } else if v.hasattr("__float__")? {
-        return Ok(toml::Value::Float(v.extract()?));
-    } else {
-        return Err(bad(format!(
-            "{} is not a TOML value (use bool, int, float, str, dict or a sequence)",
-            v.get_type().name()?
-        )));
-    };
+    let items: Vec<Bound<'_, PyAny>> =
+        if v.is_instance_of::<PyList>() || v.is_instance_of::<PyTuple>() {
+            v.try_iter()?.collect::<PyResult<_>>()?
+        } else if v.hasattr("tolist")? {
+            // numpy arrays and scalars: their Python values.
+            let l = v.call_method0("tolist")?;
+            if !l.is_instance_of::<PyList>() {
+                return py_to_toml(&l, key);
+            }
+            l.try_iter()?.collect::<PyResult<_>>()?
+        } else if v.hasattr("__float__")? {
+            return Ok(toml::Value::Float(v.extract()?));
+        } else {
+            return Err(bad(format!(
+                "{} is not a TOML value (use bool, int, float, str, dict or a sequence)",
+                v.get_type().name()?
+            )));
+        };
     let mut out = Vec::with_capacity(items.len());
     for (i, x) in items.iter().enumerate() {
         out.push(py_to_toml(x, &format!("{key}[{i}]"))?);
@@ -114,9 +116,7 @@ pub fn toml_text(v: &toml::Value) -> String {
             format!("{}.0", *x as i64)
         }
         toml::Value::Float(x) if x.is_nan() => "nan".into(),
-        toml::Value::Float(x) if x.is_infinite() => {
-            if *x > 0.0 { "inf" } else { "-inf" }.into()
-        }
+        toml::Value::Float(x) if x.is_infinite() => if *x > 0.0 { "inf" } else { "-inf" }.into(),
         toml::Value::Float(x) => toml_number(*x),
         toml::Value::Array(a) => {
             let items: Vec<String> = a.iter().map(toml_text).collect();

@@ -170,13 +170,7 @@ impl Controller for PyController {
 }
 
 /// One sample: the law's answer, checked.
-fn call(
-    py: Python<'_>,
-    law: &Py<PyAny>,
-    inputs: &[&str],
-    t: f64,
-    q: &State,
-) -> PyResult<Answer> {
+fn call(py: Python<'_>, law: &Py<PyAny>, inputs: &[&str], t: f64, q: &State) -> PyResult<Answer> {
     let arr = PyArray1::from_slice(py, q.as_slice());
     let r = law.bind(py).call1((t, arr))?;
     let bad = |what: String| {

@@ -162,9 +162,8 @@ fn law_plan(
     shared: Arc<Shared>,
 ) -> PyResult<Plan> {
     let sc = &prep.scenario;
-    let bad = |key: &str, m: String| {
-        input_error(py, format!("{key}: {m}"), None, None, Some(key.into()))
-    };
+    let bad =
+        |key: &str, m: String| input_error(py, format!("{key}: {m}"), None, None, Some(key.into()));
     if sc.sweep.is_some() {
         return Err(bad(
             "law",
@@ -185,7 +184,10 @@ fn law_plan(
         .or(external.map(|p| p.horizon))
         .unwrap_or(prep.planned.duration);
     if !(period.is_finite() && period > 0.0) {
-        return Err(bad("period", format!("{period} s: must be a finite time > 0")));
+        return Err(bad(
+            "period",
+            format!("{period} s: must be a finite time > 0"),
+        ));
     }
     if !(horizon.is_finite() && horizon > 0.0) {
         return Err(bad(
@@ -232,7 +234,14 @@ pub fn run<'py>(
     let cancel = Cancel::new();
     let shared = Arc::new(Shared::new(cancel.clone()));
     let plan = match law {
-        Some(law) => Some(law_plan(py, &scenario.prep, law, period, horizon, shared.clone())?),
+        Some(law) => Some(law_plan(
+            py,
+            &scenario.prep,
+            law,
+            period,
+            horizon,
+            shared.clone(),
+        )?),
         None => {
             if period.is_some() || horizon.is_some() {
                 return Err(input_error(
@@ -240,7 +249,14 @@ pub fn run<'py>(
                     "period/horizon: only a run with `law=` takes them".into(),
                     None,
                     None,
-                    Some(if period.is_some() { "period" } else { "horizon" }.into()),
+                    Some(
+                        if period.is_some() {
+                            "period"
+                        } else {
+                            "horizon"
+                        }
+                        .into(),
+                    ),
                 ));
             }
             None
@@ -336,7 +352,12 @@ pub fn run_many<'py>(
 }
 
 /// A trajectory's arrays: t (N,), q (N, n), u (N, m), label (N,).
-fn traj_dict<'py>(py: Python<'py>, tr: &Trajectory, n: usize, m: usize) -> PyResult<Bound<'py, PyDict>> {
+fn traj_dict<'py>(
+    py: Python<'py>,
+    tr: &Trajectory,
+    n: usize,
+    m: usize,
+) -> PyResult<Bound<'py, PyDict>> {
     let d = PyDict::new(py);
     let rows = tr.t.len();
     let flat = |v: &[anholonomy::model::State], w: usize| {
@@ -369,7 +390,10 @@ fn outcome_items(d: &Bound<'_, PyDict>, o: &RunOutcome) -> PyResult<()> {
     d.set_item("steps", o.steps)?;
     let timings = serde_json::to_value(&o.timings).unwrap_or_default();
     d.set_item("timings", json_to_py(py, &timings)?)?;
-    d.set_item("log_dir", o.log_dir.as_ref().map(|p| p.display().to_string()))?;
+    d.set_item(
+        "log_dir",
+        o.log_dir.as_ref().map(|p| p.display().to_string()),
+    )?;
     Ok(())
 }
 
@@ -415,7 +439,10 @@ fn ran_dict<'py>(
             for s in &f.series {
                 series.set_item(
                     &s.name,
-                    (PyArray1::from_slice(py, &s.t), PyArray1::from_slice(py, &s.values)),
+                    (
+                        PyArray1::from_slice(py, &s.t),
+                        PyArray1::from_slice(py, &s.values),
+                    ),
                 )?;
             }
             d.set_item("series", series)?;

@@ -464,7 +464,12 @@ impl Scenario {
                 return Err(err(format!("cannot be set: {why}")));
             }
             let v = DeValue::parse(value)
-                .map_err(|e| err(format!("`{value}` is not a TOML value: {}", e.message().trim())))?
+                .map_err(|e| {
+                    err(format!(
+                        "`{value}` is not a TOML value: {}",
+                        e.message().trim()
+                    ))
+                })?
                 .into_inner();
             keypath::set(t, kp, v, anchor.clone()).map_err(err)?;
         }
