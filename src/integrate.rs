@@ -1,5 +1,6 @@
 //! Fixed-step RK4 integration of a kinematic model under a plan (the ideal run).
 
+use crate::cancel::Cancel;
 use crate::model::{Input, KinematicModel, State};
 use crate::plan::{jump_offset, Plan};
 
@@ -116,7 +117,16 @@ fn jumps_near(jumps: &[f64], a: f64, b: f64) -> &[f64] {
 /// run at the faulting sample; [`simulate_checked`] reports the fault.
 /// Built-in planners' controllers never fault.
 pub fn simulate(model: &dyn KinematicModel, plan: &Plan, q0: &State, dt: f64) -> Trajectory {
-    run_ideal(model, plan, q0, dt).0
+    run_ideal(model, plan, q0, dt, &Cancel::default()).0
+}
+
+/// Why [`simulate_until`] stopped a run before its end.
+#[derive(Debug, Clone, PartialEq)]
+pub enum IdealStop {
+    /// The controller faulted ([`crate::plan::Controller::fault`]).
+    Fault(String),
+    /// The token was cancelled.
+    Cancelled,
 }
 
 /// [`simulate`], or the fault of a controller that stopped working (an
@@ -127,20 +137,36 @@ pub fn simulate_checked(
     q0: &State,
     dt: f64,
 ) -> Result<Trajectory, String> {
-    match run_ideal(model, plan, q0, dt) {
+    simulate_until(model, plan, q0, dt, &Cancel::default()).map_err(|e| match e {
+        IdealStop::Fault(m) => m,
+        IdealStop::Cancelled => crate::cancel::CANCELLED.into(),
+    })
+}
+
+/// [`simulate_checked`] that also stops when `cancel` is set (checked
+/// before every step).
+pub fn simulate_until(
+    model: &dyn KinematicModel,
+    plan: &Plan,
+    q0: &State,
+    dt: f64,
+    cancel: &Cancel,
+) -> Result<Trajectory, IdealStop> {
+    match run_ideal(model, plan, q0, dt, cancel) {
         (tr, None) => Ok(tr),
-        (_, Some(fault)) => Err(fault),
+        (_, Some(stop)) => Err(stop),
     }
 }
 
-/// The ideal run and the controller's fault, if it faulted (the run then
-/// ends at the faulting sample, without applying its command).
+/// The ideal run and why it stopped early, if it did (a fault ends it at
+/// the faulting sample, without applying its command).
 fn run_ideal(
     model: &dyn KinematicModel,
     plan: &Plan,
     q0: &State,
     dt: f64,
-) -> (Trajectory, Option<String>) {
+    cancel: &Cancel,
+) -> (Trajectory, Option<IdealStop>) {
     let mut ctl = plan.controller();
     let n = step_count(plan.duration, dt);
     let hold = plan.hold_period();
@@ -148,20 +174,23 @@ fn run_ideal(
     let mut q = q0.clone();
     let mut held = ctl.command(0.0, &q);
     if let Some(fault) = ctl.fault() {
-        return (out, Some(fault));
+        return (out, Some(IdealStop::Fault(fault)));
     }
     let mut clock = hold.map(|p| SampleClock::new(p, dt));
     // Open-loop u(t) may jump at segment joins: no RK4 step straddles one
     // (it is split there) and each piece reads u strictly on its own side.
     let jumps = plan.jumps();
     for k in 0..n {
+        if cancel.is_cancelled() {
+            return (out, Some(IdealStop::Cancelled));
+        }
         let t = k as f64 * dt;
         let cmd = match &mut clock {
             Some(clock) => {
                 if clock.due(t) {
                     held = ctl.command(t, &q);
                     if let Some(fault) = ctl.fault() {
-                        return (out, Some(fault));
+                        return (out, Some(IdealStop::Fault(fault)));
                     }
                 }
                 held.clone()
@@ -220,7 +249,7 @@ fn run_ideal(
     let t_end = n as f64 * dt;
     let last = ctl.command(t_end, &q);
     if let Some(fault) = ctl.fault() {
-        return (out, Some(fault));
+        return (out, Some(IdealStop::Fault(fault)));
     }
     out.t.push(t_end);
     out.q.push(q);

@@ -10,6 +10,7 @@
 //! types and never import [`scenario`].
 
 pub mod baseline;
+pub mod cancel;
 pub mod compare;
 pub mod error;
 pub mod gate;

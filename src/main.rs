@@ -497,6 +497,7 @@ fn run_cmd(args: &RunArgs, mode: Mode) -> Result<u8, Vec<Error>> {
         log_root,
         progress: !args.quiet,
         pose_rate: args.pose_rate,
+        cancel: Default::default(),
         keep: args.keep,
     };
     let mut rows = Vec::new();

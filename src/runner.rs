@@ -2,15 +2,16 @@
 //! already planned it): ideal run → physics replay → compare → thresholds →
 //! logs (one unit, [`crate::log::unit`]).
 
+use crate::cancel::Cancel;
 use crate::compare::compare;
 use crate::error::Error;
-use crate::integrate::{simulate_checked, Trajectory};
+use crate::integrate::{simulate_until, IdealStop, Trajectory};
 use crate::log::unit::LogUnit;
 use crate::log::Keep;
 use crate::model::{KinematicModel, State};
 use crate::physics::{replay_perturbed, ReplayError, ReplayOptions};
 use crate::plan::{ControlLaw, Plan};
-use crate::record::{RunRecord, SimTrajectory};
+use crate::record::{RunRecord, Series, SimTrajectory};
 use crate::verdict::Verdict;
 use serde::Serialize;
 use serde_json::json;
@@ -20,7 +21,7 @@ use std::time::Instant;
 pub use crate::compare::metric_spec;
 pub use crate::validate::Prepared;
 
-/// Where logs go, and whether to show progress.
+/// Where logs go, whether to show progress, and how to stop a run.
 #[derive(Debug, Clone)]
 pub struct RunOptions {
     /// Root directory for `<scenario>/run.*`; `None` writes no logs.
@@ -30,6 +31,10 @@ pub struct RunOptions {
     /// Link poses in the logs per second of simulated time (at least this
     /// many, see [`pose_stride`]); 0 logs them at every sample.
     pub pose_rate: f64,
+    /// Set from another thread to stop the run (the ideal run and the
+    /// replay check it every step; the run then fails with
+    /// [`crate::cancel::CANCELLED`]). The CLI passes the default token.
+    pub cancel: Cancel,
     /// Which files the log directory keeps.
     pub keep: Keep,
 }
@@ -141,10 +146,33 @@ fn display_state(model: &dyn KinematicModel, q: &State) -> serde_json::Value {
     serde_json::Value::Object(m)
 }
 
+/// Everything one run produced, for library callers (the Python package):
+/// the outcome, both runs, the system's series and the `summary.json` object.
+#[derive(Debug, Clone)]
+pub struct Finished {
+    /// Metrics, thresholds, timings, log directory.
+    pub outcome: RunOutcome,
+    /// The ideal kinematic run.
+    pub ideal: Trajectory,
+    /// The physics replay (with its channels).
+    pub sim: SimTrajectory,
+    /// Series the system computed from both runs (e.g. `V/ideal`).
+    pub series: Vec<Series>,
+    /// The same object as `summary.json` (also when no logs were written).
+    pub summary: serde_json::Value,
+    /// The plan's label names (with those a feedback law named while running).
+    pub labels: Vec<String>,
+}
+
 /// Run one scenario end to end.
 pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
     // Planned by the validation pass.
-    run_plan(prep, &prep.planned, prep.plan_wall_s, opts)
+    run_plan(prep, &prep.planned, prep.plan_wall_s, opts, false).map(|d| d.outcome)
+}
+
+/// [`run`], keeping the trajectories, series and summary.
+pub fn run_detailed(prep: &Prepared, opts: &RunOptions) -> Result<Finished, Error> {
+    run_plan(prep, &prep.planned, prep.plan_wall_s, opts, true)
 }
 
 /// Run a prepared scenario with a plan the caller supplies instead of the
@@ -179,6 +207,22 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
 /// is not a positive number, a non-finite or negative duration, or one over
 /// the scenario's step budget.
 pub fn run_with_plan(prep: &Prepared, plan: &Plan, opts: &RunOptions) -> Result<RunOutcome, Error> {
+    check_plan(prep, plan)?;
+    run_plan(prep, plan, 0.0, opts, false).map(|d| d.outcome)
+}
+
+/// [`run_with_plan`], keeping the trajectories, series and summary.
+pub fn run_with_plan_detailed(
+    prep: &Prepared,
+    plan: &Plan,
+    opts: &RunOptions,
+) -> Result<Finished, Error> {
+    check_plan(prep, plan)?;
+    run_plan(prep, plan, 0.0, opts, true)
+}
+
+/// A caller's plan against the scenario: what [`run_with_plan`] refuses.
+fn check_plan(prep: &Prepared, plan: &Plan) -> Result<(), Error> {
     let sc = &prep.scenario;
     if let ControlLaw::Feedback { period, .. } = &plan.law {
         if !(period.is_finite() && *period > 0.0) {
@@ -207,15 +251,17 @@ pub fn run_with_plan(prep: &Prepared, plan: &Plan, opts: &RunOptions) -> Result<
             ),
         ));
     }
-    run_plan(prep, plan, 0.0, opts)
+    Ok(())
 }
 
+/// The pipeline; the summary is built when logs are written or `summarize`.
 fn run_plan(
     prep: &Prepared,
     plan: &Plan,
     plan_wall_s: f64,
     opts: &RunOptions,
-) -> Result<RunOutcome, Error> {
+    summarize: bool,
+) -> Result<Finished, Error> {
     let t_all = Instant::now();
     let sc = &prep.scenario;
     let model = prep.model();
@@ -230,9 +276,16 @@ fn run_plan(
         message,
     };
 
+    let cancelled = || Error::Physics {
+        path: sc.path.clone(),
+        message: crate::cancel::CANCELLED.into(),
+    };
     let t0 = Instant::now();
     let ideal =
-        simulate_checked(model, plan, &start, sc.sim.dt).map_err(|m| law_error("ideal", m))?;
+        simulate_until(model, plan, &start, sc.sim.dt, &opts.cancel).map_err(|e| match e {
+            IdealStop::Fault(m) => law_error("ideal", m),
+            IdealStop::Cancelled => cancelled(),
+        })?;
     timings.ideal = t0.elapsed().as_secs_f64();
 
     let t0 = Instant::now();
@@ -254,6 +307,7 @@ fn run_plan(
         perturb,
         &mut |_| false,
         &mut |f| bar.set(f),
+        &opts.cancel,
     );
     bar.finish();
     let mut sim = sim.map_err(|e| match e {
@@ -262,6 +316,7 @@ fn run_plan(
             path: sc.path.clone(),
             message,
         },
+        ReplayError::Cancelled => cancelled(),
     })?;
     crate::physics::perturb::add_drive_channels(&mut sim, model.input_names());
     // Labels an external law named while running, for the logs.
@@ -287,7 +342,8 @@ fn run_plan(
         passed: failures.is_empty(),
         verdict: Verdict::of(failures.is_empty(), sc.expect_fails.is_some()),
         expect_reason: sc.expect_fails.clone(),
-        tracking_meaningful: tracking_meaningful(prep),
+        // The plan run, which may be a caller's ([`run_with_plan`]).
+        tracking_meaningful: prep.system.same_commands(plan),
         failures,
         metrics,
         steps: sim.steps,
@@ -316,10 +372,12 @@ fn run_plan(
     outcome.timings.logs = t0.elapsed().as_secs_f64();
     // Planning happened during validation: count it in.
     outcome.timings.total = t_all.elapsed().as_secs_f64() + plan_wall_s;
+    let mut summary = (summarize || unit.is_some())
+        .then(|| summary_json(prep, plan, &ideal, &sim, &outcome))
+        .unwrap_or_default();
     if let Some(unit) = unit {
         // The summary carries the final timings, so it is written last; then
         // the three files replace the previous run's as one unit.
-        let mut summary = summary_json(prep, plan, &ideal, &sim, &outcome);
         summary["logs_kept"] = json!(opts.keep.as_str());
         crate::log::atomic::write_atomic(&unit.dir().join("summary.json"), |w| {
             serde_json::to_writer_pretty(w, &summary).map_err(std::io::Error::other)
@@ -327,7 +385,14 @@ fn run_plan(
         .map_err(log_error)?;
         outcome.log_dir = Some(unit.commit().map_err(|e| log_error(e.to_string()))?);
     }
-    Ok(outcome)
+    Ok(Finished {
+        outcome,
+        ideal,
+        sim,
+        series,
+        summary,
+        labels: plan.labels.clone(),
+    })
 }
 
 /// What one run produced, for the log writers.
@@ -336,7 +401,7 @@ struct RunData<'a> {
     ideal: &'a Trajectory,
     sim: &'a SimTrajectory,
     cmp: &'a crate::record::Comparison,
-    series: &'a [crate::record::Series],
+    series: &'a [Series],
 }
 
 fn write_logs(

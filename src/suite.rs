@@ -86,7 +86,7 @@ fn run_one_report(
 }
 
 /// A rough cost for scheduling: simulated steps (× variants for sweeps).
-fn cost(prep: &Prepared) -> u64 {
+pub fn cost(prep: &Prepared) -> u64 {
     let sc = &prep.scenario;
     let variants = sc.sweep.as_ref().map_or(1, |s| s.count) as u64;
     let steps = (1.0 / sc.sim.dt.max(1e-6)) as u64;

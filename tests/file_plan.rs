@@ -18,6 +18,7 @@ fn opts(logs: Option<&Path>) -> RunOptions {
         log_root: logs.map(Path::to_path_buf),
         progress: false,
         pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
+        cancel: Default::default(),
         keep: anholonomy::log::Keep::All,
     }
 }

@@ -132,6 +132,7 @@ fn small_sweep_reports_rate_and_distribution_and_shards_agree() {
         log_root: Some(logs.clone()),
         progress: false,
         pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
+        cancel: Default::default(),
         keep: anholonomy::log::Keep::All,
     };
     let o = run_sweep(&p, &opts, None).unwrap();

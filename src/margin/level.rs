@@ -177,6 +177,7 @@ fn run_inner(ctx: &Ctx<'_>, p: &Perturbation, seed: Option<u64>) -> Run {
         p,
         &mut |s| monitor.check(s),
         &mut |_| {},
+        &crate::cancel::Cancel::default(),
     );
     let sim = match sim {
         Ok(s) => s,

@@ -30,6 +30,7 @@ pub mod world;
 pub use rapier3d_f64 as rapier;
 pub use settings::PhysicsSettings;
 
+use crate::cancel::Cancel;
 use crate::integrate::step_count;
 use crate::model::{Input, State};
 use crate::plan::Plan;
@@ -78,6 +79,9 @@ pub enum ReplayError {
     /// The controller faulted ([`crate::plan::Controller::fault`]).
     #[error("{0}")]
     Law(String),
+    /// The caller's token was cancelled ([`replay_until`]).
+    #[error("run cancelled")]
+    Cancelled,
 }
 
 /// Replay `plan` on `sys` for its duration plus `settle` seconds (zero input),
@@ -112,10 +116,23 @@ pub fn replay_with(
     progress: &mut dyn FnMut(f64),
 ) -> Result<SimTrajectory, ReplayError> {
     let nominal = perturb::Perturbation::default();
-    replay_perturbed(sys, plan, opts, &nominal, &mut |_| false, progress)
+    replay_perturbed(sys, plan, opts, &nominal, &mut |_| false, progress, &Cancel::default())
 }
 
-/// [`replay_with`] under the command and observation perturbations of `p`
+/// [`replay_with`] that stops with [`ReplayError::Cancelled`] when `cancel`
+/// is set (checked before every step).
+pub fn replay_until(
+    sys: &mut dyn PhysicsSystem,
+    plan: &Plan,
+    opts: &ReplayOptions,
+    progress: &mut dyn FnMut(f64),
+    cancel: &Cancel,
+) -> Result<SimTrajectory, ReplayError> {
+    let nominal = perturb::Perturbation::default();
+    replay_perturbed(sys, plan, opts, &nominal, &mut |_| false, progress, cancel)
+}
+
+/// [`replay_until`] under the command and observation perturbations of `p`
 /// ([`perturb::Reality`]; the world ones are in the system already), calling
 /// `stop` after every step with what was recorded so far: the run ends
 /// there when it returns true (a margin search's early stop).
@@ -126,6 +143,7 @@ pub fn replay_perturbed(
     p: &perturb::Perturbation,
     stop: &mut dyn FnMut(&SimTrajectory) -> bool,
     progress: &mut dyn FnMut(f64),
+    cancel: &Cancel,
 ) -> Result<SimTrajectory, ReplayError> {
     let dt = opts.dt;
     let mut ctl = plan.controller();
@@ -177,6 +195,9 @@ pub fn replay_perturbed(
     };
     record(&mut out, sys, 0.0, q0);
     for k in 0..n {
+        if cancel.is_cancelled() {
+            return Err(ReplayError::Cancelled);
+        }
         let t = k as f64 * dt;
         let q = out.traj.q.last().expect("the start state is recorded");
         let idle = k >= n_plan || finished;

@@ -209,7 +209,7 @@ fn set_key<'i>(
         return set_in(x, rest, value, span, path);
     }
     // Missing from here on: build the chain of tables inside out.
-    let mut v = value;
+    let mut v = respan(value, &span);
     for seg in rest.iter().rev() {
         let Segment::Key(k2) = seg else {
             return Err(format!("`{path}`: cannot insert an array element"));
@@ -228,6 +228,50 @@ fn set_key<'i>(
     Ok(())
 }
 
+/// `value` with its own span and every span inside it set to `span`: a value
+/// parsed on its own has spans into its own text, not into the file's.
+fn respan<'i>(value: DeValue<'i>, span: &Range<usize>) -> DeValue<'i> {
+    match value {
+        DeValue::Array(a) => DeValue::Array(
+            a.into_iter()
+                .map(|x| Spanned::new(span.clone(), respan(x.into_inner(), span)))
+                .collect(),
+        ),
+        DeValue::Table(t) => DeValue::Table(
+            t.into_iter()
+                .map(|(k, x)| {
+                    (
+                        Spanned::new(span.clone(), k.into_inner()),
+                        Spanned::new(span.clone(), respan(x.into_inner(), span)),
+                    )
+                })
+                .collect(),
+        ),
+        other => other,
+    }
+}
+
+/// The span of the key of the deepest table on `path` that the document
+/// writes (so a key inserted there points at its table's line), or `0..0`.
+pub fn anchor(root: &DeTable<'_>, path: &KeyPath) -> Range<usize> {
+    let mut span = 0..0;
+    let mut table = root;
+    for seg in &path.0 {
+        let Segment::Key(k) = seg else { break };
+        match table.get_key_value(k.as_str()) {
+            Some((key, v)) => {
+                span = key.span();
+                match v.get_ref() {
+                    DeValue::Table(t) => table = t,
+                    _ => break,
+                }
+            }
+            None => break,
+        }
+    }
+    span
+}
+
 fn set_in<'i>(
     v: &mut Spanned<DeValue<'i>>,
     rest: &[Segment],
@@ -237,7 +281,8 @@ fn set_in<'i>(
 ) -> Result<(), String> {
     let Some((seg, rest)) = rest.split_first() else {
         // The written value's span: errors point at its line.
-        *v = Spanned::new(v.span(), value);
+        let span = v.span();
+        *v = Spanned::new(span.clone(), respan(value, &span));
         return Ok(());
     };
     match (v.get_mut(), seg) {

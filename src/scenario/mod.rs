@@ -239,7 +239,15 @@ pub struct Scenario {
     /// The file's text (sweep variants are parsed from it, resumed sweeps check its hash).
     #[serde(skip)]
     text: Arc<str>,
+    /// Values written over the file's ([`Scenario::replace`]), in order;
+    /// variants are parsed with them.
+    #[serde(skip)]
+    edits: Arc<[Edit]>,
 }
+
+/// A value written over a scenario file's own: the key path and the value
+/// as TOML text (`0.8`, `[1.0, 2.0]`, `"name"`, `{ a = 1 }`).
+pub type Edit = (KeyPath, String);
 
 /// Longest scenario name, bytes (it becomes a directory name, with room for
 /// the staging suffix).
@@ -353,7 +361,29 @@ impl Scenario {
 
     /// Validate scenario text (`path` is used for messages and relative paths).
     pub fn parse(path: &Path, text: &str) -> Result<Scenario, Error> {
-        let sc = Self::parse_with(path, text, &[])?;
+        let sc = Self::parse_with(path, text, &[], &[])?;
+        if let Some(sw) = &sc.sweep {
+            sc.check_vary(sw)?;
+        }
+        Ok(sc)
+    }
+
+    /// This scenario with values written over some keys (dotted key paths
+    /// as in `[sweep.vary]`, each with its value as TOML text), parsed and
+    /// checked like the file. Later changes of the same key win. Errors
+    /// name the file, the line where the key is written (or its table's,
+    /// when the file leaves it at its default) and the key.
+    pub fn replace(&self, changes: &[(String, String)]) -> Result<Scenario, Error> {
+        let mut edits: Vec<Edit> = self.edits.to_vec();
+        for (key, value) in changes {
+            let kp = KeyPath::parse(key).map_err(|m| Error::Input {
+                path: self.path.clone(),
+                line: None,
+                message: format!("key `{key}`: {m}"),
+            })?;
+            edits.push((kp, value.clone()));
+        }
+        let sc = Self::parse_with(&self.path, &self.text, &edits, &[])?;
         if let Some(sw) = &sc.sweep {
             sc.check_vary(sw)?;
         }
@@ -375,7 +405,7 @@ impl Scenario {
             sc.sweep = None;
             sc
         } else {
-            Self::parse_with(&self.path, &self.text, &overrides)?
+            Self::parse_with(&self.path, &self.text, &self.edits, &overrides)?
         };
         // `sweep.mass_scale` is shorthand for `sim.perturb.mass_scale`.
         sc.sim.perturb.mass_scale *= v.mass_scale;
@@ -389,8 +419,9 @@ impl Scenario {
     /// to a key the file leaves at its default), and every value the
     /// distribution can produce at its ends must pass the file's own checks.
     fn check_vary(&self, sw: &SweepConfig) -> Result<(), Error> {
-        let root = DeTable::parse(&self.text)
+        let mut root = DeTable::parse(&self.text)
             .map_err(|e| KeyIndex::syntax_error(&self.path, &self.text, &e))?;
+        Self::apply_edits(&self.path, &self.text, &mut root, &self.edits)?;
         for (path, dist) in &sw.vary {
             let key = vary_key(path);
             let err = |m: String| Error::Input {
@@ -416,7 +447,8 @@ impl Scenario {
                 keypath::Found::Absent => {}
             }
             for x in dist.probes() {
-                if let Err(e) = Self::parse_with(&self.path, &self.text, &[(kp.clone(), x)]) {
+                let probe = [(kp.clone(), x)];
+                if let Err(e) = Self::parse_with(&self.path, &self.text, &self.edits, &probe) {
                     let inner = match e {
                         Error::Input { message, .. } => message,
                         other => other.to_string(),
@@ -428,11 +460,48 @@ impl Scenario {
         Ok(())
     }
 
-    /// [`Scenario::parse`] with numbers written over the file's (a variant:
-    /// `[sweep]` is dropped; the `[sweep.vary]` paths are checked by `parse`).
+    /// Write `edits` over the parsed file (see [`Scenario::replace`]).
+    fn apply_edits<'i>(
+        path: &Path,
+        text: &str,
+        root: &mut Spanned<DeTable<'i>>,
+        edits: &'i [Edit],
+    ) -> Result<(), Error> {
+        if edits.is_empty() {
+            return Ok(());
+        }
+        let lines = KeyIndex::new(text, &DeTable::default());
+        for (kp, value) in edits {
+            let t = root.get_mut();
+            let anchor = keypath::anchor(t, kp);
+            let err = |m: String| Error::Input {
+                path: path.into(),
+                line: (anchor.end > 0).then(|| lines.line_at(anchor.start)),
+                message: format!("key `{kp}`: {m}"),
+            };
+            if let keypath::Found::Unreachable(why) = keypath::find(t, kp) {
+                return Err(err(format!("cannot be set: {why}")));
+            }
+            let v = DeValue::parse(value)
+                .map_err(|e| {
+                    err(format!(
+                        "`{value}` is not a TOML value: {}",
+                        e.message().trim()
+                    ))
+                })?
+                .into_inner();
+            keypath::set(t, kp, v, anchor.clone()).map_err(err)?;
+        }
+        Ok(())
+    }
+
+    /// [`Scenario::parse`] with `edits` ([`Scenario::replace`]) and then
+    /// numbers written over the file's (a variant: `[sweep]` is dropped; the
+    /// `[sweep.vary]` paths are checked by `parse`).
     fn parse_with(
         path: &Path,
         text: &str,
+        edits: &[Edit],
         overrides: &[(KeyPath, f64)],
     ) -> Result<Scenario, Error> {
         let numbers: Vec<String> = overrides
@@ -440,6 +509,7 @@ impl Scenario {
             .map(|(_, x)| keypath::toml_number(*x))
             .collect();
         let mut root = DeTable::parse(text).map_err(|e| KeyIndex::syntax_error(path, text, &e))?;
+        Self::apply_edits(path, text, &mut root, edits)?;
         if !overrides.is_empty() {
             let t = root.get_mut();
             // Inserted keys point at the [sweep] table that sets them.
@@ -627,6 +697,7 @@ impl Scenario {
             margins: file.margins,
             keys: Arc::new(keys),
             text: text.into(),
+            edits: edits.into(),
         })
     }
 }

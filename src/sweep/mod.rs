@@ -14,6 +14,7 @@ pub mod merge;
 pub mod records;
 pub mod summary;
 
+use crate::cancel::Cancel;
 use crate::error::Error;
 use crate::runner::{run, RunOptions, RunOutcome, Timings};
 pub use crate::scenario::{variant_seed, SweepConfig, Variant};
@@ -152,12 +153,13 @@ struct Record<'a> {
 }
 
 /// Run one variant; its `variants.jsonl` line (with the newline).
-fn run_variant(prep: &Prepared, cfg: &SweepConfig, v: &Variant) -> String {
+fn run_variant(prep: &Prepared, cfg: &SweepConfig, v: &Variant, cancel: &Cancel) -> String {
     let t0 = Instant::now();
     let opts = RunOptions {
         log_root: None,
         progress: false,
         pose_rate: 0.0,
+        cancel: cancel.clone(),
         keep: crate::log::Keep::All,
     };
     let res = prep
@@ -375,7 +377,14 @@ pub fn run_sweep_report(
     bar.set_prefix(sc.name.clone());
     let resumed = done.iter().filter(|d| **d).count();
     todo.into_par_iter().for_each(|i| {
-        let line = run_variant(prep, cfg, &cfg.variant(i));
+        if opts.cancel.is_cancelled() {
+            return;
+        }
+        let line = run_variant(prep, cfg, &cfg.variant(i), &opts.cancel);
+        // A variant stopped by the token is not a result: not recorded.
+        if opts.cancel.is_cancelled() {
+            return;
+        }
         match &sink {
             // One write per line, straight to the file: a killed sweep loses at most the
             // variants still running.
@@ -399,6 +408,12 @@ pub fn run_sweep_report(
     bar.finish_and_clear();
     if let Some(e) = write_error.into_inner().ok().flatten() {
         return Err(log_err(e));
+    }
+    if opts.cancel.is_cancelled() {
+        return Err(Error::Physics {
+            path: sc.path.clone(),
+            message: crate::cancel::CANCELLED.into(),
+        });
     }
     let (mut entries, files) = match &path {
         Some(p) => {
