@@ -37,6 +37,8 @@ fn run_logged(path: &Path, logs: &Path) -> RunOutcome {
         log_root: Some(logs.to_path_buf()),
         progress: false,
         pose_rate: 0.0,
+        keep: Default::default(),
+        cancel: Default::default(),
     };
     run(&prepared(path), &opts).unwrap()
 }
@@ -198,6 +200,7 @@ fn actuator_lag_matches_its_closed_form_step_response() {
         &pert,
         &mut |_| false,
         &mut |_| {},
+        &Default::default(),
     )
     .unwrap();
     assert_eq!(sim.received.len(), sim.traj.t.len());
@@ -443,6 +446,7 @@ fn early_stop_families_hold_on_prefixes_of_real_runs() {
             &nominal,
             &mut |_| false,
             &mut |_| {},
+            &Default::default(),
         )
         .unwrap();
         let full = ctx.metrics(&ctx.ideal, &sim);

@@ -513,6 +513,9 @@ pub fn gate(prep: &Prepared, o: &mut RunOutcome) -> Result<(), crate::error::Err
             o.passed = false;
         }
     }
+    // The verdict the run computed did not know the margins.
+    o.verdict =
+        crate::verdict::Verdict::of(o.failures.is_empty(), prep.scenario.expect_fails.is_some());
     let wall = t0.elapsed().as_secs_f64();
     o.timings.total += wall;
     if let Some(dir) = &o.log_dir {
@@ -535,6 +538,7 @@ fn amend_summary(path: &std::path::Path, o: &RunOutcome) -> Result<(), String> {
         serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
     s["passed"] = serde_json::json!(o.passed);
     s["failures"] = serde_json::json!(o.failures);
+    s["verdict"] = serde_json::json!(o.verdict);
     let metrics: std::collections::BTreeMap<&str, f64> =
         o.metrics.iter().map(|(k, v)| (k.as_str(), *v)).collect();
     s["metrics"] = serde_json::json!(metrics);

@@ -116,7 +116,15 @@ pub fn replay_with(
     progress: &mut dyn FnMut(f64),
 ) -> Result<SimTrajectory, ReplayError> {
     let nominal = perturb::Perturbation::default();
-    replay_perturbed(sys, plan, opts, &nominal, &mut |_| false, progress, &Cancel::default())
+    replay_perturbed(
+        sys,
+        plan,
+        opts,
+        &nominal,
+        &mut |_| false,
+        progress,
+        &Cancel::default(),
+    )
 }
 
 /// [`replay_with`] that stops with [`ReplayError::Cancelled`] when `cancel`

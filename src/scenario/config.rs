@@ -443,22 +443,4 @@ mod tests {
             .unwrap()
             .is_none());
     }
-
-    /// Every model kind declares its URDF names, and its shipped URDF has them all.
-    #[test]
-    fn every_model_declares_its_urdf_names_and_ships_a_urdf_with_them() {
-        let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
-        for kind in ModelConfig::KINDS {
-            let table = ModelConfig::required_urdf(kind).unwrap_or_else(|| panic!("{kind}"));
-            assert!(!table.is_empty(), "{kind}");
-            let file = match kind {
-                "rolling_sphere" => "sphere",
-                k => k,
-            };
-            let robot = crate::validate::urdf::load(&dir.join(format!("{file}.urdf"))).unwrap();
-            crate::physics::required::check(&robot, &crate::physics::required::defaults(table))
-                .unwrap_or_else(|e| panic!("{kind}: {e}"));
-        }
-        assert!(ModelConfig::required_urdf("teleport").is_none());
-    }
 }

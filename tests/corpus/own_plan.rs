@@ -4,9 +4,6 @@
 
 use super::*;
 
-/// A valid CSV plan for the disk (inputs theta_rate, alpha_rate).
-const CSV: &str = "t,theta_rate,alpha_rate\n0,1.0,0.5\n0.5,1.0,0.5\n1.0,0.0,0.0\n";
-
 fn file_scenario(d: &str, plan: &str) -> String {
     edit(
         d,

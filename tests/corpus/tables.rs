@@ -197,8 +197,8 @@ pub fn cases(c: &mut Corpus) {
     );
     c.sc(
         "unknown model",
-        edit(&d, "kind = \"rolling_disk\"", "kind = \"car\""),
-        Some("\"car\""),
+        edit(&d, "kind = \"rolling_disk\"", "kind = \"submarine\""),
+        Some("\"submarine\""),
         Some("model.kind"),
     );
     c.sc(
