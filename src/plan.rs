@@ -35,6 +35,13 @@ pub struct Command {
 pub trait Controller: Send {
     /// The command at time `t` with measured state `q`.
     fn command(&mut self, t: f64, q: &State) -> Command;
+
+    /// The command when the replay also measures what the model
+    /// coordinates leave out (a physics system's `measurement`, e.g. the
+    /// 3D poses of the mobile manipulators' flanges). Default: ignore it.
+    fn command_measured(&mut self, t: f64, q: &State, _measured: &[f64]) -> Command {
+        self.command(t, q)
+    }
 }
 
 /// Builds fresh controller instances (a feedback policy may keep internal

@@ -48,6 +48,12 @@ pub trait PhysicsSystem {
     fn channels(&self) -> Vec<f64> {
         Vec::new()
     }
+    /// What a feedback law may measure besides the model coordinates
+    /// (handed to [`crate::plan::Controller::command_measured`] at every
+    /// policy sample), or `None`.
+    fn measurement(&self) -> Option<Vec<f64>> {
+        None
+    }
 }
 
 /// What [`replay_with`] records besides states, commands and channels.
@@ -120,7 +126,14 @@ pub fn replay_with(
     let hold = plan.hold_period();
     let mut clock = hold.map(|p| crate::integrate::SampleClock::new(p, dt));
     let q0 = sys.state();
-    let mut held = ctl.command(0.0, &q0);
+    let sample = |ctl: &mut Box<dyn crate::plan::Controller>,
+                      sys: &dyn PhysicsSystem,
+                      t: f64,
+                      q: &State| match sys.measurement() {
+        Some(m) => ctl.command_measured(t, q, &m),
+        None => ctl.command(t, q),
+    };
+    let mut held = sample(&mut ctl, sys, 0.0, &q0);
     let zero = Input::zeros(held.u.len());
     let mut finished = false;
     // Time, state and channels of one sample (the state is the last one read back).
@@ -145,7 +158,7 @@ pub fn replay_with(
             match &mut clock {
                 Some(clock) => {
                     if clock.due(t) {
-                        held = ctl.command(t, q);
+                        held = sample(&mut ctl, sys, t, q);
                     }
                 }
                 None => held = ctl.command(t + 0.5 * dt, q),

@@ -11,19 +11,47 @@
 //! axis towards robot 2's grasp point and its z axis as close to world up as
 //! that allows; end 2 the same frame translated by the beam length.
 //!
-//! b_f: Eq. 12 multiplies, per node, q_F² − ‖q_fi‖² (the ball under the
-//! ∞-norm box of Eq. 5, |q_fi,j| ≤ q_F). Like the proximities of V, each
-//! factor is normalised by q_F², b_fi = 1 − ‖q_fi‖²/q_F² ∈ (−∞, 1], so that
-//! b_f keeps its zero set and does not scale V by q_F^4; b_f ≤ 0 is the
-//! deformation "collision" (V = 0).
+//! b_f ([`Bound`]): with the printed bound, Eq. 12 multiplies, per node,
+//! q_F² − ‖q_fi‖² (the ball under the ∞-norm box of Eq. 5, |q_fi,j| ≤ q_F).
+//! Like the proximities of V, each factor is normalised by q_F², b_fi = 1 −
+//! ‖q_fi‖²/q_F² ∈ (−∞, 1], so that b_f keeps its zero set and does not
+//! scale V by q_F^4; b_f ≤ 0 is the deformation "collision" (V = 0). With
+//! the wrench bound (ours) the factors are 1 − |F_e|²/F_max² and 1 −
+//! |M_e|²/M_max² of the wrench each gripper applies to the beam (end e = 0,
+//! 2), from the statics of the carried chain ([`GraspStatics`]).
+//!
+//! Wrists ([`Wrist`]): a compliant wrist is a spring between a flange and
+//! its gripper, centred at the grasp point. The grasps are then the
+//! flanges' grasp frames (what the arms' joints fix), q_s = ξ their
+//! relative twist, which the wrists' deflections and the beam's deformation
+//! share: the beam's nodes (and so its ellipsoids) and the middle node of
+//! q_f come from the chain's statics, the beam moving with the wrists.
 
-use crate::model::beam::{Beam, FeBeam};
+use crate::model::beam::{Beam, FeBeam, GraspStatics};
 use crate::model::ellipsoid::PlacedEllipsoid;
-use crate::model::mobile_manipulator::{self as mm, DOF};
+use crate::model::mobile_manipulator::{self as mm, Wrist, DOF};
 use crate::model::spatial::{self, k, Pose, Scalar, M3};
 
 /// Standard gravity, world frame (z up), m/s².
 pub const GRAVITY: [f64; 3] = [0.0, 0.0, -9.81];
+
+/// The beam's admissible set (Eqs. 5, 11–12).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Bound {
+    /// Eq. 11's balls on the nodes of q_f: ‖q_fi‖ ≤ q_F, m and rad alike
+    /// (the SI reading of the paper's units).
+    #[default]
+    Printed,
+    /// What the beam and the robots bear (ours): at each grasp the force
+    /// the gripper applies to the beam |F| ≤ `force` (N) and its moment
+    /// about the grasp point |M| ≤ `moment` (N m).
+    Wrench {
+        /// F_max, N.
+        force: f64,
+        /// M_max, N m.
+        moment: f64,
+    },
+}
 
 /// A beam held by robots 1 and 2.
 #[derive(Debug, Clone)]
@@ -32,8 +60,14 @@ pub struct Carried {
     pub fe: FeBeam,
     /// Tool frame → beam end frame, robot 1 (end 0) and robot 2 (end 2).
     pub grasp: [Pose<f64>; 2],
-    /// q_F of Eq. 5 (m and rad, as q_f mixes them).
+    /// q_F of Eq. 5 (m and rad, as q_f mixes them); used by [`Bound::Printed`].
     pub q_max: f64,
+    /// The admissible set.
+    pub bound: Bound,
+    /// The wrists (both robots alike).
+    pub wrist: Wrist,
+    /// The carried chain's statics, when the bound or the wrists need it.
+    statics: Option<GraspStatics>,
     /// Number of ellipsoids along the beam.
     pub segments: usize,
     /// Cross semi-axes of the beam's ellipsoids, m (the rod's radius plus a margin).
@@ -46,10 +80,12 @@ pub struct Carried {
 /// The beam at one configuration.
 #[derive(Debug, Clone)]
 pub struct BeamState<T: Scalar> {
-    /// World pose of end 0.
+    /// World pose of end 0 (flange 1's grasp frame).
     pub end0: Pose<T>,
     /// q_f = (q_s, q_o): node 2 then node 1 (see [`FeBeam`]).
     pub q_f: [T; 12],
+    /// Gravity in the end-0 frame, m/s².
+    pub gravity: [T; 3],
 }
 
 impl<T: Scalar> BeamState<T> {
@@ -112,9 +148,69 @@ impl Carried {
             fe,
             grasp: [t1.inverse().then(&end0), t2.inverse().then(&end2)],
             q_max,
+            bound: Bound::Printed,
+            wrist: Wrist::Rigid,
+            statics: None,
             segments: segments.max(1),
             radius,
             max_stretch: None,
+        })
+    }
+
+    /// The same beam with `bound` and `wrist`: solves the carried chain's
+    /// statics when either needs it. Errors name the offending field.
+    pub fn with_grasps(mut self, bound: Bound, wrist: Wrist) -> Result<Carried, String> {
+        if let Bound::Wrench { force, moment } = bound {
+            if !(force.is_finite() && force > 0.0) {
+                return Err(format!("`max_force` must be > 0 N, got {force}"));
+            }
+            if !(moment.is_finite() && moment > 0.0) {
+                return Err(format!("`max_moment` must be > 0 N m, got {moment}"));
+            }
+        }
+        // In end-0 axes (the end frames share them at rest): the grasp
+        // offset's rotation has the end frame's axes in tool coordinates.
+        let stiffness = |g: &Pose<f64>| match wrist {
+            Wrist::Rigid => None,
+            Wrist::Compliant(w) => Some(w.stiffness_in(&g.r)),
+        };
+        self.statics = match (bound, wrist) {
+            (Bound::Printed, Wrist::Rigid) => None,
+            _ => Some(GraspStatics::new(
+                &self.fe,
+                [stiffness(&self.grasp[0]), stiffness(&self.grasp[1])],
+            )?),
+        };
+        self.bound = bound;
+        self.wrist = wrist;
+        Ok(self)
+    }
+
+    /// Whether the wrists are compliant (the beam's nodes then come from
+    /// the chain's statics).
+    fn compliant(&self) -> Option<&GraspStatics> {
+        match self.wrist {
+            Wrist::Rigid => None,
+            Wrist::Compliant(_) => self.statics.as_ref(),
+        }
+    }
+
+    /// The wrenches the grippers apply to the beam (end 0, end 2: force N,
+    /// moment N m about the grasp point, end-0 axes) at the state's
+    /// deformation, from the chain's statics (`None` with the printed bound
+    /// and rigid wrists, where they are not modelled).
+    pub fn wrenches<T: Scalar>(&self, q_f: &[T; 12], g: &[T; 3]) -> Option<[[T; 6]; 2]> {
+        let xi: [T; 6] = std::array::from_fn(|i| q_f[i]);
+        self.statics.as_ref().map(|s| s.wrenches(&xi, g))
+    }
+
+    /// The wrists' deflections (wrist 1, wrist 2: translation m, rotation
+    /// rad; end-0 axes) at a state, `None` with rigid wrists.
+    pub fn wrist_deflections<T: Scalar>(&self, q_f: &[T; 12], g: &[T; 3]) -> Option<[[T; 6]; 2]> {
+        let xi: [T; 6] = std::array::from_fn(|i| q_f[i]);
+        self.compliant().map(|s| {
+            let n = s.nodes(&xi, g);
+            [n[0], std::array::from_fn(|i| xi[i] - n[2][i])]
         })
     }
 
@@ -130,31 +226,44 @@ impl Carried {
         self
     }
 
-    /// The admissible set's factors at q_f: per node 1 − ‖q_fi‖²/q_F² (Eq.
-    /// 12's balls, normalised), then 1 − (q_f[0]/ε)² under a stretch bound.
-    /// Inside the set when every factor is > 0; b_f is their product.
-    fn admissible_factors<'a, T: Scalar>(
-        &'a self,
-        q_f: &'a [T; 12],
-    ) -> impl Iterator<Item = T> + 'a {
-        let balls = q_f.chunks(6).map(|node| {
+    /// The admissible set's factors at (q_f, g), in order, to `each`: with
+    /// the printed bound per node 1 − ‖q_fi‖²/q_F² (Eq. 12's balls,
+    /// normalised); with the wrench bound per grasp 1 − |F|²/F_max², 1 −
+    /// |M|²/M_max²; then 1 − (q_f[0]/ε)² under a stretch bound. Inside the
+    /// set when every factor is > 0; b_f is their product.
+    fn admissible_factors<T: Scalar>(&self, q_f: &[T; 12], g: &[T; 3], mut each: impl FnMut(T)) {
+        let sq = |v: &[T]| {
             let mut s = k::<T>(0.0);
-            for x in node {
+            for x in v {
                 s += *x * *x;
             }
-            k::<T>(1.0) - s * (1.0 / (self.q_max * self.q_max))
-        });
-        let stretch = self.max_stretch.map(|eps| {
+            s
+        };
+        match (self.bound, self.wrenches(q_f, g)) {
+            (Bound::Wrench { force, moment }, Some(w)) => {
+                for e in &w {
+                    each(k::<T>(1.0) - sq(&e[..3]) * (1.0 / (force * force)));
+                    each(k::<T>(1.0) - sq(&e[3..]) * (1.0 / (moment * moment)));
+                }
+            }
+            _ => {
+                for node in q_f.chunks(6) {
+                    each(k::<T>(1.0) - sq(node) * (1.0 / (self.q_max * self.q_max)));
+                }
+            }
+        }
+        if let Some(eps) = self.max_stretch {
             let u = q_f[0] * (1.0 / eps);
-            k::<T>(1.0) - u * u
-        });
-        balls.chain(stretch)
+            each(k::<T>(1.0) - u * u);
+        }
     }
 
-    /// The least admissibility factor of q_f ([`Carried::admissible_factors`]):
-    /// ≤ 0 outside the admissible set.
-    pub fn margin(&self, q_f: &[f64; 12]) -> f64 {
-        self.admissible_factors(q_f).fold(f64::INFINITY, f64::min)
+    /// The least admissibility factor at (q_f, g)
+    /// ([`Carried::admissible_factors`]): ≤ 0 outside the admissible set.
+    pub fn margin(&self, q_f: &[f64; 12], g: &[f64; 3]) -> f64 {
+        let mut m = f64::INFINITY;
+        self.admissible_factors(q_f, g, |b| m = m.min(b));
+        m
     }
 
     /// End-0 pose and q_f at q (both robots), generic for exact derivatives.
@@ -171,23 +280,33 @@ impl Carried {
         let g2 = tool2.then_const(&self.grasp[1]);
         let rel = g0.inverse().then(&g2);
         let g = spatial::mul_mtv(&g0.r, spatial::lift(GRAVITY));
+        let q_f = match self.compliant() {
+            // The flanges' twist is shared by the wrists and the beam.
+            Some(s) => {
+                let xi = self.fe.grasp_deformation(&rel);
+                let middle = s.nodes(&xi, &g)[1];
+                std::array::from_fn(|i| if i < 6 { xi[i] } else { middle[i - 6] })
+            }
+            None => self.fe.deformation(&rel, g),
+        };
         BeamState {
             end0: g0,
-            q_f: self.fe.deformation(&rel, g),
+            q_f,
+            gravity: g,
         }
     }
 
-    /// ln b_f (Eq. 12, normalised per node), or `None` when a node leaves
-    /// its admissible ball.
-    pub fn ln_admissible<T: Scalar>(&self, q_f: &[T; 12]) -> Option<T> {
-        let mut out = k::<T>(0.0);
-        for b in self.admissible_factors(q_f) {
-            if b.re() <= 0.0 {
-                return None;
+    /// ln b_f (Eq. 12, normalised per factor), or `None` when the
+    /// deformation leaves its admissible set.
+    pub fn ln_admissible<T: Scalar>(&self, q_f: &[T; 12], g: &[T; 3]) -> Option<T> {
+        let mut out = Some(k::<T>(0.0));
+        self.admissible_factors(q_f, g, |b| {
+            out = match out {
+                Some(acc) if b.re() > 0.0 => Some(acc + b.ln()),
+                _ => None,
             }
-            out += b.ln();
-        }
-        Some(out)
+        });
+        out
     }
 
     /// The beam's ellipsoids (world), segment j centred at s = (j + ½) L / N
@@ -200,7 +319,7 @@ impl Carried {
     pub fn segment<T: Scalar>(&self, st: &BeamState<T>, j: usize) -> PlacedEllipsoid<T> {
         let l = self.fe.beam().length;
         let n = self.segments;
-        let f = st.end0.then(&self.segment_frame(&st.q_f, j));
+        let f = st.end0.then(&self.segment_frame(&st.q_f, &st.gravity, j));
         PlacedEllipsoid {
             center: f.p,
             rot: f.r,
@@ -210,9 +329,15 @@ impl Carried {
     }
 
     /// Segment `j`'s frame in the end-0 frame (its world pose is end0 ∘ this).
-    pub fn segment_frame<T: Scalar>(&self, q_f: &[T; 12], j: usize) -> Pose<T> {
+    pub fn segment_frame<T: Scalar>(&self, q_f: &[T; 12], g: &[T; 3], j: usize) -> Pose<T> {
         let s = (j as f64 + 0.5) * self.fe.beam().length / self.segments as f64;
-        self.fe.centerline(q_f, s)
+        match self.compliant() {
+            Some(st) => {
+                let xi: [T; 6] = std::array::from_fn(|i| q_f[i]);
+                self.fe.centerline_of_nodes(&st.nodes(&xi, g), s)
+            }
+            None => self.fe.centerline(q_f, s),
+        }
     }
 
     /// Whether robot `r`'s part `part` carries segment `seg`: robot r's arm,

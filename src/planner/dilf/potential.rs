@@ -152,6 +152,15 @@ pub struct PotentialParams {
     pub field_power: f64,
 }
 
+/// The measured flanges of a pair relative to their kinematic poses: robot
+/// r's flange in the world is `frames(q_r).tool ∘ c[r]`. In the physics
+/// replay the planar state (x, y, θ, joints) cannot see a platform's tilt
+/// or the rod's pull on the arms; the 3D flange poses can. Held fixed over
+/// a policy sample, the correction turns V and its field into those of the
+/// measured grasps: a joint or platform motion moves a corrected flange by
+/// the same rigid motion as the kinematic one, so the adjoint field is exact.
+pub type GraspCorrection = [Pose<f64>; 2];
+
 /// A named static obstacle.
 #[derive(Debug, Clone)]
 pub struct Obstacle {
@@ -316,15 +325,33 @@ impl Scene {
         q: &[T],
         warm: &mut Warm,
     ) -> Result<Evaluation<T>, ContactError> {
+        self.evaluate_with(q, None, warm)
+    }
+
+    /// As [`Scene::evaluate`], with the beam held at the measured flanges:
+    /// robot r's flange is its kinematic one times `measured[r]` (see
+    /// [`GraspCorrection`]).
+    pub fn evaluate_with<T: Scalar>(
+        &self,
+        q: &[T],
+        measured: Option<&GraspCorrection>,
+        warm: &mut Warm,
+    ) -> Result<Evaluation<T>, ContactError> {
         let n = self.parts.len();
         let placed = self.placed_parts(q);
         let beam = self.object.as_ref().map(|o| {
-            let st = o.state(q);
+            let st = match measured {
+                None => o.state(q),
+                Some(c) => o.state_from_tools(
+                    &mm::frames(&q[..DOF]).tool.then_const(&c[0]),
+                    &mm::frames(&q[DOF..2 * DOF]).tool.then_const(&c[1]),
+                ),
+            };
             (
                 o.ellipsoids(&st),
-                o.ln_admissible(&st.q_f),
+                o.ln_admissible(&st.q_f, &st.gravity),
                 st.max_deformation(),
-                o.margin(&st.q_f.map(|x| x.re())),
+                o.margin(&st.q_f.map(|x| x.re()), &st.gravity.map(|x| x.re())),
             )
         });
         let ln_lambda = self.params.lambda.ln();

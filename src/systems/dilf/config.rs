@@ -42,6 +42,27 @@ impl ObstacleConfig {
     }
 }
 
+/// `model.beam.bound`: which admissible set enters b_f.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[serde(rename_all = "snake_case")]
+pub enum BoundKind {
+    /// Eq. 11's balls on the nodes of q_f (radius `max_deformation`).
+    #[default]
+    Printed,
+    /// The grasp wrenches within `max_force` and `max_moment`.
+    Wrench,
+}
+
+/// Default F_max of the wrench bound, N: a quarter of the force that tips a
+/// platform at Table I's grasp height (~1.06 m) in its weakest direction,
+/// and with [`DEFAULT_MAX_MOMENT`] within the PUMA's wrist torques (see
+/// `physics::mobile_manipulator::tipping_force` and the seed-004 docs).
+pub const DEFAULT_MAX_FORCE: f64 = 60.0;
+/// Default M_max of the wrench bound, N m: with F_max at the 0.16 m from
+/// the wrist centre to the grasp, M_max + 0.16 F_max = 17.6 N m stays below
+/// the weakest wrist joint's 20.1 N m.
+pub const DEFAULT_MAX_MOMENT: f64 = 8.0;
+
 /// `[model.beam]`: the deformable beam two robots carry (seed 004 §II, §VI).
 /// Defaults: a 10 mm pultruded GFRP rod ([`crate::model::beam::GFRP_ROD_10MM`]).
 #[derive(Debug, Clone, Deserialize, Serialize)]
@@ -62,8 +83,20 @@ pub struct BeamConfig {
     /// Rest length between the grasps, m; default: their distance at the start
     /// (the beam is straight there). Given, it must match that distance.
     pub length: Option<f64>,
-    /// q_F of Eq. 5, the bound on ‖q_f‖∞ (m and rad, SI reading of the paper's units).
-    pub max_deformation: f64,
+    /// The admissible set: `"printed"` (Eq. 11's balls on q_f, radius
+    /// `max_deformation`) or `"wrench"` (the grasp wrenches within
+    /// `max_force`, `max_moment`; ours).
+    #[serde(default)]
+    pub bound: BoundKind,
+    /// q_F of Eq. 5, the bound on ‖q_f‖∞ (m and rad, SI reading of the
+    /// paper's units); required with `bound = "printed"`.
+    pub max_deformation: Option<f64>,
+    /// F_max of the wrench bound: the force each gripper may apply to the
+    /// beam, N (default [`DEFAULT_MAX_FORCE`]).
+    pub max_force: Option<f64>,
+    /// M_max of the wrench bound: the moment each gripper may apply to the
+    /// beam about the grasp point, N m (default [`DEFAULT_MAX_MOMENT`]).
+    pub max_moment: Option<f64>,
     /// Bound on the grasps' stretch or shortening along the beam, m
     /// (ours; none by default: Eq. 5 alone). See `Carried::with_max_stretch`.
     pub max_stretch: Option<f64>,
@@ -120,15 +153,42 @@ impl BeamConfig {
         };
         let pos = |v: f64| v.is_finite() && v > 0.0;
         for (key, v) in [
-            ("youngs_modulus", self.youngs_modulus),
-            ("shear_modulus", self.shear_modulus),
-            ("density", self.density),
-            ("diameter", self.diameter),
-            ("radius", self.radius),
+            ("youngs_modulus", Some(self.youngs_modulus)),
+            ("shear_modulus", Some(self.shear_modulus)),
+            ("density", Some(self.density)),
+            ("diameter", Some(self.diameter)),
+            ("radius", Some(self.radius)),
             ("max_deformation", self.max_deformation),
+            ("max_force", self.max_force),
+            ("max_moment", self.max_moment),
         ] {
-            if !pos(v) {
+            if let Some(v) = v.filter(|v| !pos(*v)) {
                 return Err(format!("key `model.beam.{key}`: must be > 0, got {v}"));
+            }
+        }
+        match self.bound {
+            BoundKind::Printed => {
+                if self.max_deformation.is_none() {
+                    return Err(
+                        "key `model.beam.max_deformation`: required with bound = \"printed\" (q_F of Eq. 5)"
+                            .into(),
+                    );
+                }
+                for (key, v) in [("max_force", self.max_force), ("max_moment", self.max_moment)] {
+                    if v.is_some() {
+                        return Err(format!(
+                            "key `model.beam.{key}`: belongs to bound = \"wrench\" (this beam's bound is \"printed\")"
+                        ));
+                    }
+                }
+            }
+            BoundKind::Wrench => {
+                if self.max_deformation.is_some() {
+                    return Err(
+                        "key `model.beam.max_deformation`: q_F belongs to bound = \"printed\" (this beam's bound is \"wrench\": max_force, max_moment)"
+                            .into(),
+                    );
+                }
             }
         }
         if let Some(e) = self.max_stretch.filter(|e| !pos(*e)) {
@@ -150,6 +210,87 @@ impl BeamConfig {
         }
         Ok(b)
     }
+
+    /// q_F (∞ with the wrench bound, where it plays no part).
+    pub(super) fn q_max(&self) -> f64 {
+        self.max_deformation.unwrap_or(f64::INFINITY)
+    }
+
+    /// The planner's admissible set.
+    pub(super) fn bound(&self) -> crate::planner::dilf::object::Bound {
+        use crate::planner::dilf::object::Bound;
+        match self.bound {
+            BoundKind::Printed => Bound::Printed,
+            BoundKind::Wrench => Bound::Wrench {
+                force: self.max_force.unwrap_or(DEFAULT_MAX_FORCE),
+                moment: self.max_moment.unwrap_or(DEFAULT_MAX_MOMENT),
+            },
+        }
+    }
+}
+
+/// `[model.wrist]`: the passive wrist between each flange and its gripper
+/// (ours; see [`crate::model::mobile_manipulator::Wrist`]). Per-axis arrays
+/// are in the tool frame at the grasp point: x, y, z then rotations about
+/// x, y, z.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum WristConfig {
+    /// The gripper fixed to the flange (default: the paper's rigid grasp).
+    #[default]
+    Rigid,
+    /// A spring–damper per axis with a hard stop at ± travel.
+    Compliant {
+        /// N/m (translations), N m/rad (rotations); > 0.
+        #[serde(default = "default_wrist_stiffness")]
+        stiffness: [f64; 6],
+        /// N s/m, N m s/rad; ≥ 0.
+        #[serde(default = "default_wrist_damping")]
+        damping: [f64; 6],
+        /// m, rad each way; > 0 (rotations below 90°).
+        #[serde(default = "default_wrist_travel")]
+        travel: [f64; 6],
+    },
+}
+
+/// Default compliant wrist: at the wrench bound's default F_max = 60 N each
+/// wrist deflects 6 cm (1000 N/m), so the two in series give the grasps
+/// 12 cm of distance change; at M_max = 8 N m it turns 0.16 rad (50 N m/rad).
+fn default_wrist_stiffness() -> [f64; 6] {
+    [1000.0, 1000.0, 1000.0, 50.0, 50.0, 50.0]
+}
+/// About 0.7 of critical damping for the gripper and half the rod (0.8 kg)
+/// on 1000 N/m; the rotations as soft.
+fn default_wrist_damping() -> [f64; 6] {
+    [40.0, 40.0, 40.0, 3.0, 3.0, 3.0]
+}
+/// The deflections at the bound's default F_max and M_max, plus a third.
+fn default_wrist_travel() -> [f64; 6] {
+    [0.08, 0.08, 0.08, 0.22, 0.22, 0.22]
+}
+
+impl WristConfig {
+    /// The model's wrist, or the offending key.
+    pub fn wrist(&self) -> Result<crate::model::mobile_manipulator::Wrist, String> {
+        use crate::model::mobile_manipulator::{CompliantWrist, Wrist};
+        match *self {
+            WristConfig::Rigid => Ok(Wrist::Rigid),
+            WristConfig::Compliant {
+                stiffness,
+                damping,
+                travel,
+            } => {
+                let w = CompliantWrist {
+                    stiffness,
+                    damping,
+                    travel,
+                };
+                w.validate()
+                    .map_err(|(field, m)| format!("key `model.wrist.{field}`: {m}"))?;
+                Ok(Wrist::Compliant(w))
+            }
+        }
+    }
 }
 
 /// `[model] kind = "mobile_manipulator"`.
@@ -169,32 +310,72 @@ pub struct MobileManipulatorConfig {
     /// How the arms' joints execute their rate commands in physics.
     #[serde(default)]
     pub arm_servo: ArmServoConfig,
+    /// The wrists between flanges and grippers (planner and physics).
+    #[serde(default)]
+    pub wrist: WristConfig,
 }
 
 /// `[model.arm_servo]`: the arms' joint servos in physics (the planner is
 /// kinematic and does not see them).
-#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ArmServoConfig {
     /// Stiff position servos tracking the integral of the commanded rates
-    /// (torque-limited at `sim.motor_max_torque`).
-    #[default]
-    Stiff,
+    /// (torque-limited at `max_torque`, or `sim.motor_max_torque`).
+    Stiff {
+        /// Largest torque per joint, N m (> 0); default: `sim.motor_max_torque`
+        /// for every joint. The PUMA 560's published limits are
+        /// `[97.6, 186.4, 89.4, 24.2, 20.1, 21.3]`.
+        max_torque: Option<[f64; 6]>,
+    },
     /// Joint-space impedance with gravity compensation.
     Impedance {
         /// K per joint, N m/rad (> 0).
         stiffness: [f64; 6],
         /// D per joint, N m s/rad (≥ 0).
         damping: [f64; 6],
+        /// As for `stiff`.
+        max_torque: Option<[f64; 6]>,
     },
 }
 
+impl Default for ArmServoConfig {
+    fn default() -> Self {
+        ArmServoConfig::Stiff { max_torque: None }
+    }
+}
+
 impl ArmServoConfig {
+    /// The arms' per-joint torque limits, if given.
+    pub fn max_torque(&self) -> Option<[f64; 6]> {
+        match *self {
+            ArmServoConfig::Stiff { max_torque } | ArmServoConfig::Impedance { max_torque, .. } => {
+                max_torque
+            }
+        }
+    }
+
     /// The physics' servo, or the offending key.
     pub fn servo(&self) -> Result<ArmServo, String> {
+        let limits = match *self {
+            ArmServoConfig::Stiff { max_torque } | ArmServoConfig::Impedance { max_torque, .. } => {
+                max_torque
+            }
+        };
+        if let Some(t) = limits
+            .iter()
+            .flatten()
+            .find(|t| !(t.is_finite() && **t > 0.0))
+        {
+            return Err(format!(
+                "key `model.arm_servo.max_torque`: every joint's limit must be > 0 N m, got {t}"
+            ));
+        }
         match *self {
-            ArmServoConfig::Stiff => Ok(ArmServo::Stiff),
-            ArmServoConfig::Impedance { stiffness, damping } => {
+            ArmServoConfig::Stiff { .. } => Ok(ArmServo::Stiff),
+            ArmServoConfig::Impedance {
+                stiffness, damping, ..
+            } => {
                 if let Some(k) = stiffness.iter().find(|k| !(k.is_finite() && **k > 0.0)) {
                     return Err(format!(
                         "key `model.arm_servo.stiffness`: every joint's stiffness must be > 0 N m/rad, got {k}"

@@ -24,12 +24,15 @@
 mod config;
 mod overlay;
 
-pub use config::{ArmServoConfig, BeamConfig, MobileManipulatorConfig, ObstacleConfig};
+pub use config::{
+    ArmServoConfig, BeamConfig, BoundKind, MobileManipulatorConfig, ObstacleConfig, WristConfig,
+    DEFAULT_MAX_FORCE, DEFAULT_MAX_MOMENT,
+};
 
 use super::System;
 use crate::integrate::Trajectory;
 use crate::model::ellipsoid::Superellipsoid;
-use crate::model::mobile_manipulator::{self as mm, MobileManipulator};
+use crate::model::mobile_manipulator::{self as mm, MobileManipulator, Wrist};
 use crate::model::{KinematicModel, State};
 use crate::physics::beam::BeamOptions;
 use crate::physics::mobile_manipulator::{
@@ -52,6 +55,8 @@ use std::sync::Arc;
 struct Dilf {
     model: MobileManipulator,
     arm: ArmServo,
+    arm_max_torque: Option<[f64; 6]>,
+    wrist: Wrist,
     beam: Option<BeamConfig>,
     params: DilfParams,
     obstacles: Vec<(String, Superellipsoid)>,
@@ -92,6 +97,10 @@ fn dilf(cfg: &MobileManipulatorConfig, params: &DilfParams) -> Result<Dilf, Stri
         b.beam()?;
     }
     let arm = cfg.arm_servo.servo()?;
+    let wrist = cfg.wrist.wrist()?;
+    if cfg.robots == 1 && wrist != Wrist::Rigid {
+        return Err("key `model.wrist`: a compliant wrist holds the carried beam (robots = 2)".into());
+    }
     let mut obstacles = Vec::new();
     for (i, o) in cfg.obstacles.iter().enumerate() {
         let shape = o.shape();
@@ -122,6 +131,8 @@ fn dilf(cfg: &MobileManipulatorConfig, params: &DilfParams) -> Result<Dilf, Stri
     Ok(Dilf {
         model: MobileManipulator { robots: cfg.robots },
         arm,
+        arm_max_torque: cfg.arm_servo.max_torque(),
+        wrist,
         beam: cfg.beam.clone(),
         params,
         probe: ClearanceProbe::new(&obstacles),
@@ -140,7 +151,7 @@ impl Dilf {
             &b.beam()?,
             b.length,
             start,
-            b.max_deformation,
+            b.q_max(),
             b.segments,
             b.radius,
         )
@@ -151,7 +162,9 @@ impl Dilf {
                 "start"
             };
             format!("key `{key}`: {e}")
-        })?;
+        })?
+        .with_grasps(b.bound(), self.wrist)
+        .map_err(|e| format!("key `model.beam`: {e}"))?;
         Ok(scene.with_object(carried.with_max_stretch(b.max_stretch)))
     }
 
@@ -350,6 +363,8 @@ impl System for Dilf {
             obstacles: &obstacles,
             beam: beam.as_ref(),
             arm: self.arm,
+            arm_max_torque: self.arm_max_torque,
+            wrist: self.wrist,
         };
         Ok(Box::new(MobileManipulatorPhysics::new(
             robot, urdf_dir, sim, &setup,
