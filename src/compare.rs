@@ -46,12 +46,16 @@ pub fn coord_error(a: &State, b: &State, angular: &[usize]) -> Vec<f64> {
 }
 
 /// Compare on a grid of step `dt` covering both runs (each held at its end).
+///
+/// `positions` holds every robot's planar (x, y) indices: the position
+/// error is the worst robot's at each instant, and with several robots each
+/// robot's series is kept too ([`Comparison::robot_position_error`]).
 pub fn compare(
     ideal: &Trajectory,
     sim: &Trajectory,
     dt: f64,
     angular: &[usize],
-    position: Option<[usize; 2]>,
+    positions: &[[usize; 2]],
 ) -> Comparison {
     let end = ideal
         .t
@@ -61,17 +65,31 @@ pub fn compare(
         .max(sim.t.last().copied().unwrap_or(0.0));
     let n = crate::integrate::step_count(end, dt);
     let dim = ideal.q[0].len();
+    let per_robot = if positions.len() > 1 {
+        positions.len()
+    } else {
+        0
+    };
     let mut c = Comparison {
         t: Vec::with_capacity(n + 1),
         coord_error: vec![Vec::with_capacity(n + 1); dim],
-        position_error: position.map(|_| Vec::with_capacity(n + 1)),
+        position_error: (!positions.is_empty()).then(|| Vec::with_capacity(n + 1)),
+        robot_position_error: vec![Vec::with_capacity(n + 1); per_robot],
     };
     for k in 0..=n {
         let t = (k as f64 * dt).min(end);
         let (a, b) = (sample(ideal, t), sample(sim, t));
         let e = coord_error(&a, &b, angular);
-        if let (Some(series), Some([i, j])) = (c.position_error.as_mut(), position) {
-            series.push(e[i].hypot(e[j]));
+        if let Some(series) = c.position_error.as_mut() {
+            let mut worst = 0.0f64;
+            for (r, [i, j]) in positions.iter().enumerate() {
+                let d = e[*i].hypot(e[*j]);
+                worst = worst.max(d);
+                if let Some(s) = c.robot_position_error.get_mut(r) {
+                    s.push(d);
+                }
+            }
+            series.push(worst);
         }
         for (series, v) in c.coord_error.iter_mut().zip(e) {
             series.push(v);
@@ -96,7 +114,7 @@ pub fn metric_spec(model: &dyn crate::model::KinematicModel) -> MetricSpec<'_> {
     MetricSpec {
         names: model.state_names(),
         angular: model.angular_states(),
-        position: model.position_states(),
+        positions: model.robot_positions(),
     }
 }
 
@@ -106,8 +124,8 @@ pub struct MetricSpec<'a> {
     pub names: &'a [&'static str],
     /// Angular coordinate indices (reported in degrees, `_deg` suffix).
     pub angular: &'a [usize],
-    /// Planar position indices.
-    pub position: Option<[usize; 2]>,
+    /// Planar position indices, one pair per robot (empty: no position).
+    pub positions: Vec<[usize; 2]>,
 }
 
 impl MetricSpec<'_> {
@@ -133,15 +151,28 @@ impl MetricSpec<'_> {
         out
     }
 
-    /// The coordinates metrics are named after: `position` (planar systems),
-    /// then every state coordinate (angles with `_deg`).
-    pub fn coords(&self) -> Vec<String> {
-        let mut coords: Vec<String> = (0..self.names.len())
-            .map(|i| self.coord_name(i).0)
-            .collect();
-        if self.position.is_some() {
-            coords.insert(0, "position".into());
+    /// Per-robot position coordinates: `position_1`, `position_2`, … when
+    /// the model has several robots (robot numbers as in the state names).
+    fn robot_position_coords(&self) -> Vec<String> {
+        if self.positions.len() > 1 {
+            (1..=self.positions.len())
+                .map(|r| format!("position_{r}"))
+                .collect()
+        } else {
+            Vec::new()
         }
+    }
+
+    /// The coordinates metrics are named after: `position` (planar systems:
+    /// the worst robot), `position_1`, `position_2`, … (several robots), then
+    /// every state coordinate (angles with `_deg`).
+    pub fn coords(&self) -> Vec<String> {
+        let mut coords = Vec::new();
+        if !self.positions.is_empty() {
+            coords.push("position".into());
+        }
+        coords.extend(self.robot_position_coords());
+        coords.extend((0..self.names.len()).map(|i| self.coord_name(i).0));
         coords
     }
 
@@ -164,19 +195,152 @@ impl MetricSpec<'_> {
                 out.push((format!("tracking_{name}_{s}"), v * scale));
             }
         };
-        if let (Some([i, j]), Some(series)) = (self.position, cmp.position_error.as_ref()) {
-            push_coord(
-                "position",
-                1.0,
-                ge_i[i].hypot(ge_i[j]),
-                ge_s[i].hypot(ge_s[j]),
-                series,
-            );
+        if let Some(series) = cmp.position_error.as_ref() {
+            let dist = |e: &[f64], [i, j]: [usize; 2]| e[i].hypot(e[j]);
+            // The worst robot at the goal, for either run.
+            let worst = |e: &[f64]| {
+                self.positions
+                    .iter()
+                    .fold(0.0f64, |m, p| m.max(dist(e, *p)))
+            };
+            push_coord("position", 1.0, worst(&ge_i), worst(&ge_s), series);
+            for ((name, p), series) in self
+                .robot_position_coords()
+                .iter()
+                .zip(&self.positions)
+                .zip(&cmp.robot_position_error)
+            {
+                push_coord(name, 1.0, dist(&ge_i, *p), dist(&ge_s, *p), series);
+            }
         }
         for i in 0..self.names.len() {
             let (name, scale) = self.coord_name(i);
             push_coord(&name, scale, ge_i[i], ge_s[i], &cmp.coord_error[i]);
         }
         out
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use rand::{Rng, SeedableRng};
+
+    fn random_run(rng: &mut impl Rng, n: usize, dim: usize, dt: f64) -> Trajectory {
+        let mut tr = Trajectory::default();
+        for k in 0..n {
+            tr.t.push(k as f64 * dt);
+            tr.q.push(State::from_fn(dim, |_, _| rng.random_range(-2.0..2.0)));
+        }
+        tr
+    }
+
+    /// Two robots (x1, y1, θ1, x2, y2, θ2): the position metrics are the
+    /// worst robot's, each robot keeps its own (`position_1`, `position_2`),
+    /// all against distances computed here from the raw states.
+    #[test]
+    fn position_metrics_see_every_robot() {
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(7);
+        let names: &[&'static str] = &["x1", "y1", "theta1", "x2", "y2", "theta2"];
+        let spec = MetricSpec {
+            names,
+            angular: &[2, 5],
+            positions: vec![[0, 1], [3, 4]],
+        };
+        let dt = 0.1;
+        let mut worse = [0, 0];
+        for _ in 0..40 {
+            let ideal = random_run(&mut rng, 30, 6, dt);
+            let sim = random_run(&mut rng, 20, 6, dt);
+            let goal = State::from_fn(6, |_, _| rng.random_range(-2.0..2.0));
+            let cmp = compare(&ideal, &sim, dt, spec.angular, &spec.positions);
+            let m: std::collections::HashMap<String, f64> = spec
+                .compute(&goal, ideal.last(), sim.last(), &cmp)
+                .into_iter()
+                .collect();
+            let mut names = spec.names();
+            names.sort();
+            let mut got: Vec<String> = m.keys().cloned().collect();
+            got.sort();
+            assert_eq!(names, got);
+            let d = |a: &State, b: &State, r: usize| {
+                (a[3 * r] - b[3 * r]).hypot(a[3 * r + 1] - b[3 * r + 1])
+            };
+            let mut max_r = [0.0f64; 2];
+            for (k, &t) in cmp.t.iter().enumerate() {
+                let (a, b) = (sample(&ideal, t), sample(&sim, t));
+                for r in 0..2 {
+                    let e = d(&a, &b, r);
+                    assert!((cmp.robot_position_error[r][k] - e).abs() < 1e-12);
+                    max_r[r] = max_r[r].max(e);
+                }
+                assert_eq!(
+                    cmp.position_error.as_ref().unwrap()[k],
+                    cmp.robot_position_error[0][k].max(cmp.robot_position_error[1][k])
+                );
+            }
+            for run in ["ideal", "sim"] {
+                let fin = if run == "ideal" {
+                    ideal.last()
+                } else {
+                    sim.last()
+                };
+                let g = [d(&goal, fin, 0), d(&goal, fin, 1)];
+                assert!((m[&format!("{run}_goal_position_1")] - g[0]).abs() < 1e-12);
+                assert!((m[&format!("{run}_goal_position_2")] - g[1]).abs() < 1e-12);
+                assert_eq!(m[&format!("{run}_goal_position")], g[0].max(g[1]));
+                worse[usize::from(g[1] > g[0])] += 1;
+            }
+            for r in 0..2 {
+                let k = format!("tracking_position_{}_max", r + 1);
+                assert!((m[&k] - max_r[r]).abs() < 1e-12);
+            }
+            assert_eq!(m["tracking_position_max"], max_r[0].max(max_r[1]));
+            assert!(m["tracking_position_rms"] >= m["tracking_position_1_rms"]);
+            assert!(m["tracking_position_rms"] >= m["tracking_position_2_rms"]);
+        }
+        // Both robots were the worst one in some runs.
+        assert!(worse[0] > 0 && worse[1] > 0, "{worse:?}");
+    }
+
+    /// The mobile-manipulator pair through the model trait: robot 2 alone
+    /// off its goal shows in `ideal_goal_position` (robot 1 is exact).
+    #[test]
+    fn the_pairs_goal_position_sees_robot_2() {
+        let model = crate::model::mobile_manipulator::MobileManipulator { robots: 2 };
+        let spec = metric_spec(&model);
+        assert_eq!(spec.positions, [[0, 1], [9, 10]]);
+        let goal = State::from_fn(18, |i, _| 0.1 * i as f64);
+        let mut end = goal.clone();
+        end[9] += 0.6;
+        end[10] -= 0.8;
+        let mut tr = Trajectory::default();
+        tr.t.push(0.0);
+        tr.q.push(end.clone());
+        let cmp = compare(&tr, &tr, 0.1, spec.angular, &spec.positions);
+        let m: std::collections::HashMap<String, f64> =
+            spec.compute(&goal, &end, &end, &cmp).into_iter().collect();
+        assert!((m["ideal_goal_position"] - 1.0).abs() < 1e-12);
+        assert!((m["sim_goal_position_2"] - 1.0).abs() < 1e-12);
+        assert_eq!(m["ideal_goal_position_1"], 0.0);
+        assert!(spec
+            .names()
+            .contains(&"tracking_position_2_max".to_string()));
+    }
+
+    /// One robot: `position` only, no per-robot names or series.
+    #[test]
+    fn one_robot_has_no_per_robot_position_metrics() {
+        let spec = MetricSpec {
+            names: &["x", "y", "theta"],
+            angular: &[2],
+            positions: vec![[0, 1]],
+        };
+        assert_eq!(spec.coords(), ["position", "x", "y", "theta_deg"]);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(1);
+        let tr = random_run(&mut rng, 5, 3, 0.1);
+        let cmp = compare(&tr, &tr, 0.1, spec.angular, &spec.positions);
+        assert!(cmp.robot_position_error.is_empty());
+        assert!(cmp.position_error.is_some());
     }
 }

@@ -121,8 +121,12 @@ pub struct Comparison {
     pub t: Vec<f64>,
     /// Per-coordinate error sim − ideal (angles wrapped, in rad), one series per state coordinate.
     pub coord_error: Vec<Vec<f64>>,
-    /// Position error ‖p_sim − p_ideal‖ (models with a planar position), m.
+    /// Position error ‖p_sim − p_ideal‖ (models with a planar position), m;
+    /// with several robots, the worst robot's at each instant.
     pub position_error: Option<Vec<f64>>,
+    /// With several robots, each robot's position error (robot order), m;
+    /// empty for one robot (its series is `position_error`).
+    pub robot_position_error: Vec<Vec<f64>>,
 }
 
 /// A named polyline in the world frame, drawn with the paths (e.g. a target line).

@@ -148,7 +148,7 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
 
     let t0 = Instant::now();
     let spec = metric_spec(model);
-    let cmp = compare(&ideal, &sim.traj, sc.sim.dt, spec.angular, spec.position);
+    let cmp = compare(&ideal, &sim.traj, sc.sim.dt, spec.angular, &spec.positions);
     let mut metrics = spec.compute(&goal, ideal.last(), sim.traj.last(), &cmp);
     let (extra, series) = prep.system.analysis(&goal, &ideal, &sim, &cmp);
     metrics.extend(extra);

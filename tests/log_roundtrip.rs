@@ -301,6 +301,7 @@ fn overwrite_and_no_planar_position() {
         t: fx.comparison.t.clone(),
         coord_error: fx.comparison.coord_error.clone(),
         position_error: None,
+        robot_position_error: Vec::new(),
     };
     let mut rec = fx.record();
     rec.position = None;

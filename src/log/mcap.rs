@@ -290,6 +290,9 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
     if rec.comparison.position_error.is_some() {
         error_names.push(Cow::Borrowed("position"));
     }
+    for r in 1..=rec.comparison.robot_position_error.len() {
+        error_names.push(Cow::Owned(format!("position_{r}")));
+    }
 
     let ch_cmd = json_channel(
         ctx,
@@ -479,6 +482,11 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
                 }
                 if let Some(p) = &cmp.position_error {
                     err_row[state_names.len()] = p[k];
+                }
+                // Per-robot position errors (several robots) come last.
+                let first = err_row.len() - cmp.robot_position_error.len();
+                for (slot, series) in err_row[first..].iter_mut().zip(&cmp.robot_position_error) {
+                    *slot = series[k];
                 }
                 let seg = match label_at(ideal, t) {
                     Some(l) => segment_name(rec.labels, l),

@@ -190,6 +190,18 @@ fn check(rec: &RunRecord<'_>) -> Result<(), String> {
             ));
         }
     }
+    if let Some((r, p)) = c
+        .robot_position_error
+        .iter()
+        .enumerate()
+        .find(|(_, p)| p.len() != nc)
+    {
+        return Err(format!(
+            "robot {}'s position error has {} values, expected {nc}",
+            r + 1,
+            p.len()
+        ));
+    }
     if let Some([ix, iy]) = rec.position {
         if ix >= ns || iy >= ns {
             return Err(format!(

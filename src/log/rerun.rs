@@ -246,6 +246,12 @@ fn log_all(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrError>
         series_style(stream, &p, "position", None, false)?;
         send_scalars(stream, p, &rec.comparison.t, pe.iter().copied())?;
     }
+    for (r, pe) in rec.comparison.robot_position_error.iter().enumerate() {
+        let name = format!("position_{}", r + 1);
+        let p = ep(&["errors", &name]);
+        series_style(stream, &p, &name, None, false)?;
+        send_scalars(stream, p, &rec.comparison.t, pe.iter().copied())?;
+    }
     for j in 0..rec.input_names.len() {
         let name = coord_name(rec.input_names, j);
         let p = ep(&["command", &name]);
@@ -617,6 +623,10 @@ fn blueprint(rec: &RunRecord<'_>) -> (Blueprint, Vec<Property>) {
     ];
     if let Some(p) = &cmp.position_error {
         groups[0].1.push("/errors/position".into());
+        groups[0].2.push(p);
+    }
+    for (r, p) in cmp.robot_position_error.iter().enumerate() {
+        groups[0].1.push(format!("/errors/position_{}", r + 1));
         groups[0].2.push(p);
     }
     for i in 0..rec.state_names.len() {

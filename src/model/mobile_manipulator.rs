@@ -534,6 +534,9 @@ impl KinematicModel for MobileManipulator {
     fn position_states(&self) -> Option<[usize; 2]> {
         Some([0, 1])
     }
+    fn robot_positions(&self) -> Vec<[usize; 2]> {
+        (0..self.robots).map(|r| [DOF * r, DOF * r + 1]).collect()
+    }
     fn input_matrix(&self, q: &State) -> DMatrix<f64> {
         let mut g = DMatrix::zeros(DOF * self.robots, INPUTS * self.robots);
         for r in 0..self.robots {

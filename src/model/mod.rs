@@ -37,6 +37,12 @@ pub trait KinematicModel: Send + Sync {
     fn position_states(&self) -> Option<[usize; 2]> {
         None
     }
+    /// Every robot's planar position (x, y) indices, one pair per robot:
+    /// position metrics report the worst robot and, with several, each one.
+    /// Defaults to [`KinematicModel::position_states`] (one robot).
+    fn robot_positions(&self) -> Vec<[usize; 2]> {
+        self.position_states().into_iter().collect()
+    }
     /// Drift f(q); zero for driftless systems.
     fn drift(&self, q: &State) -> State {
         State::zeros(q.len())

@@ -205,6 +205,9 @@ impl SeriesFile {
         if let Some(p) = &c.position_error {
             errors.push(series("position", &c.t, |k| p[k]));
         }
+        for (r, p) in c.robot_position_error.iter().enumerate() {
+            errors.push(series(&format!("position_{}", r + 1), &c.t, |k| p[k]));
+        }
         SeriesFile {
             format: FORMAT,
             scenario: rec.scenario.to_string(),

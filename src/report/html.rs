@@ -373,7 +373,9 @@ fn single_figures(summary: &Value, sf: &SeriesFile) -> Result<String, String> {
                 name: format!("max threshold {m}"),
                 color: plots::RED,
             });
-            if s.name != "position" {
+            // Coordinate errors are signed; position errors (`position`,
+            // `position_1`, …) are distances.
+            if i.is_some() {
                 hl.push(HLine {
                     y: -m,
                     name: String::new(),

@@ -85,6 +85,7 @@ impl Fixture {
             t: ideal.t.clone(),
             coord_error,
             position_error: Some(position_error),
+            robot_position_error: Vec::new(),
         };
         let visual = |shape, origin| Visual {
             shape,

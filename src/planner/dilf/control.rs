@@ -43,7 +43,10 @@
 //! millimetres from the goal the field swings the heading by tens of degrees
 //! (seen in physics) to remove an error the task accepts, and where both v and
 //! f_θ are tiny Eq. 18b's hold branch turns the platform aimlessly. This
-//! phase may lower V; the V̇ ≥ 0 check counts only samples outside it.
+//! phase may lower V; the V̇ ≥ 0 check counts only samples outside it. The
+//! controller also hands a platform over to it anywhere within the whole
+//! tolerance once the law stops making progress, and keeps it aligning
+//! while it stays within the tolerance ([`control_aligning`], [`super::stall`]).
 //!
 //! Physical limits (ours), chosen so that V̇ ≥ 0 still holds: |v| is capped
 //! first (a state-dependent k_v ≤ the configured one) and Eq. 18b is applied
@@ -125,6 +128,19 @@ fn sign(x: f64) -> f64 {
 
 /// Eq. 18 for every robot: the inputs (8 per robot) and the branch each took.
 pub fn control(q: &[f64], f: &[f64], goal: &[f64], g: &Gains) -> (Vec<f64>, Vec<Branch>) {
+    control_aligning(q, f, goal, g, &[])
+}
+
+/// As [`control`], with robot r turning in place to its goal heading also
+/// where `aligning[r]` (the controller's hand-over, [`super::stall`]), not
+/// only within `goal_lock_radius`.
+pub fn control_aligning(
+    q: &[f64],
+    f: &[f64],
+    goal: &[f64],
+    g: &Gains,
+    aligning: &[bool],
+) -> (Vec<f64>, Vec<Branch>) {
     let robots = q.len() / DOF;
     let norm_f = f.iter().map(|x| x * x).sum::<f64>().sqrt();
     let mut u = vec![0.0; INPUTS * robots];
@@ -164,7 +180,8 @@ pub fn control(q: &[f64], f: &[f64], goal: &[f64], g: &Gains) -> (Vec<f64>, Vec<
         };
         let e = wrap_angle(theta_d - th);
         let w = v * proj + g.ko * fth * e;
-        let (v, omega, branch) = if dist <= g.goal_lock_radius {
+        let align = dist <= g.goal_lock_radius || aligning.get(r).copied().unwrap_or(false);
+        let (v, omega, branch) = if align {
             let omega = (g.ko * wrap_angle(th_goal - th)).clamp(-g.max_turn_rate, g.max_turn_rate);
             (0.0, omega, Branch::Align)
         } else if w >= 0.0 {

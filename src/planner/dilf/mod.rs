@@ -7,7 +7,9 @@
 //! * [`point_world`]: H0, T, the switches, H1 and H2 as printed (Eqs. 6–9);
 //! * [`potential`]: V (Eq. 15) and f (Eq. 17), exact gradients by dual numbers;
 //! * [`adjoint`]: the same gradient by hand-written adjoints (the fast path);
-//! * [`control`]: Eq. 18.
+//! * [`control`]: Eq. 18;
+//! * [`stall`]: the law's progress: the `stalled` stop and the hand-over to
+//!   the final alignment (ours).
 //!
 //! The planner's output is a feedback policy ([`crate::plan::ControlLaw::Feedback`]):
 //! the harness evaluates it on the ideal state and, in physics, on the
@@ -20,6 +22,7 @@ pub mod guard;
 pub mod object;
 pub mod point_world;
 pub mod potential;
+pub mod stall;
 
 use crate::model::mobile_manipulator::{self as mm, DOF, INPUTS};
 use crate::model::{Input, State};
@@ -28,6 +31,7 @@ use crate::planner::{check_param, PlanError};
 use control::{Branch, Gains};
 use potential::{DipoleProduct, GoalFrame, GraspCorrection, Scene, SingularityEnclosure, Warm};
 use serde::{Deserialize, Serialize};
+use stall::{Progress, StallParams, Verdict};
 use std::sync::Arc;
 
 /// When the task counts as done.
@@ -129,6 +133,10 @@ pub struct DilfParams {
     /// more (ours: Eq. 18 is a continuous-time law, sampled here).
     #[serde(default = "default_hold_guard")]
     pub hold_guard: bool,
+    /// When the law counts as stalled, and the hand-over to the final
+    /// alignment ([`stall`]).
+    #[serde(default)]
+    pub stall: StallParams,
     /// Where the law reads a carried beam's grasps in the physics replay
     /// ([`Grasps`]).
     #[serde(default)]
@@ -239,6 +247,12 @@ impl DilfParams {
                 .all(|v| pos(*v)),
             "every tolerance must be > 0",
         )?;
+        if let Err((name, reason)) = self.stall.check() {
+            return Err(PlanError::InvalidParameter {
+                name: name.into(),
+                reason: reason.into(),
+            });
+        }
         Ok(())
     }
 
@@ -278,10 +292,16 @@ fn labels(robots: usize) -> Vec<String> {
             "singular",
             "solver failure",
             "overstrained",
+            "stalled",
         ]
         .map(String::from),
     );
     out
+}
+
+/// Index of a plan label (e.g. `"stalled"`) for `robots` robots.
+pub fn label_index(robots: usize, name: &str) -> Option<usize> {
+    labels(robots).iter().position(|l| l == name)
 }
 
 struct Policy {
@@ -291,6 +311,7 @@ struct Policy {
     /// Hold period, s, and whether the hold guard acts.
     period: f64,
     hold_guard: bool,
+    stall: StallParams,
     grasps: Grasps,
 }
 
@@ -302,21 +323,62 @@ struct DilfController {
     /// Number of branch combinations (3^k): the guarded ones follow, then
     /// "converged" at 2 · combos.
     combos: usize,
+    /// The law's progress (stall stop, hand-over).
+    progress: Progress,
+    /// Per robot: turning in place to its goal heading (Eq. 18 suspended).
+    aligning: Vec<bool>,
+}
+
+impl DilfController {
+    /// Which robots turn in place from this sample on: those within half the
+    /// position tolerance; those already turning, while within the whole
+    /// tolerance; and, when the law has made no progress for
+    /// `handover_time`, every robot within the tolerance. `Err(())` when it
+    /// has made none for `stall.time`: the run ends.
+    fn hand_over(&mut self, t: f64, q: &[f64], v: f64) -> Result<(), ()> {
+        let p = &self.policy;
+        let goal = &p.scene.goal;
+        let dist = |r: usize| {
+            let i = DOF * r;
+            (q[i] - goal[i]).hypot(q[i + 1] - goal[i + 1])
+        };
+        let tolerance = p.tolerance.position;
+        for (r, a) in self.aligning.iter_mut().enumerate() {
+            let d = dist(r);
+            *a = d <= p.gains.goal_lock_radius || (*a && d <= tolerance);
+        }
+        // The in-place turn is progress while a heading is still off.
+        let heading = (0..self.aligning.len())
+            .filter(|&r| self.aligning[r])
+            .map(|r| crate::compare::wrap_angle(q[DOF * r + 2] - goal[DOF * r + 2]).abs())
+            .filter(|h| *h > p.tolerance.heading_deg.to_radians())
+            .reduce(f64::max);
+        match self.progress.observe(t, v, heading) {
+            Verdict::Stalled => return Err(()),
+            Verdict::HandOver => {
+                for (r, a) in self.aligning.iter_mut().enumerate() {
+                    *a |= dist(r) <= tolerance;
+                }
+            }
+            Verdict::Moving => {}
+        }
+        Ok(())
+    }
 }
 
 impl Controller for DilfController {
-    fn command(&mut self, _t: f64, q: &State) -> Command {
-        self.decide(q.as_slice(), None)
+    fn command(&mut self, t: f64, q: &State) -> Command {
+        self.decide(t, q.as_slice(), None)
     }
 
     /// With `grasps = "measured"` and a carried beam, the flanges' 3D poses
     /// (12 numbers per robot: position, rotation row by row) replace the
     /// kinematic ones for the beam ([`GraspCorrection`]).
-    fn command_measured(&mut self, _t: f64, q: &State, measured: &[f64]) -> Command {
+    fn command_measured(&mut self, t: f64, q: &State, measured: &[f64]) -> Command {
         let q = q.as_slice();
         let p = &self.policy;
         if p.grasps != Grasps::Measured || p.scene.object.is_none() || measured.len() < 24 {
-            return self.decide(q, None);
+            return self.decide(t, q, None);
         }
         let corr: GraspCorrection = std::array::from_fn(|r| {
             let m = &measured[12 * r..12 * (r + 1)];
@@ -329,12 +391,12 @@ impl Controller for DilfController {
                 .inverse()
                 .then(&flange)
         });
-        self.decide(q, Some(&corr))
+        self.decide(t, q, Some(&corr))
     }
 }
 
 impl DilfController {
-    fn decide(&mut self, q: &[f64], measured: Option<&GraspCorrection>) -> Command {
+    fn decide(&mut self, t: f64, q: &[f64], measured: Option<&GraspCorrection>) -> Command {
         let p = &self.policy;
         let robots = p.scene.robots;
         let stop = |label: usize| Command {
@@ -362,7 +424,12 @@ impl DilfController {
         if e.overstrained() {
             return stop(done + 4);
         }
-        let (mut u, branches) = control::control(q, &f, &p.scene.goal, &p.gains);
+        if self.hand_over(t, q, e.v).is_err() {
+            return stop(done + 5);
+        }
+        let p = &self.policy;
+        let (mut u, branches) =
+            control::control_aligning(q, &f, &p.scene.goal, &p.gains, &self.aligning);
         let mut label = branches
             .iter()
             .enumerate()
@@ -392,6 +459,8 @@ impl PolicyFactory for Factory {
             warm: self.0.scene.warm(),
             guard_warm: self.0.scene.warm(),
             combos: 3usize.pow(self.0.scene.robots as u32),
+            progress: Progress::new(self.0.stall),
+            aligning: vec![false; self.0.scene.robots],
         })
     }
 }
@@ -477,6 +546,7 @@ pub fn plan(scene: Arc<Scene>, start: &State, params: &DilfParams) -> Result<Pla
         tolerance: params.tolerance,
         period: params.period,
         hold_guard: params.hold_guard,
+        stall: params.stall,
         grasps: params.grasps,
     };
     Ok(Plan {

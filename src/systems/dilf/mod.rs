@@ -19,7 +19,10 @@
 //! claim, Appendix G), `ideal_min_manipulability` / `sim_min_manipulability`
 //! (least √det(JᵀJ) = |det J| of any arm at the policy samples, m³: the
 //! singularity-avoidance claim), `slip_lateral_max`, `joint_rate_error_max`, `sim_max_tilt_deg` (largest
-//! platform tilt, deg; `sim_max_tilt_2_deg` for robot 2).
+//! platform tilt, deg; `sim_max_tilt_2_deg` for robot 2), `ideal_stall_time` /
+//! `sim_stall_time` (when the law declared a stall, s: no progress in V for
+//! `planner.stall.time`, [`crate::planner::dilf::stall`]; NaN if it never
+//! did; informational: the verdict shows in the time to goal).
 
 mod config;
 mod overlay;
@@ -203,6 +206,17 @@ impl Dilf {
                 ..BeamOptions::default()
             },
         })
+    }
+
+    /// When the law declared a stall along a trajectory (NaN if never).
+    fn stall_time(&self, tr: &Trajectory) -> f64 {
+        let stalled = dilf::label_index(self.model.robots, "stalled");
+        tr.label
+            .iter()
+            .zip(&tr.t)
+            .find(|(l, _)| Some(**l) == stalled)
+            .map(|(_, t)| *t)
+            .unwrap_or(f64::NAN)
     }
 
     /// The first time a trajectory is within the planner's tolerance (NaN if never).
@@ -408,6 +422,12 @@ impl System for Dilf {
         }
         out
     }
+    fn metric_direction(&self, name: &str) -> Option<crate::metric::Direction> {
+        // A stall shows as a goal not reached; when it is declared is
+        // information (earlier is neither better nor worse).
+        name.ends_with("_stall_time")
+            .then_some(crate::metric::Direction::Informational)
+    }
     fn extra_metric_names(&self) -> Vec<String> {
         let mut names: Vec<String> = [
             "ideal_time_to_goal",
@@ -424,6 +444,8 @@ impl System for Dilf {
             "slip_lateral_max",
             "joint_rate_error_max",
             "sim_max_tilt_deg",
+            "ideal_stall_time",
+            "sim_stall_time",
         ]
         .map(String::from)
         .to_vec();
@@ -493,6 +515,8 @@ impl System for Dilf {
                 max_abs(chan("joint_rate_error")),
             ),
             ("sim_max_tilt_deg".into(), max_abs(chan("tilt_deg"))),
+            ("ideal_stall_time".into(), self.stall_time(ideal)),
+            ("sim_stall_time".into(), self.stall_time(&sim.traj)),
         ];
         if self.beam.is_some() {
             // ‖q_f‖∞ of the FE model at the ideal and at the simulated grasps,
