@@ -355,7 +355,10 @@ fn log_paths(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrErro
             &rr::LineStrips3D::new([strip])
                 .with_colors([rgba(o.rgba)])
                 .with_radii([Radius::new_ui_points(1.0)])
-                .with_labels([o.name.as_str()]),
+                .with_labels([o.name.as_str()])
+                // Obstacles and ellipsoid covers can number dozens: their labels
+                // would bury the robot. Names stay on hover and in the entity tree.
+                .with_show_labels(false),
         )?;
     }
     let (Some(ideal), Some(sim)) = (planar_path(rec, rec.ideal), planar_path(rec, &rec.sim.traj))
