@@ -45,6 +45,11 @@ pub struct SweepConfig {
     /// `check` fails when the success rate is below this.
     #[serde(default)]
     pub min_success_rate: f64,
+    /// A variant succeeds only if it also passes every `[thresholds]` and
+    /// `[minimums]` gate of the scenario (for verdicts made of several
+    /// criteria: position, heading, contacts, tilt, ...).
+    #[serde(default)]
+    pub success_requires_gates: bool,
 }
 
 /// How a swept key's value is chosen for each variant.
@@ -326,6 +331,7 @@ mod tests {
             success_max: 1.0,
             time_metric: "t".into(),
             min_success_rate: 0.0,
+            success_requires_gates: false,
         }
     }
 

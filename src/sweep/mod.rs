@@ -170,7 +170,8 @@ fn run_variant(prep: &Prepared, cfg: &SweepConfig, v: &Variant) -> String {
             let final_error = finite(o.metric(&cfg.success_metric));
             Record {
                 variant: v,
-                success: final_error.is_some_and(|e| e <= cfg.success_max),
+                success: final_error.is_some_and(|e| e <= cfg.success_max)
+                    && (o.passed || !cfg.success_requires_gates),
                 final_error,
                 time_to_goal: finite(o.metric(&cfg.time_metric)),
                 steps: o.steps,

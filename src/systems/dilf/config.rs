@@ -53,10 +53,11 @@ pub enum BoundKind {
     Wrench,
 }
 
-/// Default F_max of the wrench bound, N: a quarter of the force that tips a
-/// platform at Table I's grasp height (~1.06 m) in its weakest direction,
-/// and with [`DEFAULT_MAX_MOMENT`] within the PUMA's wrist torques (see
-/// `physics::mobile_manipulator::tipping_force` and the seed-004 docs).
+/// Default F_max of the wrench bound, N: about a quarter of the force that
+/// tips a platform at Table I's grasp height (~1.06 m) in its weakest
+/// direction, and with [`DEFAULT_MAX_MOMENT`] within the PUMA's wrist
+/// torques (derived in the seed-004 docs; test
+/// `the_wrench_bound_defaults_keep_the_platforms_and_wrists_safe`).
 pub const DEFAULT_MAX_FORCE: f64 = 60.0;
 /// Default M_max of the wrench bound, N m: with F_max at the 0.16 m from
 /// the wrist centre to the grasp, M_max + 0.16 F_max = 17.6 N m stays below
@@ -254,19 +255,26 @@ pub enum WristConfig {
 }
 
 /// Default compliant wrist: at the wrench bound's default F_max = 60 N each
-/// wrist deflects 6 cm (1000 N/m), so the two in series give the grasps
-/// 12 cm of distance change; at M_max = 8 N m it turns 0.16 rad (50 N m/rad).
+/// wrist deflects 15 cm (400 N/m), so the two in series give the grasps
+/// up to 30 cm of distance change (stiffer wrists leave Eq. 18 too little
+/// room: `dilf_table_i_rigid_goal` stalls at 1000 N/m, see the seed-004
+/// docs); at M_max = 8 N m each turns 0.16 rad (50 N m/rad).
 fn default_wrist_stiffness() -> [f64; 6] {
-    [1000.0, 1000.0, 1000.0, 50.0, 50.0, 50.0]
+    [400.0, 400.0, 400.0, 50.0, 50.0, 50.0]
 }
-/// About 0.7 of critical damping for the gripper and half the rod (0.8 kg)
-/// on 1000 N/m; the rotations as soft.
+/// About 0.7 of critical damping for the gripper and half the rod (~0.8 kg)
+/// on 400 N/m. The rotations' 2 N m s/rad: at 3 a fast in-place turn adds
+/// the damper's moment to the spring's and the grasp moment overshoots its
+/// bound; at 1 the wrist roll rings at the rod's first bending mode (~4 Hz).
 fn default_wrist_damping() -> [f64; 6] {
-    [40.0, 40.0, 40.0, 3.0, 3.0, 3.0]
+    [25.0, 25.0, 25.0, 2.0, 2.0, 2.0]
 }
-/// The deflections at the bound's default F_max and M_max, plus a third.
+/// The translations' deflection at the bound's default F_max plus a third;
+/// the rotations' twice their deflection at M_max (0.16 rad): the spring
+/// alone does not keep the arm's quick counter-rotations of the wrist roll
+/// off the stop.
 fn default_wrist_travel() -> [f64; 6] {
-    [0.08, 0.08, 0.08, 0.22, 0.22, 0.22]
+    [0.2, 0.2, 0.2, 0.35, 0.35, 0.35]
 }
 
 impl WristConfig {

@@ -25,6 +25,7 @@
 //! did; informational: the verdict shows in the time to goal).
 
 mod config;
+mod grasp;
 mod overlay;
 
 pub use config::{
@@ -449,8 +450,12 @@ impl System for Dilf {
         ]
         .map(String::from)
         .to_vec();
-        if self.beam.is_some() {
+        if let Some(b) = &self.beam {
             names.extend(PAIR_METRICS.map(String::from));
+            names.extend(grasp::metric_names(
+                b.bound == BoundKind::Wrench,
+                self.wrist != Wrist::Rigid,
+            ));
         }
         names
     }
@@ -551,9 +556,19 @@ impl System for Dilf {
                 ("sim_max_tilt_2_deg".into(), max_abs(chan("tilt_2_deg"))),
             ]);
         }
-        (
-            metrics,
-            vec![a_ideal.v, a_sim.v, a_ideal.beta, a_sim.beta, clear],
-        )
+        let mut series = vec![a_ideal.v, a_sim.v, a_ideal.beta, a_sim.beta, clear];
+        if let Some(c) = &scene.object {
+            let dt = match sim.traj.t.as_slice() {
+                [a, b, ..] => b - a,
+                _ => self.params.period,
+            };
+            let every = ((self.params.period / dt).round() as usize).max(1);
+            let samples = self.policy_samples(ideal);
+            let compliant = self.wrist != Wrist::Rigid;
+            let (m, s) = grasp::analysis(c, compliant, ideal, &samples, sim, every);
+            metrics.extend(m);
+            series.extend(s);
+        }
+        (metrics, series)
     }
 }
