@@ -143,6 +143,7 @@ fn full_run(c: &mut Criterion) {
         log_root: Some(logs.path().to_path_buf()),
         progress: false,
         pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
+        keep: anholonomy::log::Keep::All,
     };
     let mut g = c.benchmark_group("dilf_single_door_full_run");
     g.sample_size(10);

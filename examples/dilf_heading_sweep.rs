@@ -92,7 +92,7 @@ fn parse_args() -> Result<Args, String> {
     let [from, to, step]: [f64; 3] = range
         .try_into()
         .map_err(|_| "--headings FROM:TO:STEP".to_string())?;
-    if !(step > 0.0) {
+    if step.is_nan() || step <= 0.0 {
         return Err("--headings: STEP must be > 0".into());
     }
     let mut h = from;

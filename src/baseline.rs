@@ -36,6 +36,7 @@ use crate::error::Error;
 pub use crate::metric::Direction;
 use crate::runner::RunOutcome;
 use crate::systems::System;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -59,12 +60,14 @@ pub fn direction(system: &dyn System, name: &str) -> Direction {
 }
 
 /// A relative and an absolute tolerance; unset fields fall back to the level above.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct Tolerance {
     /// Relative to |baseline|.
+    #[schemars(range(min = 0))]
     pub rel: Option<f64>,
     /// In the metric's unit.
+    #[schemars(range(min = 0))]
     pub abs: Option<f64>,
 }
 
@@ -75,12 +78,14 @@ pub struct Tolerance {
 /// rel = 0.05                                    # every metric of this scenario
 /// metrics.sim_time_to_goal = { rel = 0.2 }      # one metric
 /// ```
-#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RegressionConfig {
     /// Relative tolerance for every metric.
+    #[schemars(range(min = 0))]
     pub rel: Option<f64>,
     /// Absolute tolerance for every metric.
+    #[schemars(range(min = 0))]
     pub abs: Option<f64>,
     /// Per-metric overrides.
     #[serde(default)]
@@ -526,6 +531,9 @@ mod tests {
             name: "s".into(),
             planner: "p".into(),
             passed: true,
+            verdict: crate::verdict::Verdict::Pass,
+            expect_reason: None,
+            tracking_meaningful: true,
             failures: vec![],
             metrics: metrics.iter().map(|(k, v)| (k.to_string(), *v)).collect(),
             steps: 0,

@@ -269,10 +269,10 @@ mod tests {
             let mut max_r = [0.0f64; 2];
             for (k, &t) in cmp.t.iter().enumerate() {
                 let (a, b) = (sample(&ideal, t), sample(&sim, t));
-                for r in 0..2 {
+                for (r, m) in max_r.iter_mut().enumerate() {
                     let e = d(&a, &b, r);
                     assert!((cmp.robot_position_error[r][k] - e).abs() < 1e-12);
-                    max_r[r] = max_r[r].max(e);
+                    *m = m.max(e);
                 }
                 assert_eq!(
                     cmp.position_error.as_ref().unwrap()[k],
@@ -291,9 +291,9 @@ mod tests {
                 assert_eq!(m[&format!("{run}_goal_position")], g[0].max(g[1]));
                 worse[usize::from(g[1] > g[0])] += 1;
             }
-            for r in 0..2 {
+            for (r, max) in max_r.iter().enumerate() {
                 let k = format!("tracking_position_{}_max", r + 1);
-                assert!((m[&k] - max_r[r]).abs() < 1e-12);
+                assert!((m[&k] - max).abs() < 1e-12);
             }
             assert_eq!(m["tracking_position_max"], max_r[0].max(max_r[1]));
             assert!(m["tracking_position_rms"] >= m["tracking_position_1_rms"]);

@@ -5,12 +5,16 @@
 //! `name` the scenario, `classname` `anholonomy.<planner>`, `time` the
 //! scenario's wall time. A broken threshold or a baseline regression is a
 //! `<failure>` whose text lists every one; a scenario that could not run
-//! (planner refusal, physics failure) is an `<error>`. A sweep is one test
+//! (planner refusal, physics failure) is an `<error>`. A scenario expected to
+//! fail (`expect = "fails"`) that does is `<skipped>` with type `xfail` and
+//! the reason; one that meets every threshold instead (XPASS) is a `<failure>`
+//! of type `xpass`. A sweep is one test
 //! case with its statistics (`sweep_*` metrics) as `<property>` elements.
 
 use crate::baseline::{fmt_value, Delta, Status};
 use crate::error::Error;
 use crate::runner::RunOutcome;
+use crate::verdict::Verdict;
 use quick_junit::{NonSuccessKind, Property, Report, TestCase, TestCaseStatus, TestSuite};
 use std::path::Path;
 use std::time::Duration;
@@ -71,31 +75,56 @@ pub fn test_case(r: &CaseResult<'_>) -> TestCase {
                     )
                 })
                 .collect();
-            let status = if o.failures.is_empty() && regressions.is_empty() {
-                TestCaseStatus::success()
-            } else {
-                let mut s = TestCaseStatus::non_success(NonSuccessKind::Failure);
-                let mut parts = Vec::new();
-                if !o.failures.is_empty() {
-                    parts.push(format!("{} threshold(s) broken", o.failures.len()));
+            let thresholds: Vec<String> = o
+                .failures
+                .iter()
+                .map(|f| format!("threshold: {f}"))
+                .collect();
+            let reason = o.expect_reason.as_deref().unwrap_or("");
+            let status = match (o.verdict, regressions.is_empty()) {
+                (Verdict::Pass, true) => TestCaseStatus::success(),
+                // An expected failure is reported as skipped, the way test
+                // runners report xfail, so CI dashboards do not count it.
+                (Verdict::Xfail, true) => {
+                    let mut s = TestCaseStatus::skipped();
+                    s.set_message(format!("XFAIL: expected failure: {reason}"))
+                        .set_type("xfail")
+                        .set_description(thresholds.join("\n"));
+                    s
                 }
-                if !regressions.is_empty() {
-                    parts.push(format!("{} baseline regression(s)", regressions.len()));
+                (v, _) => {
+                    let mut s = TestCaseStatus::non_success(NonSuccessKind::Failure);
+                    let mut parts = Vec::new();
+                    let mut lines = Vec::new();
+                    match v {
+                        Verdict::Fail => {
+                            parts.push(format!("{} threshold(s) broken", o.failures.len()));
+                            lines.extend(thresholds);
+                        }
+                        Verdict::Xpass => {
+                            parts.push(format!(
+                                "XPASS: met every threshold although expected to fail ({reason})"
+                            ));
+                        }
+                        Verdict::Xfail => {
+                            parts.push(format!("XFAIL ({reason})"));
+                            lines.extend(thresholds);
+                        }
+                        Verdict::Pass => {}
+                    }
+                    if !regressions.is_empty() {
+                        parts.push(format!("{} baseline regression(s)", regressions.len()));
+                    }
+                    lines.extend(regressions);
+                    s.set_message(parts.join(", "))
+                        .set_type(match v {
+                            Verdict::Fail => "threshold",
+                            Verdict::Xpass => "xpass",
+                            _ => "regression",
+                        })
+                        .set_description(lines.join("\n"));
+                    s
                 }
-                let lines: Vec<String> = o
-                    .failures
-                    .iter()
-                    .map(|f| format!("threshold: {f}"))
-                    .chain(regressions)
-                    .collect();
-                s.set_message(parts.join(", "))
-                    .set_type(if o.failures.is_empty() {
-                        "regression"
-                    } else {
-                        "threshold"
-                    })
-                    .set_description(lines.join("\n"));
-                s
             };
             let mut tc = TestCase::new(o.name.as_str(), status);
             tc.set_classname(format!("anholonomy.{}", o.planner))
@@ -140,15 +169,25 @@ pub fn report(results: &[CaseResult<'_>], wall_s: f64) -> Report {
 
 /// Checks up front that `path` can be written (its directory exists and takes a new file), so
 /// a bad `--junit` is an input error before anything runs; nothing is created or overwritten.
-pub fn check_writable(path: &Path) -> Result<(), Error> {
+/// A directory that does not exist yet is accepted when it is `created` (the `--logs`
+/// directory the run creates) or inside it, and its nearest existing parent takes new files.
+pub fn check_writable(path: &Path, created: Option<&Path>) -> Result<(), Error> {
     let bad = |m: String| Error::input(path, format!("option `--junit`: {m}"));
     if path.is_dir() {
         return Err(bad("is a directory".into()));
     }
-    let dir = match path.parent() {
+    let mut dir = match path.parent() {
         Some(d) if !d.as_os_str().is_empty() => d,
         _ => Path::new("."),
     };
+    if !dir.exists() && created.is_some_and(|c| dir.starts_with(c)) {
+        while !dir.exists() {
+            dir = match dir.parent() {
+                Some(d) if !d.as_os_str().is_empty() => d,
+                _ => Path::new("."),
+            };
+        }
+    }
     if !dir.is_dir() {
         return Err(bad(format!("directory {} does not exist", dir.display())));
     }
@@ -173,7 +212,10 @@ fn tempfile_in(dir: &Path) -> std::io::Result<std::path::PathBuf> {
     Ok(p)
 }
 
-/// Write the report atomically.
+/// Write the report atomically (creating its directory, see [`check_writable`]).
 pub fn write(path: &Path, report: &Report) -> Result<(), String> {
+    if let Some(d) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
+        std::fs::create_dir_all(d).map_err(|e| format!("cannot create {}: {e}", d.display()))?;
+    }
     crate::log::atomic::write_atomic(path, |w| report.serialize(w).map_err(std::io::Error::other))
 }

@@ -27,6 +27,7 @@ pub mod progress;
 #[cfg(test)]
 mod prop_config;
 pub mod record;
+pub mod reference;
 pub mod report;
 pub mod runner;
 pub mod scenario;
@@ -34,6 +35,7 @@ pub mod suite;
 pub mod sweep;
 pub mod systems;
 pub mod validate;
+pub mod verdict;
 
 pub use error::Error;
 

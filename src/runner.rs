@@ -6,10 +6,12 @@ use crate::compare::compare;
 use crate::error::Error;
 use crate::integrate::{simulate, Trajectory};
 use crate::log::unit::LogUnit;
+use crate::log::Keep;
 use crate::model::{KinematicModel, State};
 use crate::physics::{replay_with, ReplayOptions};
 use crate::plan::Plan;
 use crate::record::{RunRecord, SimTrajectory};
+use crate::verdict::Verdict;
 use serde::Serialize;
 use serde_json::json;
 use std::path::{Path, PathBuf};
@@ -28,6 +30,8 @@ pub struct RunOptions {
     /// Link poses in the logs per second of simulated time (at least this
     /// many, see [`pose_stride`]); 0 logs them at every sample.
     pub pose_rate: f64,
+    /// Which files the log directory keeps.
+    pub keep: Keep,
 }
 
 /// Default of [`RunOptions::pose_rate`], Hz: more than a viewer plays back,
@@ -72,6 +76,12 @@ pub struct RunOutcome {
     pub planner: String,
     /// All thresholds met.
     pub passed: bool,
+    /// PASS, FAIL, XFAIL or XPASS: `passed` against the scenario's `expect`.
+    pub verdict: Verdict,
+    /// `expect = "fails"`: the scenario's reason.
+    pub expect_reason: Option<String>,
+    /// Whether the `tracking_*` metrics mean anything (see [`tracking_meaningful`]).
+    pub tracking_meaningful: bool,
     /// Broken thresholds, human-readable.
     pub failures: Vec<String>,
     /// Metric name → value.
@@ -92,6 +102,16 @@ impl RunOutcome {
             .find(|(n, _)| n == name)
             .map(|(_, v)| *v)
     }
+}
+
+/// Why the `tracking_*` metrics of a run mean nothing, when they do not.
+pub const TRACKING_NOT_MEANINGFUL: &str = "not meaningful: a feedback policy closes the loop on each run's own state, so the runs reach the goal at different times and differ sample by sample whatever the physics";
+
+/// Whether the `tracking_*` metrics (simulated − ideal at equal times) mean
+/// anything: only when both runs execute the same commands, i.e. the system
+/// says its plan's commands depend on time alone ([`crate::systems::System::same_commands`]).
+pub fn tracking_meaningful(prep: &Prepared) -> bool {
+    prep.system.same_commands(&prep.planned)
 }
 
 /// State in display units (angles in degrees) as a JSON object.
@@ -131,9 +151,7 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
         dt: sc.sim.dt,
         settle: sc.sim.settle,
         // Only the 3D logs read link poses, at their own rate.
-        link_pose_every: opts
-            .log_root
-            .is_some()
+        link_pose_every: (opts.log_root.is_some() && opts.keep == Keep::All)
             .then(|| pose_stride(opts.pose_rate, sc.sim.dt)),
     };
     let sim =
@@ -180,6 +198,9 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
         name: sc.name.clone(),
         planner: sc.planner.kind().into(),
         passed: failures.is_empty(),
+        verdict: Verdict::of(failures.is_empty(), sc.expect_fails.is_some()),
+        expect_reason: sc.expect_fails.clone(),
+        tracking_meaningful: tracking_meaningful(prep),
         failures,
         metrics,
         steps: sim.steps,
@@ -200,7 +221,7 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
                 cmp: &cmp,
                 series: &series,
             };
-            write_logs(prep, &run, &outcome, unit.dir(), &goal).map_err(log_error)?;
+            write_logs(prep, &run, &outcome, unit.dir(), &goal, opts.keep).map_err(log_error)?;
             Some(unit)
         }
         None => None,
@@ -211,7 +232,8 @@ pub fn run(prep: &Prepared, opts: &RunOptions) -> Result<RunOutcome, Error> {
     if let Some(unit) = unit {
         // The summary carries the final timings, so it is written last; then
         // the three files replace the previous run's as one unit.
-        let summary = summary_json(prep, plan, &ideal, &sim, &outcome);
+        let mut summary = summary_json(prep, plan, &ideal, &sim, &outcome);
+        summary["logs_kept"] = json!(opts.keep.as_str());
         crate::log::atomic::write_atomic(&unit.dir().join("summary.json"), |w| {
             serde_json::to_writer_pretty(w, &summary).map_err(std::io::Error::other)
         })
@@ -236,7 +258,11 @@ fn write_logs(
     outcome: &RunOutcome,
     dir: &Path,
     goal: &State,
+    keep: Keep,
 ) -> Result<(), String> {
+    if keep == Keep::Summary {
+        return Ok(());
+    }
     let RunData {
         plan,
         ideal,
@@ -270,6 +296,9 @@ fn write_logs(
     };
     // The writers are independent (each file from the same record): on two
     // cores a single run's logs take the longer writer's time, not the sum.
+    if keep == Keep::Report {
+        return crate::report::data::write(&dir.join("series.json"), &rec);
+    }
     let (mcap, rest) = rayon::join(
         || crate::log::mcap::write_mcap(&dir.join("run.mcap"), &rec).map_err(|e| e.to_string()),
         || {
@@ -303,6 +332,11 @@ fn summary_json(
         "file": sc.path,
         "description": sc.description,
         "passed": o.passed,
+        "verdict": o.verdict,
+        "expect": {
+            "fails": sc.expect_fails.is_some(),
+            "reason": sc.expect_fails,
+        },
         "failures": o.failures,
         "thresholds": sc.thresholds,
         "minimums": sc.minimums,
@@ -332,6 +366,12 @@ fn summary_json(
             "final_segment": final_segment(plan, &sim.traj),
         },
         "metrics": o.metrics.iter().cloned().collect::<std::collections::BTreeMap<_, _>>(),
+        // Metric families whose numbers mean nothing for this run, and why.
+        "not_meaningful": if o.tracking_meaningful {
+            json!({})
+        } else {
+            json!({ "tracking": TRACKING_NOT_MEANINGFUL })
+        },
         "sim_steps": o.steps,
         // Everything that depends on the clock, and only that, sits here: the
         // rest of the summary is identical across runs.

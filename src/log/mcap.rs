@@ -73,18 +73,24 @@ pub fn write_mcap(path: &Path, rec: &RunRecord<'_>) -> Result<(), LogError> {
     write_atomically(path, |tmp| write_file(tmp, rec))
 }
 
+/// The first I/O error of a [`Latched`] writer, readable after the writer
+/// has been handed to (and lost in) a failed MCAP writer.
+type FirstError = std::sync::Arc<std::sync::Mutex<Option<io::Error>>>;
+
 /// A writer that remembers the first I/O error: the foxglove sink reports
-/// per-message write errors only as log warnings.
+/// per-message write errors only as log warnings, and after one it fails with
+/// "attempted another write after a write method failed", which hides the
+/// cause (e.g. "No space left on device").
 struct Latched<W> {
     inner: W,
-    err: Option<io::Error>,
+    err: FirstError,
 }
 
 impl<W> Latched<W> {
     fn latch<T>(&mut self, r: io::Result<T>) -> io::Result<T> {
         if let Err(e) = &r {
-            if self.err.is_none() {
-                self.err = Some(io::Error::new(e.kind(), e.to_string()));
+            if let Ok(mut first) = self.err.lock() {
+                first.get_or_insert_with(|| io::Error::new(e.kind(), e.to_string()));
             }
         }
         r
@@ -115,14 +121,20 @@ fn write_file(tmp: &Path, rec: &RunRecord<'_>) -> Result<(), LogError> {
         path: tmp.to_path_buf(),
         source,
     };
-    let fg_err = |source: FoxgloveError| LogError::Mcap {
-        path: tmp.to_path_buf(),
-        source,
+    let first: FirstError = Default::default();
+    let latched = || first.lock().ok().and_then(|mut e| e.take());
+    // An SDK error that follows an I/O error is reported as that I/O error.
+    let fg_err = |source: FoxgloveError| match latched() {
+        Some(e) => io_err("cannot write", e),
+        None => LogError::Mcap {
+            path: tmp.to_path_buf(),
+            source,
+        },
     };
     let file = File::create(tmp).map_err(|e| io_err("cannot create", e))?;
     let writer = Latched {
         inner: BufWriter::with_capacity(1 << 20, file),
-        err: None,
+        err: first.clone(),
     };
 
     let ctx = Context::new();
@@ -148,9 +160,11 @@ fn write_file(tmp: &Path, rec: &RunRecord<'_>) -> Result<(), LogError> {
     });
     // Always close (flushes and finishes the file) before reporting errors.
     let closed = handle.close().map_err(fg_err);
-    logged?;
+    if let Err(e) = logged {
+        return Err(latched().map_or(e, |io| io_err("cannot write", io)));
+    }
     let writer = closed?;
-    if let Some(e) = writer.err {
+    if let Some(e) = latched() {
         return Err(io_err("cannot write", e));
     }
     let file = writer

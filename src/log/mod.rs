@@ -25,6 +25,51 @@ pub use self::rerun::write_rrd;
 pub(crate) use self::scene::segment_name;
 use crate::record::RunRecord;
 
+/// Which files a run keeps in its log directory (`--keep`).
+///
+/// * `all`: `run.mcap`, `run.rrd`, `series.json`, `summary.json` (the report's pages beside them);
+/// * `report`: no 3D logs (`run.mcap`, `run.rrd`), enough for the HTML report;
+/// * `summary`: `summary.json` only (metrics and verdicts; no report).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Default)]
+pub enum Keep {
+    /// `summary.json` only.
+    Summary,
+    /// `summary.json` and `series.json`: what the report reads.
+    Report,
+    /// Everything, including the MCAP and Rerun logs.
+    #[default]
+    All,
+}
+
+impl Keep {
+    /// `summary`, `report`, `all`.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            Keep::Summary => "summary",
+            Keep::Report => "report",
+            Keep::All => "all",
+        }
+    }
+}
+
+impl std::str::FromStr for Keep {
+    type Err = String;
+    fn from_str(s: &str) -> Result<Keep, String> {
+        match s {
+            "summary" => Ok(Keep::Summary),
+            "report" => Ok(Keep::Report),
+            "all" => Ok(Keep::All),
+            _ => Err(format!("`{s}`: expected summary, report or all")),
+        }
+    }
+}
+
+impl std::fmt::Display for Keep {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(self.as_str())
+    }
+}
+
 /// Errors of the log writers. Every variant names the file concerned.
 #[derive(Debug, thiserror::Error)]
 pub enum LogError {

@@ -37,6 +37,7 @@ use super::{Input, KinematicModel, State};
 use nalgebra::{DMatrix, DVector, Vector3};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use schemars::JsonSchema;
 
 /// Which rear contact holds (the multiple-model index σ of Eq. 5).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
@@ -59,14 +60,17 @@ impl Sigma {
 }
 
 /// Rover dimensions, metres.
-#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Deserialize, serde::Serialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct RoverGeometry {
     /// Middle axle to front wheel (the seed's l).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub l: f64,
     /// Back axle to middle axle (the seed's r).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub r: f64,
     /// Front wheel radius ρ (only enters φ' = u1/ρ and the constraint ω2).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub wheel_radius: f64,
 }
 

@@ -8,6 +8,7 @@
 
 use super::rapier::prelude::*;
 use super::real::{f, r, vector};
+use super::required::Required;
 use super::urdf::{Drive, SimWorld};
 use super::{angles, PhysicsSettings, PhysicsSystem};
 use crate::model::{Input, State};
@@ -21,6 +22,19 @@ pub const YOKE: &str = "yoke";
 pub const WHEEL: &str = "wheel";
 /// Wheel joint name.
 pub const WHEEL_JOINT: &str = "wheel_joint";
+
+/// The links and joints the disk looks up in its URDF.
+pub const REQUIRED: [Required; 3] = [
+    Required::link(
+        YOKE,
+        "the body carrying the axle (the root link): held upright, yaw driven",
+    ),
+    Required::link(
+        WHEEL,
+        "the disk, with a sphere or cylinder collision of radius `radius`",
+    ),
+    Required::joint(WHEEL_JOINT, "yoke to wheel, about the axle: driven at θ'"),
+];
 
 /// The disk in Rapier.
 pub struct DiskPhysics {

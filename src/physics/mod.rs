@@ -12,6 +12,7 @@ pub mod beam;
 pub mod disk;
 pub mod mobile_manipulator;
 pub mod real;
+pub mod required;
 pub mod rover;
 pub mod settings;
 pub mod space_robot;

@@ -20,6 +20,7 @@
 
 use super::rapier::prelude::*;
 use super::real::{f, r as real, vector};
+use super::required::Required;
 use super::urdf::{Drive, SimWorld};
 use super::{angles, PhysicsSettings, PhysicsSystem};
 use crate::model::rover::{envelope, RoverGeometry};
@@ -41,6 +42,33 @@ pub const WHEELS: [&str; 5] = [
     "middle_right_wheel",
     "back_left_wheel",
     "back_right_wheel",
+];
+/// Steering link name (between `steer_joint` and the front wheel).
+pub const STEERING: &str = "steering";
+/// The back axle's left wheel joint (its x offset is the back axle's).
+pub const BACK_JOINT: &str = "back_left_wheel_joint";
+
+/// The links and joints the rover looks up in its URDF.
+pub const REQUIRED: [Required; 10] = [
+    Required::link(
+        CHASSIS,
+        "the body (root link); its origin is the middle-axle centre, +x forward",
+    ),
+    Required::link(STEERING, "turns about `steer_joint`, carries the front wheel"),
+    Required::link(
+        WHEELS[0],
+        "steered, driven front wheel, with a sphere or cylinder collision of `geometry.wheel_radius`",
+    ),
+    Required::link(WHEELS[1], "passive middle-axle wheel, left"),
+    Required::link(WHEELS[2], "passive middle-axle wheel, right"),
+    Required::link(WHEELS[3], "passive back-axle wheel, left"),
+    Required::link(WHEELS[4], "passive back-axle wheel, right"),
+    Required::joint(
+        STEER_JOINT,
+        "chassis to steering, revolute about z at x = `geometry.l`; its limit bounds ψ",
+    ),
+    Required::joint(FRONT_JOINT, "steering to front wheel: driven at u1 / radius"),
+    Required::joint(BACK_JOINT, "its x offset is the back axle's, −`geometry.r`"),
 ];
 
 /// x offset of a joint's origin in its parent frame.
@@ -80,12 +108,7 @@ impl RoverPhysics {
         start: &[f64],
         sim: &PhysicsSettings,
     ) -> Result<Self, String> {
-        let rho = super::urdf::collision_radius(robot, WHEELS[0]).ok_or_else(|| {
-            format!(
-                "URDF needs a link `{}` with a sphere or cylinder collision",
-                WHEELS[0]
-            )
-        })?;
+        let rho = super::urdf::round_collision(robot, WHEELS[0], "the front wheel")?;
         if (rho - geom.wheel_radius).abs() > 1e-6 {
             return Err(format!(
                 "URDF front wheel radius {rho} m differs from model.geometry.wheel_radius {} m",
@@ -94,8 +117,8 @@ impl RoverPhysics {
         }
         let l = joint_x(robot, STEER_JOINT)
             .ok_or_else(|| format!("URDF has no joint `{STEER_JOINT}`"))?;
-        let r = joint_x(robot, "back_left_wheel_joint")
-            .ok_or_else(|| "URDF has no joint `back_left_wheel_joint`".to_string())?;
+        let r = joint_x(robot, BACK_JOINT)
+            .ok_or_else(|| format!("URDF has no joint `{BACK_JOINT}`"))?;
         if (l - geom.l).abs() > 1e-6 || (-r - geom.r).abs() > 1e-6 {
             return Err(format!(
                 "URDF axle positions (l = {l} m, r = {} m) differ from model.geometry (l = {}, r = {})",
@@ -108,7 +131,7 @@ impl RoverPhysics {
         );
         let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root);
         let chassis = sw.require_link(CHASSIS)?;
-        let steering = sw.require_link("steering")?;
+        let steering = sw.require_link(STEERING)?;
         let wheels = WHEELS
             .iter()
             .map(|w| sw.require_link(w))

@@ -35,6 +35,7 @@
 
 use super::rapier::prelude::*;
 use super::real::{arr, quat, r, vector};
+use super::required::Required;
 use super::urdf::{Drive, SimWorld, WorldOptions};
 use super::{angles, PhysicsSettings, PhysicsSystem};
 use crate::model::space_robot::SpaceRobot;
@@ -47,6 +48,19 @@ use std::path::Path;
 pub const LINKS: [&str; 3] = ["vehicle", "link1", "link2"];
 /// Joint names (θ1, θ2).
 pub const JOINTS: [&str; 2] = ["joint1", "joint2"];
+
+/// The links and joints the space robot looks up in its URDF (it must have
+/// exactly these, with the model's masses, inertias and lengths).
+pub const REQUIRED: [Required; 5] = [
+    Required::link(
+        LINKS[0],
+        "the vehicle (root link), mass m0 and izz I0 of the model",
+    ),
+    Required::link(LINKS[1], "arm link 1, CoM at l1/2 on its x axis"),
+    Required::link(LINKS[2], "arm link 2, CoM at l2/2 on its x axis"),
+    Required::joint(JOINTS[0], "vehicle to link1 at its origin, about +z: θ1"),
+    Required::joint(JOINTS[1], "link1 to link2 at x = l1, about +z: θ2"),
+];
 
 /// Names of the per-step channels, in [`SpaceRobotPhysics::channels`] order.
 pub const CHANNELS: [&str; 6] = [

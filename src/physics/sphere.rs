@@ -16,6 +16,7 @@
 
 use super::rapier::prelude::*;
 use super::real::{f, quat, r, rotation, vector};
+use super::required::Required;
 use super::urdf::SimWorld;
 use super::{PhysicsSettings, PhysicsSystem};
 use crate::model::rolling_sphere::geodesic_angle;
@@ -26,6 +27,12 @@ use std::path::Path;
 
 /// The link the URDF must provide.
 pub const BALL: &str = "ball";
+
+/// The links the sphere looks up in its URDF.
+pub const REQUIRED: [Required; 1] = [Required::link(
+    BALL,
+    "the ball, with a sphere collision of radius `radius`",
+)];
 
 /// The sphere in Rapier.
 pub struct SpherePhysics {

@@ -150,12 +150,20 @@ pub fn collision_radius(robot: &Robot, link: &str) -> Option<f64> {
         })
 }
 
+/// The radius of `link`'s first round collision (`what`, e.g. "the wheel",
+/// names it in the error when it has none).
+pub fn round_collision(robot: &Robot, link: &str, what: &str) -> Result<f64, String> {
+    if !robot.links.iter().any(|l| l.name == link) {
+        return Err(format!("URDF lacks link `{link}`"));
+    }
+    collision_radius(robot, link)
+        .ok_or_else(|| format!("URDF link `{link}` needs a sphere or cylinder collision ({what})"))
+}
+
 /// Check that `link` has a round collision (`what`, e.g. "the wheel") of the
 /// scenario's `radius`; the error names both values.
 pub fn require_radius(robot: &Robot, link: &str, what: &str, radius: f64) -> Result<(), String> {
-    let r = collision_radius(robot, link).ok_or_else(|| {
-        format!("URDF needs a link `{link}` with a sphere or cylinder collision ({what})")
-    })?;
+    let r = round_collision(robot, link, what)?;
     if (r - radius).abs() > 1e-6 {
         return Err(format!(
             "URDF radius of {what} ({r} m) differs from the scenario's model.radius ({radius} m)"

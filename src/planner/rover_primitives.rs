@@ -49,6 +49,7 @@ use crate::model::rover::{RoverGeometry, Sigma, SwitchingRover};
 use crate::model::{Input, State};
 use crate::plan::{Command, ControlLaw, Controller, Limits, Plan, PolicyFactory};
 use crate::planner::PlanError;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
 use std::sync::Arc;
@@ -61,7 +62,7 @@ pub const LABEL_P2: usize = 1;
 pub const LABEL_P3: usize = 2;
 
 /// Which way P1 turns.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum TurnDirection {
     /// The shorter way to the approach heading (ties: left).
@@ -73,7 +74,7 @@ pub enum TurnDirection {
 }
 
 /// When P2 hands over to P3.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum StopRule {
     /// |e| ≤ ε/4 and |δ| ≤ ε/(4·max(d, 1 m)): guarantees ending within ε (module docs).
@@ -82,41 +83,58 @@ pub enum StopRule {
     Printed,
 }
 
-/// Parameters of the P1–P3 policy. Angles in degrees.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+/// Seed 002 feedback primitives P1–P3 (turn, follow the line through the goal,
+/// drive straight): a feedback policy. Angles in degrees.
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct RoverPrimitiveParams {
     /// Drive speed k of P1 and P2 and top speed of P3, m/s (front-wheel ground speed).
+    /// The default gains place P2's poles for the default speed; for a speed k choose
+    /// k3 = 3p, k2 = 3p²l/k, k1 = p³l/k² (a triple pole −p, wheelbase l).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub speed: f64,
     /// Lateral gain k1, rad/(s·m).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub k1: f64,
     /// Heading gain k2, 1/s.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub k2: f64,
     /// Steering-angle damping k3, 1/s.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub k3: f64,
     /// Goal tolerance ε in the seed's SE(2) metric (m and rad alike).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub epsilon: f64,
-    /// Wheel angle held during P1 (the seed chose π/6).
+    /// Wheel angle held during P1 (the seed chose π/6), deg; at most `max_steer_deg`.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub p1_wheel_deg: f64,
-    /// Angle between the heading and N at which P1 ends (the seed: π/6).
+    /// Angle between the heading and N at which P1 ends (the seed: π/6), deg.
+    #[schemars(extend("exclusiveMinimum" = 0, "exclusiveMaximum" = 90))]
     pub approach_deg: f64,
-    /// P1 is skipped when the heading is already this close to the approach heading.
+    /// P1 is skipped when the heading is already this close to the approach heading, deg;
+    /// below `approach_deg`.
+    #[schemars(range(min = 0))]
     pub p1_tolerance_deg: f64,
     /// Turning direction of P1.
     pub turn: TurnDirection,
     /// P2 → P3 hand-over rule.
     pub stop_rule: StopRule,
     /// Steering-rate limit |u2|, deg/s.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub steer_rate_deg: f64,
     /// Steering-angle limit |ψ| enforced by the controller, deg.
+    #[schemars(extend("exclusiveMinimum" = 0, "exclusiveMaximum" = 90))]
     pub max_steer_deg: f64,
     /// The wheel counts as set (P1) or straight (P1, P3) within this angle, deg. In the ideal
     /// model the deadbeat steering command lands exactly; a physical servo needs slack, and
     /// P3 keeps steering towards ψ = 0 while it drives.
+    #[schemars(range(min = 0, max = 1))]
     pub steer_tolerance_deg: f64,
     /// Control (sample-and-hold) period, s.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub period: f64,
-    /// Time horizon of the run, s.
+    /// Time horizon of the run, s: at least one control period (`planner.period`).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub horizon: f64,
 }
 

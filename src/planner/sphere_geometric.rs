@@ -38,12 +38,13 @@ use crate::model::rolling_sphere::RollingSphere;
 use crate::model::{Input, State};
 use crate::plan::{ControlLaw, Limits, Plan, RampProfile, Segment};
 use crate::planner::PlanError;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 use std::sync::Arc;
 
 /// Sense of the circular arc (B).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum ArcDirection {
     /// Try both and keep the shorter plan.
@@ -54,21 +55,27 @@ pub enum ArcDirection {
     Cw,
 }
 
-/// Parameters of the geometric planner.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+/// Seed 003 §3 geometric planner: roll straight (A), along a circular arc (B),
+/// straight again (A).
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct SphereGeometricParams {
     /// Arc sense; `auto` picks the shorter.
     pub direction: ArcDirection,
     /// Number of feasible 2π shifts of Δβ considered per direction (the shortest plan wins).
+    #[schemars(range(min = 1))]
     pub candidate_turns: u32,
     /// Grid points per half of the Δα scan (root bracketing).
+    #[schemars(range(min = 8))]
     pub scan_points: usize,
     /// Upper bound on θ'; near 90° Δβ becomes very sensitive to θ' (paper remark 1).
+    #[schemars(extend("exclusiveMinimum" = 0, "exclusiveMaximum" = 90))]
     pub max_theta_prime_deg: f64,
     /// Bisection iteration cap per root.
+    #[schemars(range(min = 1))]
     pub max_iter: usize,
     /// Chord r (in radii) below which F_i = F_f and the arc is a full circle.
+    #[schemars(range(min = 0))]
     pub zero_distance: f64,
 }
 

@@ -45,6 +45,7 @@ use crate::model::{Input, State};
 use crate::plan::{plan_from_legs, Limits, Plan};
 use crate::planner::PlanError;
 use nalgebra::{Rotation3, Unit, UnitQuaternion, Vector3};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{FRAC_PI_2, PI, TAU};
 
@@ -68,22 +69,28 @@ impl Handedness {
     }
 }
 
-/// Parameters of the spherical-triangle planner.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+/// Seed 003 §4 spherical-triangle planner: closed paths whose spherical
+/// triangles' area turns the sphere.
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct SphereTriangleParams {
     /// b / a of the free-ψ triangle family.
+    #[schemars(extend("exclusiveMinimum" = 0.05, "exclusiveMaximum" = 20))]
     pub side_ratio: f64,
     /// Paper mode: ψ = φ + offset (deg) fixed and (a, b, C) solved from Eqs. 17, 18, 21
     /// (single triangle only). `None`: ψ free (default).
     pub psi_offset_deg: Option<f64>,
     /// Grid points of the 1-D root scan over a.
+    #[schemars(range(min = 8))]
     pub scan_points: usize,
     /// Iteration cap of the bisection / Newton solves.
+    #[schemars(range(min = 1))]
     pub max_iter: usize,
     /// Number of ℓ₁ values tried for the two-triangle split.
+    #[schemars(range(min = 2))]
     pub split_candidates: usize,
     /// |d| (radii) and |α| (rad) below which nothing is left to do.
+    #[schemars(range(min = 0))]
     pub zero_tol: f64,
 }
 

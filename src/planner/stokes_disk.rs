@@ -33,11 +33,12 @@ use crate::model::disk::RollingDisk;
 use crate::model::{Input, State};
 use crate::plan::{plan_from_legs, Limits, Plan};
 use crate::planner::PlanError;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::{PI, TAU};
 
 /// Which §4.2 algorithm to run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Algorithm {
     /// Eqs. 25–26 plus the Fig. 9 detour.
@@ -47,7 +48,7 @@ pub enum Algorithm {
 }
 
 /// Where the singularity-avoiding detour puts the loop (point R of Fig. 9).
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Detour {
     /// The paper's choice: R = (θ_i, α_i), falling back to `optimal` when that is near-singular too.
@@ -57,7 +58,7 @@ pub enum Detour {
 }
 
 /// Order of convergence for the singularity-free algorithm.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Order {
     /// x first when |cos α_f| ≥ |sin α_f| (the paper's rule), else y first.
@@ -68,21 +69,25 @@ pub enum Order {
     YFirst,
 }
 
-/// Parameters of the Stokes disk planner (scenario `[planner]` table).
-#[derive(Debug, Clone, Deserialize, Serialize)]
+/// Seed 000 §4.2 Stokes planner for the rolling disk: (θ, α) converge on a
+/// line, then (x, y) with closed loops sized by Green's theorem.
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct StokesDiskParams {
     /// Algorithm of §4.2.
     pub algorithm: Algorithm,
     /// Loops with sin(b/2) below this are "near the singularity" (Eq. 26's a ≥ 1/this × its minimum).
+    #[schemars(range(min = 0), extend("exclusiveMaximum" = 1))]
     pub min_sin_half_b: f64,
     /// Detour point choice.
     pub detour: Detour,
     /// Singularity-free: convergence order.
     pub order: Order,
     /// Singularity-free: b of the first loop in degrees (paper: 60). `None`: best-conditioned b.
+    #[schemars(extend("exclusiveMinimum" = 0, "exclusiveMaximum" = 360))]
     pub b_first_deg: Option<f64>,
     /// Δθ of a parallelogram's slanted sides as a fraction of |a| (0 gives the rectangle PQRSP).
+    #[schemars(range(min = 0))]
     pub slant: f64,
 }
 

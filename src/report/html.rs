@@ -3,6 +3,7 @@
 use super::data::{Series, SeriesFile};
 use super::plots::{self, HLine, Line, Marker, Path2, Shade};
 use super::{Loaded, RunData, StoredDelta};
+use crate::verdict::Verdict;
 use serde_json::Value;
 use std::collections::BTreeMap;
 use std::fmt::Write as _;
@@ -38,12 +39,45 @@ fn page(title: &str, body: &str) -> String {
     )
 }
 
-fn verdict(passed: bool) -> &'static str {
-    if passed {
-        "<span class=\"pass\">PASS</span>"
-    } else {
-        "<span class=\"fail\">FAIL</span>"
+/// The verdict of a summary or sweep document (older logs: from `passed`).
+fn verdict_of(doc: &Value) -> Verdict {
+    Verdict::parse(
+        doc["verdict"].as_str(),
+        doc["passed"].as_bool() == Some(true),
+    )
+}
+
+/// The verdict as a coloured word; XFAIL carries its reason on hover.
+fn verdict(doc: &Value) -> String {
+    let v = verdict_of(doc);
+    let class = if v.ok() { "pass" } else { "fail" };
+    match doc["expect"]["reason"].as_str() {
+        Some(r) => format!(
+            "<span class=\"{class}\" title=\"expected to fail: {}\">{v}</span>",
+            esc(r)
+        ),
+        None => format!("<span class=\"{class}\">{v}</span>"),
     }
+}
+
+/// "expected to fail: REASON" under a verdict, when the scenario expects to fail.
+fn expectation(doc: &Value) -> String {
+    match (verdict_of(doc), doc["expect"]["reason"].as_str()) {
+        (Verdict::Xfail, Some(r)) => format!(
+            "<p><b>XFAIL</b>: the thresholds below are broken, as this scenario expects: {}</p>",
+            esc(r)
+        ),
+        (Verdict::Xpass, Some(r)) => format!(
+            "<p class=\"fail\">XPASS: every threshold is met, but this scenario is expected to fail ({}). Check what changed: <code>check</code> fails until the scenario shows its limit again or drops <code>expect = \"fails\"</code>.</p>",
+            esc(r)
+        ),
+        _ => String::new(),
+    }
+}
+
+/// Whether the run's tracking metrics mean anything (older logs: yes).
+fn tracking_meaningful(summary: &Value) -> bool {
+    summary["not_meaningful"]["tracking"].is_null()
 }
 
 /// "2 regressed, 1 improved" from a stored comparison.
@@ -84,22 +118,30 @@ fn primary(summary: &Value) -> Option<String> {
 }
 
 /// `LOGDIR/index.html`.
-pub fn index_page(runs: &[Loaded]) -> String {
+pub fn index_page(runs: &[Loaded], unreadable: &[crate::error::Error]) -> String {
     let mut b = String::new();
-    let passed = runs
+    let verdicts: Vec<Verdict> = runs
         .iter()
-        .filter(|l| match &l.data {
-            RunData::Single { summary, .. } => summary["passed"].as_bool() == Some(true),
-            RunData::Sweep(s) => s["passed"].as_bool() == Some(true),
+        .map(|l| match &l.data {
+            RunData::Single { summary, .. } => verdict_of(summary),
+            RunData::Sweep(s) => verdict_of(s),
         })
-        .count();
+        .collect();
+    let count = |v: Verdict| verdicts.iter().filter(|x| **x == v).count();
+    let mut counts = vec![format!("{} PASS", count(Verdict::Pass))];
+    for v in [Verdict::Fail, Verdict::Xfail, Verdict::Xpass] {
+        if count(v) > 0 {
+            counts.push(format!("{} {v}", count(v)));
+        }
+    }
     let _ = write!(
         b,
-        "<h1>anholonomy report</h1><p>{passed} of {} scenarios pass their thresholds.</p>\
+        "<h1>anholonomy report</h1><p>{} scenarios: {}. XFAIL: broke a threshold as the scenario expects (it shows a limit on purpose); XPASS: met every threshold although expected to fail, which <code>check</code> counts as a failure.</p>\
          <table><tr><th class=\"l\">scenario</th><th class=\"l\">planner</th><th>result</th>\
          <th class=\"l\">key metric</th><th>sim goal error</th><th>tracking max</th><th>wall s</th>\
          <th class=\"l\">baseline</th><th class=\"l\">broken thresholds</th></tr>",
-        runs.len()
+        runs.len(),
+        counts.join(", ")
     );
     for l in runs {
         let link = format!("<a href=\"{0}/report.html\">{0}</a>", esc(&l.name));
@@ -115,10 +157,14 @@ pub fn index_page(runs: &[Loaded]) -> String {
                     "<tr><td class=\"l\">{link}</td><td class=\"l\">{}</td><td>{}</td><td class=\"l\">{}</td>\
                      <td>{}</td><td>{}</td><td>{:.2}</td><td class=\"l\">{}</td><td class=\"l\">{}</td></tr>",
                     esc(summary["planner"]["kind"].as_str().unwrap_or("")),
-                    verdict(summary["passed"].as_bool() == Some(true)),
+                    verdict(summary),
                     esc(&c),
                     num(metric(summary, &format!("sim_goal_{c}"))),
-                    num(metric(summary, &format!("tracking_{c}_max"))),
+                    if tracking_meaningful(summary) {
+                        num(metric(summary, &format!("tracking_{c}_max")))
+                    } else {
+                        "<span class=\"muted\" title=\"feedback policy: the runs reach the goal at different times\">n/a</span>".into()
+                    },
                     summary["wall_time_s"]["total"].as_f64().unwrap_or(f64::NAN),
                     baseline_summary(&l.regression),
                     fails.join("; ")
@@ -133,7 +179,7 @@ pub fn index_page(runs: &[Loaded]) -> String {
                     b,
                     "<tr><td class=\"l\">{link}</td><td class=\"l\">sweep</td><td>{}</td><td class=\"l\">success rate {:.1} % ({} variants)</td>\
                      <td>median {}</td><td>–</td><td>{:.2}</td><td class=\"l\">{}</td><td class=\"l\">{}</td></tr>",
-                    verdict(s["passed"].as_bool() == Some(true)),
+                    verdict(s),
                     100.0 * s["success_rate"].as_f64().unwrap_or(f64::NAN),
                     s["variants_run"].as_u64().unwrap_or(0),
                     num(s["final_error"]["median"].as_f64()),
@@ -144,7 +190,14 @@ pub fn index_page(runs: &[Loaded]) -> String {
             }
         }
     }
-    b.push_str("</table><p class=\"muted\">Key metric: the planar position (m) when the model has one, else the first state coordinate (angles in degrees). Baseline: the comparison made by <code>anholonomy check --baseline</code> with this log directory.</p>");
+    for e in unreadable {
+        let _ = write!(
+            b,
+            "<tr><td class=\"l\" colspan=\"9\"><span class=\"fail\">not readable</span> {}</td></tr>",
+            esc(&e.to_string())
+        );
+    }
+    b.push_str("</table><p class=\"muted\">Key metric: the planar position (m) when the model has one, else the first state coordinate (angles in degrees). Tracking n/a: the plan is a feedback policy, so each run reaches the goal at its own time and the runs differ sample by sample whatever the physics. Baseline: the comparison made by <code>anholonomy check --baseline</code> with this log directory.</p>");
     page("anholonomy report", &b)
 }
 
@@ -159,8 +212,23 @@ fn metrics_table(summary: &Value, reg: &Option<Vec<StoredDelta>>) -> String {
     let mut b = String::from(
         "<table><tr><th class=\"l\">metric</th><th>value</th><th>threshold</th><th>baseline</th><th>change</th><th class=\"l\">baseline verdict</th></tr>",
     );
+    let meaningless = (!tracking_meaningful(summary)).then(|| {
+        summary["not_meaningful"]["tracking"]
+            .as_str()
+            .unwrap_or("not meaningful")
+    });
     if let Some(m) = summary["metrics"].as_object() {
         for (k, v) in m {
+            if let (Some(why), true) = (meaningless, k.starts_with("tracking_")) {
+                let _ = write!(
+                    b,
+                    "<tr><td class=\"l\">{}</td><td class=\"muted\" title=\"{}\">n/a</td><td></td><td></td><td></td><td class=\"l muted\">{}</td></tr>",
+                    esc(k),
+                    esc(why),
+                    esc(why)
+                );
+                continue;
+            }
             let v = v.as_f64();
             let th = thresholds.and_then(|t| t.get(k)).and_then(Value::as_f64);
             let th_cell = match th {
@@ -237,7 +305,13 @@ fn end_time(sf: &SeriesFile) -> f64 {
         .fold(0.0f32, f32::max) as f64
 }
 
-/// Segment shading and the legend that names the colours.
+/// Most shaded spans per chart: a feedback policy can switch labels every
+/// sample period (hundreds of one-pixel spans, most of a page's bytes).
+const MAX_SHADES: usize = 120;
+
+/// Segment shading and the legend that names the colours. More than
+/// [`MAX_SHADES`] spans are merged into that many equal time bins, each
+/// shaded with the label that covers most of it.
 fn shades(sf: &SeriesFile) -> (Vec<Shade>, String) {
     let mut names: Vec<&str> = Vec::new();
     let mut out = Vec::new();
@@ -250,6 +324,9 @@ fn shades(sf: &SeriesFile) -> (Vec<Shade>, String) {
             }
         };
         out.push((s.start, s.end, k));
+    }
+    if out.len() > MAX_SHADES {
+        out = bin_shades(&out, MAX_SHADES);
     }
     let mut legend = String::from("<p>Plan segments (shaded in every time plot): ");
     for (k, n) in names.iter().enumerate() {
@@ -265,6 +342,43 @@ fn shades(sf: &SeriesFile) -> (Vec<Shade>, String) {
     }
     legend.push_str("</p>");
     (out, legend)
+}
+
+/// `spans` merged into `n` equal time bins (each with the label covering
+/// most of it), adjacent bins of one label joined.
+fn bin_shades(spans: &[Shade], n: usize) -> Vec<Shade> {
+    let (t0, t1) = (
+        spans.first().map_or(0.0, |s| s.0),
+        spans.last().map_or(0.0, |s| s.1),
+    );
+    let w = (t1 - t0) / n as f64;
+    if w <= 0.0 {
+        return spans.to_vec();
+    }
+    let mut out: Vec<Shade> = Vec::new();
+    let mut j = 0;
+    for b in 0..n {
+        let (a, z) = (t0 + b as f64 * w, t0 + (b + 1) as f64 * w);
+        let mut cover: Vec<(usize, f64)> = Vec::new();
+        while j < spans.len() && spans[j].1 <= a {
+            j += 1;
+        }
+        for s in spans[j..].iter().take_while(|s| s.0 < z) {
+            let len = s.1.min(z) - s.0.max(a);
+            match cover.iter_mut().find(|(k, _)| *k == s.2) {
+                Some(c) => c.1 += len,
+                None => cover.push((s.2, len)),
+            }
+        }
+        let Some(&(k, _)) = cover.iter().max_by(|x, y| x.1.total_cmp(&y.1)) else {
+            continue;
+        };
+        match out.last_mut() {
+            Some(last) if last.2 == k && (last.1 - a).abs() < 1e-9 => last.1 = z,
+            _ => out.push((a, z, k)),
+        }
+    }
+    out
 }
 
 /// Display name, scale and unit of state coordinate `i`.
@@ -352,7 +466,18 @@ fn single_figures(summary: &Value, sf: &SeriesFile) -> Result<String, String> {
     b.push_str("<h2>Tracking error (simulated − ideal)</h2>");
     b.push_str(&legend);
     b.push_str("<div class=\"grid\">");
-    for s in &sf.errors {
+    let errors: &[Series] = if tracking_meaningful(summary) {
+        &sf.errors
+    } else {
+        let _ =
+            write!(
+            b,
+            "<p class=\"muted\">Not shown: {}. Compare the final states and the paths instead.</p>",
+            esc(summary["not_meaningful"]["tracking"].as_str().unwrap_or("not meaningful"))
+        );
+        &[]
+    };
+    for s in errors {
         let i = sf.state_names.iter().position(|n| *n == s.name);
         let (scale, unit, key) = match i {
             Some(i) => {
@@ -506,13 +631,18 @@ fn sweep_figures(s: &Value) -> Result<String, String> {
         20,
         limit.map(|l| (l, "success limit")),
     )?);
-    b.push_str(&plots::histogram(
-        "time to goal (successes)",
-        "t (s)",
-        &times,
-        20,
-        None,
-    )?);
+    match cfg["time_metric"].as_str() {
+        Some(m) => b.push_str(&plots::histogram(
+            &format!("time to goal, {m} (successes)"),
+            "t (s)",
+            &times,
+            20,
+            None,
+        )?),
+        None => b.push_str(
+            "<p class=\"muted\">Time to goal: no time metric for this model (set <code>sweep.time_metric</code> to name one).</p>",
+        ),
+    }
     b.push_str("</div><h2>Success against each randomised parameter</h2><div class=\"grid\">");
     // Every swept parameter: the [sweep.vary] keys (and the friction shorthand) under
     // `params`, and the mass scale.
@@ -607,15 +737,17 @@ pub fn scenario_page(l: &Loaded) -> Result<String, String> {
         RunData::Single { summary, series } => {
             let _ = write!(
                 b,
-                "<h1>{} {}</h1><p>{}</p><p class=\"muted\">model <b>{}</b>, planner <b>{}</b>, plan {:.3} s, {} physics steps, wall {:.2} s. Logs: <a href=\"run.rrd\">run.rrd</a> (Rerun), <a href=\"run.mcap\">run.mcap</a> (Foxglove), <a href=\"summary.json\">summary.json</a>.</p>",
+                "<h1>{} {}</h1><p>{}</p>{}<p class=\"muted\">model <b>{}</b>, planner <b>{}</b>, {}, {} physics steps, wall {:.2} s. Logs: {}<a href=\"summary.json\">summary.json</a>.</p>",
                 esc(&l.name),
-                verdict(summary["passed"].as_bool() == Some(true)),
+                verdict(summary),
                 esc(summary["description"].as_str().unwrap_or("")),
+                expectation(summary),
                 esc(summary["model"]["kind"].as_str().unwrap_or("")),
                 esc(summary["planner"]["kind"].as_str().unwrap_or("")),
-                summary["plan"]["duration_s"].as_f64().unwrap_or(f64::NAN),
+                durations(summary),
                 summary["sim_steps"].as_u64().unwrap_or(0),
                 summary["wall_time_s"]["total"].as_f64().unwrap_or(f64::NAN),
+                log_links(&l.dir),
             );
             if let Some(f) = summary["failures"].as_array().filter(|f| !f.is_empty()) {
                 b.push_str("<p class=\"fail\">Broken thresholds:</p><ul>");
@@ -632,9 +764,10 @@ pub fn scenario_page(l: &Loaded) -> Result<String, String> {
         RunData::Sweep(s) => {
             let _ = write!(
                 b,
-                "<h1>{} {}</h1><p>Monte Carlo sweep: {} variants, {} successes ({:.1} %; needs ≥ {:.1} %), wall {:.1} s. Final error median {}, p95 {}, max {}; time to goal median {} s.</p>",
+                "<h1>{} {}</h1>{}<p>Monte Carlo sweep: {} variants, {} successes ({:.1} %; needs ≥ {:.1} %), wall {:.1} s. Final error median {}, p95 {}, max {}; {}.</p>",
                 esc(&l.name),
-                verdict(s["passed"].as_bool() == Some(true)),
+                verdict(s),
+                expectation(s),
                 s["variants_run"].as_u64().unwrap_or(0),
                 s["successes"].as_u64().unwrap_or(0),
                 100.0 * s["success_rate"].as_f64().unwrap_or(f64::NAN),
@@ -643,7 +776,13 @@ pub fn scenario_page(l: &Loaded) -> Result<String, String> {
                 num(s["final_error"]["median"].as_f64()),
                 num(s["final_error"]["p95"].as_f64()),
                 num(s["final_error"]["max"].as_f64()),
-                num(s["time_to_goal"]["median"].as_f64()),
+                match s["sweep"]["time_metric"].as_str() {
+                    Some(_) => format!(
+                        "time to goal median {} s",
+                        num(s["time_to_goal"]["median"].as_f64())
+                    ),
+                    None => "no time metric".into(),
+                },
             );
             b.push_str(&sweep_figures(s)?);
             if let Some(d) = &l.regression {
@@ -666,6 +805,38 @@ pub fn scenario_page(l: &Loaded) -> Result<String, String> {
     Ok(page(&format!("{} — anholonomy", l.name), &b))
 }
 
+/// The runs' simulated durations: "ideal run 157.2 s, physics run 160.3 s"
+/// (a feedback policy's plan duration is only its horizon, named as such).
+fn durations(summary: &Value) -> String {
+    let t = |k: &str| summary[k]["end_time_s"].as_f64();
+    let plan = summary["plan"]["duration_s"].as_f64().unwrap_or(f64::NAN);
+    let feedback = summary["plan"]["segments"]
+        .as_array()
+        .is_some_and(|s| s.is_empty());
+    match (t("ideal"), t("sim")) {
+        (Some(a), Some(b)) => {
+            let horizon = if feedback {
+                format!(" (feedback policy, horizon {plan:.1} s)")
+            } else {
+                format!(" (plan {plan:.3} s)")
+            };
+            format!("ideal run {a:.2} s, physics run {b:.2} s{horizon}")
+        }
+        _ => format!("plan {plan:.3} s"),
+    }
+}
+
+/// Links to the 3D logs that are still there (`--keep report` removes them).
+fn log_links(dir: &std::path::Path) -> String {
+    let mut out = String::new();
+    for (f, what) in [("run.rrd", "Rerun"), ("run.mcap", "Foxglove")] {
+        if dir.join(f).is_file() {
+            let _ = write!(out, "<a href=\"{f}\">{f}</a> ({what}), ");
+        }
+    }
+    out
+}
+
 /// A sweep's wall time: `wall_time_s.total` (older logs: a plain number).
 fn sweep_wall(s: &Value) -> f64 {
     let w = &s["wall_time_s"];
@@ -673,4 +844,31 @@ fn sweep_wall(s: &Value) -> f64 {
         .as_f64()
         .or_else(|| w.as_f64())
         .unwrap_or(f64::NAN)
+}
+
+#[cfg(test)]
+mod shade_tests {
+    use super::bin_shades;
+
+    #[test]
+    fn many_spans_become_at_most_n_bins_with_the_dominant_label() {
+        // 470 spans of 20 ms alternating 0, 1, 0, 1 ..., with label 2 over [4, 6) s.
+        let mut spans = Vec::new();
+        for i in 0..470 {
+            let (a, b) = (i as f64 * 0.02, (i + 1) as f64 * 0.02);
+            let k = if (4.0..6.0).contains(&a) { 2 } else { i % 2 };
+            spans.push((a, b, k));
+        }
+        let out = bin_shades(&spans, 120);
+        assert!(out.len() <= 120, "{}", out.len());
+        assert_eq!(out.first().unwrap().0, 0.0);
+        assert!((out.last().unwrap().1 - 9.4).abs() < 1e-9);
+        for w in out.windows(2) {
+            assert!((w[0].1 - w[1].0).abs() < 1e-9 && w[0].2 != w[1].2);
+        }
+        // The long span keeps its label across its bins, merged into one.
+        let long: Vec<_> = out.iter().filter(|s| s.2 == 2).collect();
+        assert_eq!(long.len(), 1);
+        assert!(long[0].0 <= 4.1 && long[0].1 >= 5.9, "{long:?}");
+    }
 }

@@ -111,10 +111,12 @@ pub fn load_dir(dir: &Path) -> Result<Loaded, Error> {
         }
         let series_path = dir.join("series.json");
         if !series_path.is_file() {
-            return Err(Error::input(
-                &series_path,
-                "missing: the run did not finish or predates series.json (run the scenario again)",
-            ));
+            let why = if s["logs_kept"] == "summary" {
+                "missing: the run kept only summary.json (--keep summary); run it again with --keep report"
+            } else {
+                "missing: the run did not finish or predates series.json (run the scenario again)"
+            };
+            return Err(Error::input(&series_path, why));
         }
         let series: data::SeriesFile = read_json(&series_path)?;
         if series.format != data::FORMAT {
@@ -150,8 +152,8 @@ pub fn load_dir(dir: &Path) -> Result<Loaded, Error> {
     })
 }
 
-/// The scenario directories of `root` (sorted), optionally only those named.
-fn scenario_dirs(root: &Path, only: Option<&[String]>) -> Result<Vec<PathBuf>, Error> {
+/// The scenario directories of `root` (sorted).
+fn scenario_dirs(root: &Path) -> Result<Vec<PathBuf>, Error> {
     if !root.is_dir() {
         return Err(Error::input(root, "not a log directory"));
     }
@@ -161,12 +163,6 @@ fn scenario_dirs(root: &Path, only: Option<&[String]>) -> Result<Vec<PathBuf>, E
         .flatten()
         .map(|e| e.path())
         .filter(|p| p.is_dir())
-        .filter(|p| {
-            only.is_none_or(|names| {
-                p.file_name()
-                    .is_some_and(|n| names.iter().any(|s| s.as_str() == n))
-            })
-        })
         .collect();
     dirs.sort();
     if dirs.is_empty() {
@@ -178,14 +174,40 @@ fn scenario_dirs(root: &Path, only: Option<&[String]>) -> Result<Vec<PathBuf>, E
     Ok(dirs)
 }
 
-/// Write the report of `root` (only the scenarios named in `only`, when given); returns the
-/// number of scenarios. Nothing is written unless every directory reads back.
-pub fn write_report(root: &Path, only: Option<&[String]>) -> Result<usize, Error> {
-    let dirs = scenario_dirs(root, only)?;
-    let loaded: Vec<Loaded> = dirs
-        .par_iter()
-        .map(|d| load_dir(d))
-        .collect::<Result<_, _>>()?;
+/// What [`write_report`] wrote.
+#[derive(Debug, Default)]
+pub struct Written {
+    /// Scenarios indexed.
+    pub scenarios: usize,
+    /// Directories left out of the index, with why (only with `this_run`).
+    pub skipped: Vec<Error>,
+}
+
+/// Write the report of every scenario directory of `root`.
+///
+/// Without `this_run` (`anholonomy report`) every directory must read back,
+/// else nothing is written. With the names of the scenarios a call just ran
+/// (`run --report`), those must read back and the other directories are
+/// indexed when they can be, and listed in [`Written::skipped`] when not (an
+/// older run's interrupted directory does not hide this run's report).
+pub fn write_report(root: &Path, this_run: Option<&[String]>) -> Result<Written, Error> {
+    let dirs = scenario_dirs(root)?;
+    let results: Vec<(PathBuf, Result<Loaded, Error>)> =
+        dirs.par_iter().map(|d| (d.clone(), load_dir(d))).collect();
+    let mut loaded = Vec::new();
+    let mut skipped = Vec::new();
+    for (dir, r) in results {
+        let name = dir
+            .file_name()
+            .map(|n| n.to_string_lossy().into_owned())
+            .unwrap_or_default();
+        let required = this_run.is_none_or(|names| names.contains(&name));
+        match r {
+            Ok(l) => loaded.push(l),
+            Err(e) if required => return Err(e),
+            Err(e) => skipped.push(e),
+        }
+    }
     let pages: Vec<String> = loaded
         .par_iter()
         .map(|l| {
@@ -204,11 +226,14 @@ pub fn write_report(root: &Path, only: Option<&[String]>) -> Result<usize, Error
             })?;
     }
     let index = root.join("index.html");
-    let text = html::index_page(&loaded);
+    let text = html::index_page(&loaded, &skipped);
     crate::log::atomic::write_atomic(&index, |w| std::io::Write::write_all(w, text.as_bytes()))
         .map_err(|message| Error::Log {
             path: index.clone(),
             message,
         })?;
-    Ok(loaded.len())
+    Ok(Written {
+        scenarios: loaded.len(),
+        skipped,
+    })
 }

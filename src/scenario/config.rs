@@ -6,6 +6,8 @@
 //! define plain parameter structs and never see these enums (nor anything
 //! else of `crate::scenario`); this module picks the system for a pair.
 
+use super::schema::Schema;
+use crate::physics::required::Required;
 use crate::planner::dilf::DilfParams;
 use crate::planner::endogenous::EndogenousParams;
 use crate::planner::rover_primitives::RoverPrimitiveParams;
@@ -22,6 +24,7 @@ use crate::systems::{self, System};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 use std::path::Path;
+use std::sync::OnceLock;
 use toml::de::{DeValue, ValueDeserializer};
 use toml::Spanned;
 
@@ -108,6 +111,45 @@ impl ModelConfig {
         }
     }
 
+    /// The schema of the `[model]` table of `kind` (its keys, defaults,
+    /// ranges and docs): what the validation pass checks and `keys` prints.
+    pub fn schema(kind: &str) -> Option<&'static Schema> {
+        static CACHE: OnceLock<Vec<(&'static str, Schema)>> = OnceLock::new();
+        let all = CACHE.get_or_init(|| {
+            Self::KINDS
+                .iter()
+                .filter_map(|k| {
+                    let s = match *k {
+                        "rolling_disk" => Schema::of::<DiskModelConfig>(),
+                        "space_robot" => Schema::of::<SpaceRobotConfig>(),
+                        "rover" => Schema::of::<RoverConfig>(),
+                        "rolling_sphere" => Schema::of::<SphereConfig>(),
+                        "mobile_manipulator" => Schema::of::<MobileManipulatorConfig>(),
+                        _ => return None,
+                    };
+                    Some((*k, s))
+                })
+                .collect()
+        });
+        all.iter().find(|(k, _)| *k == kind).map(|(_, s)| s)
+    }
+
+    /// The URDF links and joints the model `kind` looks up, as declared by
+    /// its physics module (default names, renaming keys, roles): what the
+    /// validation pass checks and the reference lists. `None` for an
+    /// unknown kind.
+    pub fn required_urdf(kind: &str) -> Option<&'static [Required]> {
+        use crate::physics as p;
+        Some(match kind {
+            "rolling_disk" => &p::disk::REQUIRED,
+            "space_robot" => &p::space_robot::REQUIRED,
+            "rover" => &p::rover::REQUIRED,
+            "rolling_sphere" => &p::sphere::REQUIRED,
+            "mobile_manipulator" => &p::mobile_manipulator::REQUIRED,
+            _ => return None,
+        })
+    }
+
     /// The model of `kind` from its table; `Ok(None)` for an unknown kind.
     pub(crate) fn parse(
         kind: &str,
@@ -147,6 +189,30 @@ impl PlannerConfig {
             PlannerConfig::SphereTriangle(_) => "sphere_triangle",
             PlannerConfig::Dilf(_) => "dilf",
         }
+    }
+
+    /// The schema of the `[planner]` table of `kind` (see [`ModelConfig::schema`]).
+    pub fn schema(kind: &str) -> Option<&'static Schema> {
+        static CACHE: OnceLock<Vec<(&'static str, Schema)>> = OnceLock::new();
+        let all = CACHE.get_or_init(|| {
+            Self::KINDS
+                .iter()
+                .filter_map(|k| {
+                    let s = match *k {
+                        "stokes_disk" => Schema::of::<StokesDiskParams>(),
+                        "stokes_space" => Schema::of::<StokesSpaceParams>(),
+                        "endogenous" => Schema::of::<EndogenousParams>(),
+                        "rover_primitives" => Schema::of::<RoverPrimitiveParams>(),
+                        "sphere_geometric" => Schema::of::<SphereGeometricParams>(),
+                        "sphere_triangle" => Schema::of::<SphereTriangleParams>(),
+                        "dilf" => Schema::of::<DilfParams>(),
+                        _ => return None,
+                    };
+                    Some((*k, s))
+                })
+                .collect()
+        });
+        all.iter().find(|(k, _)| *k == kind).map(|(_, s)| s)
     }
 
     /// The planner of `kind` from its table; `Ok(None)` for an unknown kind.

@@ -14,15 +14,19 @@
 mod config;
 pub mod doc;
 pub mod keypath;
+pub mod schema;
 mod sweep_config;
 
 pub use config::{build_system, ModelConfig, PlannerConfig, PAIRS};
 pub use keypath::KeyPath;
-pub use sweep_config::{sweep_metric_names, variant_seed, vary_key, Dist, SweepConfig, Variant};
+pub use sweep_config::{
+    sweep_metric_names, variant_seed, vary_key, Dist, SweepConfig, Variant, DEFAULT_TIME_METRIC,
+};
 
 use crate::error::Error;
 use crate::input::{read_text, SCENARIO_MAX_BYTES};
 use doc::KeyIndex;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
@@ -31,12 +35,14 @@ use toml::de::{DeTable, DeValue, ValueDeserializer};
 use toml::Spanned;
 
 /// `[limits]`: time parameterisation of open-loop plans.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct LimitsConfig {
     /// Per-input rate limit (rad/s or model units); default per model.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub max_rate: Option<Vec<f64>>,
     /// Cycloidal ramp time at both ends of each leg, s.
+    #[schemars(range(min = 0))]
     pub ramp: f64,
 }
 
@@ -50,29 +56,37 @@ impl Default for LimitsConfig {
 }
 
 /// `[sim]`: physics settings.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct SimConfig {
     /// Physics (and ideal integration) step, s.
+    #[schemars(range(max = 0.1), extend("exclusiveMinimum" = 0))]
     pub dt: f64,
     /// Rapier solver iterations (substeps) per step.
+    #[schemars(range(min = 1, max = 1000))]
     pub solver_iterations: usize,
     /// Projected Gauss–Seidel sweeps per substep.
+    #[schemars(range(min = 1, max = 1000))]
     pub solver_pgs_iterations: usize,
     /// Velocity relax pass after each substep; default: only with a ground plane.
     pub solver_relax_pass: Option<bool>,
     /// Coulomb friction coefficient between robot and ground (both sides set to it).
+    #[schemars(range(min = 0))]
     pub friction: f64,
     /// Gravity, m/s².
     pub gravity: [f64; 3],
     /// Maximum torque of each velocity motor, N·m.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub motor_max_torque: f64,
     /// Velocity motor gain (Rapier's motor factor), 1/s-like; higher tracks tighter.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub motor_gain: f64,
     /// Rate (1/s) at which joint drives remove the error between joint angle and commanded
     /// angle ∫u dt (servo integral action); 0 = pure velocity motors.
+    #[schemars(range(min = 0))]
     pub motor_angle_gain: f64,
     /// Extra simulated time after the plan ends, s (lets the body come to rest).
+    #[schemars(range(min = 0))]
     pub settle: f64,
 }
 
@@ -110,26 +124,61 @@ impl Default for SimConfig {
     }
 }
 
-/// The file as written, without the tagged `[model]` and `[planner]` tables
-/// (those are parsed by kind, see [`config`]).
-#[derive(Debug, Deserialize)]
+/// A scenario file: what to plan, how to simulate it and which thresholds the
+/// runs must meet. The keys of `[model]` and `[planner]` depend on their
+/// `kind` and are on the model's and the planner's pages.
+#[derive(Debug, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 struct ScenarioFile {
+    /// Scenario name, also its log directory's name; default: the file name without `.toml`.
     name: Option<String>,
+    /// One line shown by `anholonomy list`, the report and `summary.json`.
     description: Option<String>,
+    /// `"fails"`: the scenario is meant to break a threshold (it shows a limit of the
+    /// planner or of the model); its verdict is then XFAIL, and XPASS (a failure of
+    /// `check`) when it meets every threshold. Needs `reason`.
+    expect: Option<Expect>,
+    /// Why the scenario is expected to fail (shown with its XFAIL or XPASS verdict).
+    reason: Option<String>,
+    /// Start state in the model's file coordinates: lengths in m, angles in degrees
+    /// (the model's page lists them).
     start: Vec<f64>,
+    /// Goal state, as `start`.
     goal: Vec<f64>,
+    /// Rate limits and ramps of open-loop plans.
     #[serde(default)]
     limits: LimitsConfig,
+    /// Physics settings of the replay (and the ideal run's step).
     #[serde(default)]
     sim: SimConfig,
+    /// Metric name → largest allowed value; `check` exits 1 when one is broken.
     #[serde(default)]
+    #[schemars(extend("minimum" = 0))]
     thresholds: BTreeMap<String, f64>,
+    /// Metric name → smallest allowed value (a clearance, a success rate).
     #[serde(default)]
     minimums: BTreeMap<String, f64>,
+    /// Monte Carlo variants: `run` and `check` run the sweep instead of one run.
     sweep: Option<SweepConfig>,
+    /// Tolerances of the baseline comparison (`check --baseline`).
     #[serde(default)]
     regression: crate::baseline::RegressionConfig,
+}
+
+/// The verdict a scenario expects (`expect = "fails"`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
+#[serde(rename_all = "lowercase")]
+pub enum Expect {
+    /// Meets every threshold (the default).
+    Passes,
+    /// Breaks a threshold on purpose.
+    Fails,
+}
+
+/// The schema of the file's own keys (everything but `[model]` and `[planner]`).
+pub fn file_schema() -> &'static schema::Schema {
+    static SCHEMA: std::sync::OnceLock<schema::Schema> = std::sync::OnceLock::new();
+    SCHEMA.get_or_init(schema::Schema::of::<ScenarioFile>)
 }
 
 /// A validated scenario with resolved paths and SI units.
@@ -141,6 +190,8 @@ pub struct Scenario {
     pub name: String,
     /// Free text.
     pub description: String,
+    /// `expect = "fails"`: why the scenario is meant to break a threshold.
+    pub expect_fails: Option<String>,
     /// Model.
     pub model: ModelConfig,
     /// Resolved URDF path.
@@ -408,6 +459,20 @@ impl Scenario {
                     "key `planner.kind`: unknown planner `{planner_kind}`"
                 ))
             })?;
+        // Every number against its documented range (the reference pages
+        // show the same schemas).
+        let ranges = |schema: &schema::Schema, value: Result<serde_json::Value, _>, prefix| {
+            let value =
+                value.map_err(|e: serde_json::Error| bad(format!("key `{prefix}`: {e}")))?;
+            schema.check(&value, prefix).map_err(&bad)
+        };
+        ranges(file_schema(), serde_json::to_value(&file), "")?;
+        if let Some(s) = ModelConfig::schema(&model_kind) {
+            ranges(s, serde_json::to_value(&model), "model")?;
+        }
+        if let Some(s) = PlannerConfig::schema(&planner_kind) {
+            ranges(s, serde_json::to_value(&planner), "planner")?;
+        }
         let name = match &file.name {
             Some(n) => {
                 if let Some(p) = name_problem(n) {
@@ -429,6 +494,20 @@ impl Scenario {
                 }
                 stem
             }
+        };
+        let expect_fails = match (file.expect, &file.reason) {
+            (Some(Expect::Fails), Some(r)) if !r.trim().is_empty() => Some(r.trim().to_string()),
+            (Some(Expect::Fails), _) => {
+                return Err(bad(
+                    "key `expect`: `expect = \"fails\"` needs a `reason` (why the scenario is meant to fail)".into(),
+                ))
+            }
+            (_, Some(_)) => {
+                return Err(bad(
+                    "key `reason`: only with `expect = \"fails\"` (the reason a scenario is meant to fail)".into(),
+                ))
+            }
+            _ => None,
         };
         let base = path.parent().unwrap_or(Path::new("."));
         let system = build_system(&model, &planner).map_err(&bad)?;
@@ -480,40 +559,6 @@ impl Scenario {
                 "key `limits.max_rate[{i}]`: rates must be > 0"
             )));
         }
-        if file.limits.ramp < 0.0 {
-            return Err(bad("key `limits.ramp`: must be ≥ 0".into()));
-        }
-        let s = &file.sim;
-        if !(s.dt > 0.0 && s.dt <= 0.1) {
-            return Err(bad("key `sim.dt`: must be in (0, 0.1] s".into()));
-        }
-        if s.solver_iterations == 0 || s.solver_iterations > 1000 {
-            return Err(bad(
-                "key `sim.solver_iterations`: must be in 1..=1000".into()
-            ));
-        }
-        if s.solver_pgs_iterations == 0 || s.solver_pgs_iterations > 1000 {
-            return Err(bad(
-                "key `sim.solver_pgs_iterations`: must be in 1..=1000".into()
-            ));
-        }
-        if s.friction < 0.0 {
-            return Err(bad("key `sim.friction`: must be ≥ 0".into()));
-        }
-        for (key, v) in [
-            ("sim.motor_max_torque", s.motor_max_torque),
-            ("sim.motor_gain", s.motor_gain),
-        ] {
-            if v <= 0.0 {
-                return Err(bad(format!("key `{key}`: must be > 0")));
-            }
-        }
-        if s.motor_angle_gain < 0.0 {
-            return Err(bad("key `sim.motor_angle_gain`: must be ≥ 0".into()));
-        }
-        if s.settle < 0.0 {
-            return Err(bad("key `sim.settle`: must be ≥ 0".into()));
-        }
         if let Some(sw) = &file.sweep {
             sw.validate().map_err(&bad)?;
             if sw.sigma_rate.is_some() && !matches!(model, ModelConfig::Rover(_)) {
@@ -524,15 +569,11 @@ impl Scenario {
             }
         }
         file.regression.validate().map_err(&bad)?;
-        for (k, v) in &file.thresholds {
-            if *v < 0.0 {
-                return Err(bad(format!("key `thresholds.{k}`: must be ≥ 0")));
-            }
-        }
         Ok(Scenario {
             path: path.to_path_buf(),
             name,
             description: file.description.unwrap_or_default(),
+            expect_fails,
             model,
             urdf,
             start,

@@ -13,37 +13,47 @@
 use super::keypath::KeyPath;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::collections::BTreeMap;
 
 /// `[sweep]`: Monte Carlo variants of the scenario.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SweepConfig {
     /// Number of variants.
+    #[schemars(range(min = 1, max = 1000000))]
     pub count: usize,
     /// Base seed; variant i uses [`variant_seed`]`(seed, i)`.
     #[serde(default)]
     pub seed: u64,
     /// Shorthand for `"sim.friction" = { uniform = [lo, hi] }`.
+    #[schemars(extend("minimum" = 0))]
     pub friction: Option<[f64; 2]>,
     /// Range [lo, hi] of a factor applied to every link's mass and inertia (uniform).
+    #[schemars(extend("minimum" = 0.001))]
     pub mass_scale: Option<[f64; 2]>,
     /// Rover only: the ideal run uses a telegraph σ with this rate (1/s) and the variant's seed.
+    #[schemars(range(min = 0))]
     pub sigma_rate: Option<f64>,
     /// Any numeric scenario key by dotted path (quoted: `"planner.k1" = { uniform = [0.6, 1.0] }`).
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub vary: BTreeMap<String, Dist>,
-    /// Metric that decides success (`value ≤ success_max`).
+    /// Metric that decides success (`value ≤ success_max`); models without a planar
+    /// position must name one (e.g. `sim_goal_theta0_deg`).
     #[serde(default = "default_success_metric")]
     pub success_metric: String,
     /// Largest `success_metric` value that counts as success.
+    #[schemars(range(min = 0))]
     pub success_max: f64,
-    /// Metric reported as the time to goal (NaN or missing = not reached).
-    #[serde(default = "default_time_metric")]
-    pub time_metric: String,
+    /// Metric reported as the time to goal (NaN = not reached). Default:
+    /// `sim_time_to_goal` when the model reports it (rover, mobile manipulator),
+    /// else none: the sweep then reports no times.
+    #[serde(default)]
+    pub time_metric: Option<String>,
     /// `check` fails when the success rate is below this.
     #[serde(default)]
+    #[schemars(range(min = 0, max = 1))]
     pub min_success_rate: f64,
     /// A variant succeeds only if it also passes every `[thresholds]` and
     /// `[minimums]` gate of the scenario (for verdicts made of several
@@ -53,7 +63,7 @@ pub struct SweepConfig {
 }
 
 /// How a swept key's value is chosen for each variant.
-#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields, rename_all = "snake_case")]
 pub enum Dist {
     /// `{ uniform = [lo, hi] }`.
@@ -113,9 +123,9 @@ fn default_success_metric() -> String {
     "sim_goal_position".into()
 }
 
-fn default_time_metric() -> String {
-    "sim_time_to_goal".into()
-}
+/// The time metric a sweep reports when `time_metric` is not written, if the
+/// model reports it.
+pub const DEFAULT_TIME_METRIC: &str = "sim_time_to_goal";
 
 /// Key of the `[sweep.vary]` entry `path` as messages write it.
 pub fn vary_key(path: &str) -> String {
@@ -329,7 +339,7 @@ mod tests {
                 .collect(),
             success_metric: "m".into(),
             success_max: 1.0,
-            time_metric: "t".into(),
+            time_metric: Some("t".into()),
             min_success_rate: 0.0,
             success_requires_gates: false,
         }

@@ -158,6 +158,7 @@ fn run_variant(prep: &Prepared, cfg: &SweepConfig, v: &Variant) -> String {
         log_root: None,
         progress: false,
         pose_rate: 0.0,
+        keep: crate::log::Keep::All,
     };
     let res = prep
         .variant(v)
@@ -173,7 +174,7 @@ fn run_variant(prep: &Prepared, cfg: &SweepConfig, v: &Variant) -> String {
                 success: final_error.is_some_and(|e| e <= cfg.success_max)
                     && (o.passed || !cfg.success_requires_gates),
                 final_error,
-                time_to_goal: finite(o.metric(&cfg.time_metric)),
+                time_to_goal: cfg.time_metric.as_ref().and_then(|m| finite(o.metric(m))),
                 steps: o.steps,
                 error: None,
                 metrics: Metrics(&o.metrics),
@@ -425,6 +426,9 @@ pub fn run_sweep_report(
         name: sc.name.clone(),
         planner: sc.planner.kind().into(),
         passed: sum.failures.is_empty(),
+        verdict: crate::verdict::Verdict::of(sum.failures.is_empty(), sc.expect_fails.is_some()),
+        expect_reason: sc.expect_fails.clone(),
+        tracking_meaningful: true,
         failures: sum.failures,
         metrics: sum.metrics,
         steps: sum.steps,

@@ -90,23 +90,36 @@ pub fn finish(
         n,
         100.0 * rate
     );
+    let err_label = format!("final error ({})", cfg.success_metric);
+    let time_label = cfg
+        .time_metric
+        .as_ref()
+        .map(|m| format!("time to goal, s ({m}, successes)"));
+    let w = [Some(&err_label), time_label.as_ref()]
+        .iter()
+        .flatten()
+        .map(|l| l.chars().count())
+        .max()
+        .unwrap_or(0)
+        .max(28);
     let _ = writeln!(
         table,
-        "  {:<28} {:>9} {:>9} {:>9}",
+        "  {:<w$} {:>9} {:>9} {:>9}",
         "", "median", "p95", "max"
     );
-    let _ = writeln!(
-        table,
-        "  {:<28} {}",
-        format!("final error ({})", cfg.success_metric),
-        fmt(err_d)
-    );
-    let _ = writeln!(
-        table,
-        "  {:<28} {}",
-        "time to goal, s (successes)",
-        fmt(time_d)
-    );
+    let _ = writeln!(table, "  {err_label:<w$} {}", fmt(err_d));
+    match &time_label {
+        Some(l) => {
+            let _ = writeln!(table, "  {l:<w$} {}", fmt(time_d));
+        }
+        // The model reports no time to goal: say so rather than print a column of dashes.
+        None => {
+            let _ = writeln!(
+                table,
+                "  time to goal: not reported (the model has no time-to-goal metric; set sweep.time_metric to name one)"
+            );
+        }
+    }
 
     if let Some(out) = out {
         let summary = |d: Option<[f64; 3]>| {

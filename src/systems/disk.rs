@@ -10,14 +10,17 @@ use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::stokes_disk::{self, Algorithm, StokesDiskParams};
 use crate::planner::PlanError;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// `[model] kind = "rolling_disk"`.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+/// A disk rolling upright without slipping on a plane (seed 000 §4.2), replayed
+/// on a wheel URDF in Rapier.
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DiskModelConfig {
     /// Wheel radius, m (must match the URDF wheel).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub radius: f64,
     /// URDF file, relative to the scenario file.
     pub urdf: PathBuf,
@@ -53,6 +56,9 @@ impl System for Disk {
     fn goal_heading(&self, goal: &State) -> Option<f64> {
         // α is measured from +y towards +x.
         Some(std::f64::consts::FRAC_PI_2 - goal[3])
+    }
+    fn urdf_names(&self) -> Vec<crate::physics::required::Named> {
+        crate::physics::required::defaults(&crate::physics::disk::REQUIRED)
     }
     fn physics(
         &self,

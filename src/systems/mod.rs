@@ -21,7 +21,12 @@
 //!    `PlannerConfig` for a new planner), its `kind` string in `KINDS` and
 //!    `parse`, its row in `PAIRS`, and the arm(s) of `build_system` that hand
 //!    the typed configs to `build`.
-//! 4. Everything else is checked by the validation pass before anything runs
+//! 4. Declare the URDF links and joints the physics looks up by name
+//!    (`REQUIRED` in the physics module, a [`crate::physics::required::Required`]
+//!    table; a `[model]` key may rename them) and return them, as named by
+//!    the scenario, from [`System::urdf_names`]; add the table to
+//!    `ModelConfig::required_urdf` in `src/scenario/config.rs`.
+//! 5. Everything else is checked by the validation pass before anything runs
 //!    (`crate::validate`): it builds the system, calls [`System::plan`] and
 //!    [`System::physics`] at the start pose, and reports their errors as bad
 //!    input (exit 2). So a task that cannot work (URDF that disagrees with
@@ -40,6 +45,7 @@ use crate::integrate::Trajectory;
 use crate::metric::Direction;
 use crate::model::{KinematicModel, State};
 use crate::paper::PaperRow;
+use crate::physics::required::Named;
 use crate::physics::PhysicsSettings;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
@@ -64,6 +70,11 @@ pub trait System: Send + Sync {
     fn default_max_rate(&self) -> Vec<f64>;
     /// Run the configured planner.
     fn plan(&self, start: &State, goal: &State, limits: &Limits) -> Result<Plan, PlanError>;
+    /// The URDF links and joints the physics looks up, with the names this
+    /// scenario gives them: the model's declaration (`REQUIRED` in its
+    /// physics module). The validation pass checks them all before
+    /// [`System::physics`] and names every missing one in one message.
+    fn urdf_names(&self) -> Vec<Named>;
     /// Build the rigid-body counterpart at `start` (errors are user-facing, about the URDF).
     fn physics(
         &self,
@@ -118,6 +129,13 @@ pub trait System: Send + Sync {
         cmp: &Comparison,
     ) -> (Vec<(String, f64)>, Vec<Series>) {
         (self.extra_metrics(goal, ideal, sim, cmp), Vec::new())
+    }
+    /// Whether both runs execute the same commands, a function of time alone, so
+    /// they can be compared sample by sample (the `tracking_*` metrics mean
+    /// something only then). Default: open-loop plans yes; feedback policies no
+    /// (each run closes the loop on its own state and reaches the goal at its own time).
+    fn same_commands(&self, plan: &Plan) -> bool {
+        matches!(plan.law, crate::plan::ControlLaw::OpenLoop(_))
     }
     /// Which way one of this system's metrics regresses, when the harness convention
     /// ([`Direction::conventional`]: `min`/`clearance`/`margin` tokens and success rates are

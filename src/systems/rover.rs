@@ -22,12 +22,13 @@ use crate::planner::rover_primitives::{self, se2_distance, RoverPrimitiveParams,
 use crate::planner::PlanError;
 use crate::record::Comparison;
 use crate::record::{Overlay, SimTrajectory};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
 /// σ(t) of the ideal run.
-#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize, JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum SwitchingConfig {
     /// σ ≡ a (middle axle holds).
@@ -39,6 +40,7 @@ pub enum SwitchingConfig {
         /// RNG seed.
         seed: u64,
         /// Mean switching rate, 1/s.
+        #[schemars(range(min = 0))]
         rate: f64,
     },
 }
@@ -49,8 +51,10 @@ impl Default for SwitchingConfig {
     }
 }
 
-/// `[model] kind = "rover"`.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+/// The overconstrained rover of seed 002: a steered, driven front wheel and
+/// two passive rear axles, one of which must slip (σ(t) says which in the
+/// ideal run; the contact solver decides on Rapier).
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct RoverConfig {
     /// URDF file, relative to the scenario file.
@@ -67,6 +71,7 @@ pub struct RoverConfig {
     /// A physics sample counts as inside the envelope when its distance to the allowed
     /// velocity set is at most this (m/s and rad/s alike).
     #[serde(default = "default_envelope_tolerance")]
+    #[schemars(range(min = 0))]
     pub envelope_tolerance: f64,
 }
 
@@ -153,6 +158,10 @@ impl System for Rover {
     fn model(&self) -> &dyn KinematicModel {
         &self.model
     }
+    /// The open-loop replay sends the recorded commands to both runs.
+    fn same_commands(&self, _plan: &Plan) -> bool {
+        self.open_loop
+    }
     fn goal_heading(&self, goal: &State) -> Option<f64> {
         Some(goal[2])
     }
@@ -206,6 +215,9 @@ impl System for Rover {
             },
             details,
         })
+    }
+    fn urdf_names(&self) -> Vec<crate::physics::required::Named> {
+        crate::physics::required::defaults(&crate::physics::rover::REQUIRED)
     }
     fn physics(
         &self,

@@ -34,12 +34,14 @@ use crate::planner::stokes_space::{self, FixedSide, StokesSpaceParams};
 use crate::planner::PlanError;
 use crate::record::Comparison;
 use crate::record::SimTrajectory;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// `[model] kind = "space_robot"`. The robot is seed 000's table (the URDF
-/// must match it; the physics checks).
-#[derive(Debug, Clone, Deserialize, Serialize)]
+/// A free-floating planar space robot with a two-link arm (seeds 000 §4.1 and
+/// 001): the vehicle turns through the arm's motion alone. The robot is seed
+/// 000's table; the URDF must match it (the physics checks).
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SpaceRobotConfig {
     /// URDF file, relative to the scenario file.
@@ -144,6 +146,9 @@ impl System for Space {
                 endogenous::plan(&manipulator(&self.model.robot), start, goal, p, limits)
             }
         }
+    }
+    fn urdf_names(&self) -> Vec<crate::physics::required::Named> {
+        crate::physics::required::defaults(&crate::physics::space_robot::REQUIRED)
     }
     fn physics(
         &self,

@@ -32,14 +32,17 @@ use crate::planner::sphere_geometric::{self, ArcDirection, SphereGeometricParams
 use crate::planner::sphere_triangle::{self, SphereTriangleParams};
 use crate::planner::PlanError;
 use crate::record::{Comparison, Overlay, SimTrajectory};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// `[model] kind = "rolling_sphere"`.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+/// A sphere rolling without slipping on a plane (seed 003), its orientation
+/// written as Euler angles in scenario files.
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct SphereConfig {
     /// Sphere radius, m (must match the URDF ball).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub radius: f64,
     /// URDF file, relative to the scenario file.
     pub urdf: PathBuf,
@@ -155,6 +158,9 @@ impl System for Sphere {
             Planner::Geometric(p) => sphere_geometric::plan(&self.euler, &s, &g, p, limits),
             Planner::Triangle(p) => sphere_triangle::plan(&self.euler, &s, &g, p, limits),
         }
+    }
+    fn urdf_names(&self) -> Vec<crate::physics::required::Named> {
+        crate::physics::required::defaults(&crate::physics::sphere::REQUIRED)
     }
     fn physics(
         &self,

@@ -24,7 +24,7 @@ use crate::model::{KinematicModel, State};
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::PlanError;
-use crate::scenario::{build_system, collect, Scenario, Variant};
+use crate::scenario::{build_system, collect, Scenario, Variant, DEFAULT_TIME_METRIC};
 use crate::systems::System;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
@@ -68,7 +68,7 @@ impl Prepared {
     /// Like [`Prepared::with_budget`] with the URDF already loaded (sweep
     /// variants scale its masses).
     pub fn with_robot(
-        scenario: Scenario,
+        mut scenario: Scenario,
         robot: urdf_rs::Robot,
         max_steps: u64,
     ) -> Result<Prepared, Error> {
@@ -84,17 +84,35 @@ impl Prepared {
                 )));
             }
         }
+        let written = |k: &str| scenario.has_key(k);
+        let (success_written, time_written) = (
+            written("sweep.success_metric"),
+            written("sweep.time_metric"),
+        );
+        if let Some(sw) = &mut scenario.sweep {
+            // The default time metric only where the model reports one.
+            if sw.time_metric.is_none() && known.iter().any(|k| k == DEFAULT_TIME_METRIC) {
+                sw.time_metric = Some(DEFAULT_TIME_METRIC.into());
+            }
+        }
         if let Some(sw) = &scenario.sweep {
-            for (key, m) in [
-                ("success_metric", &sw.success_metric),
-                ("time_metric", &sw.time_metric),
-            ] {
-                if !known.contains(m) {
-                    return Err(scenario.error(format!(
-                        "key `sweep.{key}`: {}",
-                        unknown_metric(m, system.as_ref(), &[])
-                    )));
-                }
+            let metrics = [
+                ("success_metric", Some(&sw.success_metric), success_written),
+                ("time_metric", sw.time_metric.as_ref(), time_written),
+            ];
+            for (key, m, is_written) in metrics {
+                let Some(m) = m.filter(|m| !known.contains(m)) else {
+                    continue;
+                };
+                let default = if is_written {
+                    String::new()
+                } else {
+                    format!("the default `{m}` does not fit this model: name a metric; ")
+                };
+                return Err(scenario.error(format!(
+                    "key `sweep.{key}`: {default}{}",
+                    unknown_metric(m, system.as_ref(), &[])
+                )));
             }
         }
         let mut regressable = known.clone();
@@ -130,6 +148,18 @@ impl Prepared {
             "sim.dt",
             "the plan and settling",
         )?;
+        if !system.same_commands(&planned) {
+            // The runs follow their own feedback: comparing them at equal
+            // times measures the time shift, not the physics.
+            let gates = scenario.thresholds.keys().map(|k| ("thresholds", k));
+            for (table, k) in gates.chain(scenario.minimums.keys().map(|k| ("minimums", k))) {
+                if k.starts_with("tracking_") {
+                    return Err(scenario.error(format!(
+                        "key `{table}.{k}`: tracking errors mean nothing for this plan (a feedback policy: each run closes the loop on its own state and reaches the goal at its own time); gate on `sim_goal_*` instead"
+                    )));
+                }
+            }
+        }
         let prep = Prepared {
             scenario,
             system,
@@ -319,6 +349,10 @@ fn build_physics(
     system: &dyn System,
     robot: &urdf_rs::Robot,
 ) -> Result<Box<dyn PhysicsSystem>, Error> {
+    // Every name the model looks up, in one message, before the physics
+    // stops at the first one it misses.
+    crate::physics::required::check(robot, &system.urdf_names())
+        .map_err(|m| physics_error(sc, &m))?;
     let dir = sc.urdf.parent().unwrap_or(Path::new("."));
     system
         .physics(robot, dir, &sc.start, &sc.sim.physics())

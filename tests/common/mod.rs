@@ -30,6 +30,7 @@ pub fn run_prepared(prep: &Prepared, logs: Option<&Path>) -> RunOutcome {
         log_root: logs.map(Path::to_path_buf),
         progress: false,
         pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
+        keep: anholonomy::log::Keep::All,
     };
     run(prep, &opts).unwrap()
 }

@@ -130,7 +130,27 @@ pub fn cases(c: &mut Corpus) {
             ("<child link=\"wheel\"/>", "<child link=\"wheal\"/>"),
         ],
         None,
-        "URDF needs a link `wheel`",
+        "URDF lacks link `wheel`",
+    );
+    // Several declared names missing: all of them, in one message.
+    c.urdf(
+        "urdf rover names missing",
+        &rv,
+        "rover.urdf",
+        &[
+            ("name=\"steer_joint\"", "name=\"steering_joint\""),
+            ("name=\"front_wheel_joint\"", "name=\"drive_joint\""),
+            (
+                "<link name=\"back_left_wheel\">",
+                "<link name=\"rear_left_wheel\">",
+            ),
+            (
+                "<child link=\"back_left_wheel\"/>",
+                "<child link=\"rear_left_wheel\"/>",
+            ),
+        ],
+        None,
+        "URDF lacks joints `steer_joint`, `front_wheel_joint` and link `back_left_wheel`",
     );
     c.urdf(
         "urdf negative visual radius",
@@ -445,5 +465,15 @@ pub fn cases(c: &mut Corpus) {
         "--logs is a file",
         &["--logs", "logfile"],
         no_line("logfile"),
+    ));
+    c.raw(flagged(
+        "--keep summary with --report",
+        &["--keep", "summary", "--report"],
+        no_line("--report"),
+    ));
+    c.raw(flagged(
+        "--variant of a scenario without [sweep]",
+        &["--variant", "0"],
+        no_line("case.toml"),
     ));
 }

@@ -41,6 +41,34 @@ pub fn cases(c: &mut Corpus) {
         Some("stat ="),
         Some("stat"),
     );
+    c.sc(
+        "expect fails without a reason",
+        edit(&d, "name = \"d\"", "name = \"d\"\nexpect = \"fails\""),
+        Some("expect ="),
+        Some("expect"),
+    );
+    c.sc(
+        "reason without expect",
+        edit(&d, "name = \"d\"", "name = \"d\"\nreason = \"why\""),
+        Some("reason ="),
+        Some("reason"),
+    );
+    c.sc(
+        "expect is not passes or fails",
+        edit(
+            &d,
+            "name = \"d\"",
+            "name = \"d\"\nexpect = \"maybe\"\nreason = \"x\"",
+        ),
+        Some("expect ="),
+        Some("expect"),
+    );
+    c.sc(
+        "sim.dt above its documented range",
+        edit(&d, "dt = 0.001", "dt = 0.5"),
+        Some("dt = 0.5"),
+        Some("sim.dt"),
+    );
     c.sc_line(
         "missing start",
         edit(&d, "start = [0.0, 0.0, 0.0, 0.0]\n", ""),
@@ -463,7 +491,7 @@ pub fn cases(c: &mut Corpus) {
             "sweep friction negative",
             "friction = [0.5, 1.0]",
             "friction = [-0.5, 1.0]",
-            "sweep.friction",
+            "sweep.friction[0]",
         ),
         (
             "sweep friction length",
@@ -475,7 +503,7 @@ pub fn cases(c: &mut Corpus) {
             "sweep mass scale zero",
             "mass_scale = [0.7, 1.3]",
             "mass_scale = [0.0, 1.3]",
-            "sweep.mass_scale",
+            "sweep.mass_scale[0]",
         ),
         (
             "sweep sigma rate negative",
@@ -611,8 +639,8 @@ pub fn cases(c: &mut Corpus) {
     );
     c.sc(
         "sweep time metric the disk lacks",
-        format!("{d}\n[sweep]\ncount = 2\nsuccess_max = 1.0\n"),
-        Some("[sweep]"),
+        format!("{d}\n[sweep]\ncount = 2\nsuccess_max = 1.0\ntime_metric = \"sim_time_to_goal\"\n"),
+        Some("time_metric ="),
         Some("sweep.time_metric"),
     );
     let sr = shipped("space_robot_paper.toml");
@@ -694,7 +722,7 @@ pub fn cases(c: &mut Corpus) {
         "rover telegraph rate negative",
         edit(&rv, "rate = 0.5 }", "rate = -0.5 }"),
         Some("switching = {"),
-        Some("model.switching"),
+        Some("model.switching.rate"),
     );
     c.sc(
         "rover envelope tolerance",
@@ -706,7 +734,7 @@ pub fn cases(c: &mut Corpus) {
         "rover geometry",
         edit(&rv, "[planner]", "geometry = { l = -0.25 }\n\n[planner]"),
         Some("geometry"),
-        Some("model.geometry"),
+        Some("model.geometry.l"),
     );
     c.sc(
         "rover turn",

@@ -31,6 +31,8 @@
 
 mod carried;
 mod urdf;
+#[cfg(test)]
+mod wrist_tests;
 
 pub use carried::{link_visuals, robot_link_name, CarriedBeam};
 pub use urdf::urdf;
@@ -38,6 +40,7 @@ pub use urdf::urdf;
 use super::rapier::parry::bounding_volume::Aabb;
 use super::rapier::prelude::*;
 use super::real::{self as rl, f, vector};
+use super::required::Required;
 use super::settings::PhysicsSettings;
 use super::urdf::{RobotHandles, SimWorld};
 use super::{angles, PhysicsSystem};
@@ -78,6 +81,51 @@ pub(crate) const TOOL_MASS: f64 = 0.5;
 
 /// URDF joint names of the arm, in order.
 pub const ARM_JOINTS: [&str; 6] = ["joint1", "joint2", "joint3", "joint4", "joint5", "joint6"];
+
+/// Drive wheel links (left, right) and their joints.
+const WHEELS: [&str; 2] = ["left_wheel", "right_wheel"];
+const WHEEL_JOINTS: [&str; 2] = ["left_wheel_joint", "right_wheel_joint"];
+/// Caster links (frictionless).
+const CASTERS: [&str; 2] = ["caster_front", "caster_rear"];
+
+/// The links and joints each mobile manipulator looks up in its URDF.
+pub const REQUIRED: [Required; 20] = [
+    Required::link(
+        "base_link",
+        "the platform (root link); origin at the drive-axle midpoint on the ground",
+    ),
+    Required::link(WHEELS[0], "driven wheel, left"),
+    Required::link(WHEELS[1], "driven wheel, right"),
+    Required::link(
+        CASTERS[0],
+        "front caster (its collisions are made frictionless)",
+    ),
+    Required::link(
+        CASTERS[1],
+        "rear caster (its collisions are made frictionless)",
+    ),
+    Required::link("link1", "PUMA 560 link 1"),
+    Required::link("link2", "PUMA 560 link 2"),
+    Required::link("link3", "PUMA 560 link 3"),
+    Required::link("link4", "PUMA 560 link 4"),
+    Required::link("link5", "PUMA 560 link 5"),
+    Required::link("link6", "PUMA 560 link 6"),
+    Required::link("tool", "the gripper"),
+    Required::joint(
+        WHEEL_JOINTS[0],
+        "base_link to left_wheel: driven at (v − ω b)/r",
+    ),
+    Required::joint(
+        WHEEL_JOINTS[1],
+        "base_link to right_wheel: driven at (v + ω b)/r",
+    ),
+    Required::joint(ARM_JOINTS[0], "arm joint 1 (PUMA 560 DH table, axis z)"),
+    Required::joint(ARM_JOINTS[1], "arm joint 2 (PUMA 560 DH table, axis z)"),
+    Required::joint(ARM_JOINTS[2], "arm joint 3 (PUMA 560 DH table, axis z)"),
+    Required::joint(ARM_JOINTS[3], "arm joint 4 (PUMA 560 DH table, axis z)"),
+    Required::joint(ARM_JOINTS[4], "arm joint 5 (PUMA 560 DH table, axis z)"),
+    Required::joint(ARM_JOINTS[5], "arm joint 6 (PUMA 560 DH table, axis z)"),
+];
 
 /// An obstacle for the physics: a fixed convex collider.
 #[derive(Debug, Clone)]
@@ -482,13 +530,10 @@ fn least_distance(
 fn place_robot(sw: &mut SimWorld, h: &RobotHandles, q: &[f64]) -> Result<RobotBodies, String> {
     let frames = mm::frames::<f64>(q);
     let base = h.require_link("base_link")?;
-    let wheels = [
-        h.require_link("left_wheel")?,
-        h.require_link("right_wheel")?,
-    ];
+    let wheels = [h.require_link(WHEELS[0])?, h.require_link(WHEELS[1])?];
     let wheel_joints = [
-        h.require_joint("left_wheel_joint")?,
-        h.require_joint("right_wheel_joint")?,
+        h.require_joint(WHEEL_JOINTS[0])?,
+        h.require_joint(WHEEL_JOINTS[1])?,
     ];
     let mut arm = [base; 6];
     let mut arm_joints = [wheel_joints[0]; 6];
@@ -503,7 +548,7 @@ fn place_robot(sw: &mut SimWorld, h: &RobotHandles, q: &[f64]) -> Result<RobotBo
     sw.world.bodies[tool].set_position(rl::from_spatial(&frames.tool), true);
     let tool_joint = h.require_joint("tool_joint")?;
     let mut rolling = Vec::new();
-    for name in ["caster_front", "caster_rear"] {
+    for name in CASTERS {
         let b = h.require_link(name)?;
         for c in sw.world.bodies[b].colliders().to_vec() {
             if let Some(col) = sw.world.colliders.get_mut(c) {

@@ -30,19 +30,23 @@ use crate::plan::{Command, ControlLaw, Controller, Plan, PolicyFactory};
 use crate::planner::{check_param, PlanError};
 use control::{Branch, Gains};
 use potential::{DipoleProduct, GoalFrame, GraspCorrection, Scene, SingularityEnclosure, Warm};
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use stall::{Progress, StallParams, Verdict};
 use std::sync::Arc;
 
 /// When the task counts as done.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct Tolerance {
     /// Platform position error, m.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub position: f64,
     /// Platform heading error, degrees.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub heading_deg: f64,
     /// Every joint's error, degrees.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub joint_deg: f64,
 }
 
@@ -74,43 +78,55 @@ impl Tolerance {
     }
 }
 
-/// `[planner] kind = "dilf"`.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+/// Seed 004 dipolar inverse Lyapunov function: the feedback law of Eq. 18
+/// (a feedback policy).
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DilfParams {
     /// λ of the analytic switches (Eqs. 6, 8).
     #[serde(default = "default_lambda")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub lambda: f64,
     /// The exponent k_v of Eq. 15 (larger: obstacles felt less far away).
     #[serde(default = "default_kv_exponent")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub kv_exponent: f64,
     /// The speed gain k_v of Eq. 18a.
     #[serde(default = "default_kv_gain")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub kv_gain: f64,
     /// k_o of Eq. 18b.
     #[serde(default = "default_ko")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub ko: f64,
     /// K_a of Eq. 18c: one gain per joint.
     #[serde(default = "default_ka")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub ka: [f64; 6],
     /// Largest platform speed, m/s.
     #[serde(default = "default_max_speed")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub max_speed: f64,
     /// Largest platform turn rate, rad/s.
     #[serde(default = "default_max_turn_rate")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub max_turn_rate: f64,
     /// Largest joint rate, rad/s.
     #[serde(default = "default_max_joint_rate")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub max_joint_rate: f64,
     /// Hold the heading while the platform's planar field is below this
     /// fraction of ‖f‖ (θ_d is undefined there; 0 disables).
     #[serde(default = "default_deadzone")]
+    #[schemars(range(min = 0), extend("exclusiveMaximum" = 1))]
     pub heading_deadzone: f64,
     /// The policy is evaluated every `period` seconds and held in between.
     #[serde(default = "default_period")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub period: f64,
     /// Run length if the goal is never reached, s.
     #[serde(default = "default_horizon")]
+    #[schemars(range(max = 100000), extend("exclusiveMinimum" = 0))]
     pub horizon: f64,
     /// Coordinates of the arm parts' goal points.
     #[serde(default)]
@@ -119,8 +135,9 @@ pub struct DilfParams {
     /// [`DipoleProduct`]): `"geometric_mean"` (default) or `"printed"`.
     #[serde(default)]
     pub dipole: DipoleProduct,
-    /// p of the field f = (Σ‖h2‖²)^p ∂V/∂q; Eq. 17 prints p = 2 (see the README).
+    /// p of the field f = (Σ‖h2‖²)^p ∂V/∂q; Eq. 17 prints p = 2 (the research notes on seed 004 discuss it).
     #[serde(default = "default_field_power")]
+    #[schemars(extend("exclusiveMinimum" = 1.5))]
     pub field_power: f64,
     /// Singularity enclosures (Eq. 13).
     #[serde(default)]
@@ -145,7 +162,7 @@ pub struct DilfParams {
 
 /// Where the law reads the flanges that hold a beam (its q_f, its
 /// ellipsoids, the grasp wrench) in the physics replay.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Grasps {
     /// From the planar state through the kinematic model (as in the ideal run).

@@ -369,6 +369,42 @@ pub fn table_i_start() -> Vec<f64> {
     q
 }
 
+/// Table I's desired configuration of both robots (rad).
+pub fn table_i_goal() -> Vec<f64> {
+    use std::f64::consts::PI;
+    let arm = |q1: f64| [q1, -PI / 2.0, 2.0 * PI / 3.0, 0.0, -PI / 6.0, 0.0];
+    let mut q = vec![0.0, -2.0, 0.0];
+    q.extend(arm(PI / 3.0));
+    q.extend([0.0, 2.0, 0.0]);
+    q.extend(arm(-PI / 2.0));
+    q
+}
+
+/// How far the grasps' relative pose at `b` is from the one at `a`:
+/// translation (m) and rotation (rad) of tool 2 in tool 1's frame. A solid
+/// object held at both needs both 0.
+pub fn relative_grasp_change(a: &[f64], b: &[f64]) -> (f64, f64) {
+    let rel = |q: &[f64]| {
+        mm::frames::<f64>(&q[..DOF])
+            .tool
+            .inverse()
+            .then(&mm::frames::<f64>(&q[DOF..2 * DOF]).tool)
+    };
+    let (ra, rb) = (rel(a), rel(b));
+    let d = spatial::sub(rb.p, ra.p);
+    // tr(Raᵀ Rb) = 1 + 2 cos(angle).
+    let mut tr = 0.0;
+    for i in 0..3 {
+        for j in 0..3 {
+            tr += ra.r[i][j] * rb.r[i][j];
+        }
+    }
+    (
+        spatial::dot(d, d).sqrt(),
+        ((tr - 1.0) / 2.0).clamp(-1.0, 1.0).acos(),
+    )
+}
+
 /// Distance between the grasp points of two robots at q (for messages).
 pub fn grasp_distance(q: &[f64]) -> f64 {
     let d = spatial::sub(
@@ -498,6 +534,126 @@ pub(crate) mod tests {
             let what = format!("pair with beam, sample {checked}");
             assert_field_is_scaled_gradient(&s, &q, 1e-5, &what);
         }
+    }
+
+    /// The default compliant wrist of `[model.wrist]` (400 N/m, 50 N m/rad).
+    fn soft_wrist() -> Wrist {
+        Wrist::Compliant(crate::model::mobile_manipulator::CompliantWrist {
+            stiffness: [400.0, 400.0, 400.0, 50.0, 50.0, 50.0],
+            damping: [25.0, 25.0, 25.0, 2.0, 2.0, 2.0],
+            travel: [0.2, 0.2, 0.2, 0.35, 0.35, 0.35],
+        })
+    }
+
+    /// The wrench bound (b_f from the grasp wrenches of the carried chain's
+    /// statics), with rigid and with compliant wrists: the law's field is
+    /// V's gradient (central differences), and so is ln b_f's dual-number
+    /// derivative along random directions, on random admissible
+    /// configurations near Table I's start.
+    #[test]
+    fn the_wrench_bound_has_exact_gradients() {
+        use num_dual::Dual64 as Dual;
+        let q0 = table_i_start();
+        let mut goal = q0.clone();
+        goal[1] -= 2.0;
+        goal[DOF + 1] -= 2.0;
+        let bound = Bound::Wrench {
+            force: 60.0,
+            moment: 8.0,
+        };
+        for (wrist, size) in [(Wrist::Rigid, 0.002), (soft_wrist(), 0.05)] {
+            let mut s = scene(&q0, goal.clone(), 1.0);
+            let c = s.object.take().unwrap().with_grasps(bound, wrist).unwrap();
+            s = s.with_object(c);
+            let c = s.object.as_ref().unwrap();
+            let mut rng = ChaCha8Rng::seed_from_u64(29);
+            let (mut checked, mut tries) = (0, 0);
+            while checked < 6 {
+                tries += 1;
+                assert!(tries < 2000, "{wrist:?}: no admissible sample");
+                let q = perturbed(&q0, &mut rng, size);
+                let e = s.evaluate::<f64>(&q, &mut s.warm()).unwrap();
+                let st = c.state(&q);
+                // Well inside the set, where b_f is smooth at h = 1e-6.
+                if !(e.v > 0.0 && e.min_beta > 0.02 && c.margin(&st.q_f, &st.gravity) > 0.05) {
+                    continue;
+                }
+                checked += 1;
+                let what = format!("wrench bound, {wrist:?}, sample {checked}");
+                assert_field_is_scaled_gradient(&s, &q, 1e-5, &what);
+                let lnb = |q: &[f64]| {
+                    let st = c.state(q);
+                    c.ln_admissible(&st.q_f, &st.gravity).unwrap()
+                };
+                let dir: Vec<f64> = (0..q.len()).map(|_| rng.random_range(-1.0..1.0)).collect();
+                let qd: Vec<Dual> = q.iter().zip(&dir).map(|(x, d)| Dual::new(*x, *d)).collect();
+                let std = c.state(&qd);
+                let exact = c.ln_admissible(&std.q_f, &std.gravity).unwrap().eps;
+                let h = 1e-6;
+                let (qp, qm): (Vec<f64>, Vec<f64>) = q
+                    .iter()
+                    .zip(&dir)
+                    .map(|(x, d)| (x + h * d, x - h * d))
+                    .unzip();
+                let fd = (lnb(&qp) - lnb(&qm)) / (2.0 * h);
+                assert!(
+                    (fd - exact).abs() <= 1e-5 * exact.abs().max(1.0),
+                    "{what}: d ln b_f exact {exact:e}, fd {fd:e}"
+                );
+            }
+        }
+    }
+
+    /// The law on measured grasps: with a fixed correction of each flange
+    /// (as `grasps = "measured"` applies per sample), the field is still
+    /// V's gradient.
+    #[test]
+    fn the_field_on_measured_grasps_is_the_gradient_of_v() {
+        use crate::model::spatial::{rot_x, rot_y};
+        let q0 = table_i_start();
+        let mut goal = q0.clone();
+        goal[1] -= 2.0;
+        goal[DOF + 1] -= 2.0;
+        let bound = Bound::Wrench {
+            force: 60.0,
+            moment: 8.0,
+        };
+        let mut s = scene(&q0, goal, 1.0);
+        let c = s.object.take().unwrap().with_grasps(bound, soft_wrist()).unwrap();
+        s = s.with_object(c);
+        // Each flange 1 cm off and tilted by 0.01 rad (a platform rocking on
+        // its casters).
+        let corr: crate::planner::dilf::potential::GraspCorrection = [
+            Pose {
+                r: rot_x(0.01),
+                p: [0.01, 0.0, -0.005],
+            },
+            Pose {
+                r: rot_y(-0.01),
+                p: [0.0, 0.01, 0.005],
+            },
+        ];
+        let (e, f) = s.field_with(&q0, Some(&corr), &mut s.warm()).unwrap();
+        let dp = e.d.powf(s.params.field_power);
+        let v = |q: &[f64]| s.evaluate_with::<f64>(q, Some(&corr), &mut s.warm()).unwrap().v;
+        let scale = f.iter().map(|x| x.abs()).fold(0.0, f64::max) / dp;
+        for i in 0..q0.len() {
+            let central = |h: f64| {
+                let (mut qp, mut qm) = (q0.clone(), q0.clone());
+                qp[i] += h;
+                qm[i] -= h;
+                (v(&qp) - v(&qm)) / (2.0 * h)
+            };
+            let fd = (4.0 * central(5e-7) - central(1e-6)) / 3.0;
+            let exact = f[i] / dp;
+            assert!(
+                (fd - exact).abs() <= 1e-5 * scale.max(exact.abs()),
+                "coord {i}: exact {exact:e}, fd {fd:e}"
+            );
+        }
+        // The correction matters: V differs from the unmeasured one.
+        let plain = s.evaluate::<f64>(&q0, &mut s.warm()).unwrap().v;
+        assert!((plain - e.v).abs() > 1e-6 * plain, "{plain} vs {}", e.v);
     }
 
     /// b_f (Eq. 12): V vanishes exactly when a node leaves its ball, and the

@@ -47,11 +47,12 @@ use crate::model::mobile_manipulator::{self as mm, Link, Part, DOF};
 use crate::model::puma560;
 use crate::model::spatial::{self, k, Pose, Scalar, V3};
 use num_dual::DualSVec64;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// Where the arm parts' goal points live (the paper: "in an appropriate
 /// coordinate system the desired configuration of every h_p is the origin").
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum GoalFrame {
     /// Arm parts are measured in their own platform's frame: their goal term
@@ -74,7 +75,7 @@ pub enum GoalFrame {
 /// geometric mean (Π_r γ_r)^{1/k} keeps Eq. 15 unchanged for one robot,
 /// keeps the dipole planes γ_r = 0 as V's zero sets (the 2k regions of
 /// Lemma 2), and restores degree −1, so V → ∞ at the goal for any k.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum DipoleProduct {
     /// (Π_r γ_r)^{1/k} (default).
@@ -87,14 +88,17 @@ pub enum DipoleProduct {
 /// Singular sets of each arm (zeros of the three factors of det J, see
 /// [`puma560`]) enclosed in slabs |f_k| ≤ δ_k: generalized ellipsoids in the
 /// factor coordinates. δ = 0 disables a factor.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct SingularityEnclosure {
     /// Shoulder: wrist centre's reach in the arm plane, m.
+    #[schemars(range(min = 0))]
     pub shoulder: f64,
     /// Elbow: d4 c3 + a3 s3, m.
+    #[schemars(range(min = 0))]
     pub elbow: f64,
     /// Wrist: |sin q5|.
+    #[schemars(range(min = 0))]
     pub wrist: f64,
 }
 

@@ -22,20 +22,24 @@
 //!   keeps aligning while it stays within the tolerance (in physics its
 //!   axle drifts by millimetres while it turns).
 
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// `[planner.stall]`: when the law counts as stalled.
-#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct StallParams {
     /// No progress for this long ends the run with the label `stalled`, s;
     /// 0 disables the stop (the run goes on to the horizon).
+    #[schemars(range(min = 0))]
     pub time: f64,
     /// Relative rise of V (and relative fall of the aligning platforms'
     /// heading error) that counts as progress.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub gain: f64,
     /// No progress for this long hands a platform within the position
     /// tolerance over to the final alignment, s.
+    #[schemars(range(min = 0))]
     pub handover_time: f64,
 }
 
@@ -116,7 +120,8 @@ impl Progress {
     pub fn observe(&mut self, t: f64, v: f64, aligning_heading: Option<f64>) -> Verdict {
         let ln_v = v.ln();
         let mut progress = false;
-        if ln_v >= self.best_ln_v + self.ln_factor {
+        // Strict: V = 0 (ln V = −∞, on a dipole plane) is never progress.
+        if ln_v > self.best_ln_v + self.ln_factor {
             self.best_ln_v = ln_v;
             progress = true;
         }
@@ -151,6 +156,110 @@ impl Progress {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::model::State;
+    use crate::plan::{Command, Controller};
+    use crate::planner::dilf::potential::{PotentialParams, Scene};
+    use crate::planner::dilf::{DilfController, DilfParams, Policy};
+    use std::sync::Arc;
+
+    /// One robot in the open, goal at the origin facing +x, and its
+    /// controller (the shipped defaults but `field_power`).
+    fn controller() -> (DilfController, Vec<f64>) {
+        let params: DilfParams = toml::from_str("field_power = 1.75").unwrap();
+        let goal = vec![0.0, 0.0, 0.0, 0.0, -1.2, 2.2, 0.0, -0.6, 0.0];
+        let scene = Scene::new(
+            1,
+            crate::model::mobile_manipulator::default_parts(),
+            Vec::new(),
+            goal.clone(),
+            PotentialParams {
+                lambda: params.lambda,
+                kv: params.kv_exponent,
+                goal_frame: params.goal_frame,
+                dipole: params.dipole,
+                singularity: params.singularity,
+                field_power: params.field_power,
+            },
+        )
+        .unwrap();
+        let scene = Arc::new(scene);
+        let policy = Arc::new(Policy {
+            gains: params.gains(),
+            tolerance: params.tolerance,
+            period: params.period,
+            hold_guard: params.hold_guard,
+            stall: params.stall,
+            scene: scene.clone(),
+        });
+        let c = DilfController {
+            warm: scene.warm(),
+            guard_warm: scene.warm(),
+            combos: 3,
+            progress: Progress::new(params.stall),
+            aligning: vec![false],
+            policy,
+        };
+        (c, goal)
+    }
+
+    fn label(c: &mut DilfController, t: f64, q: &[f64]) -> (String, Command) {
+        let cmd = c.command(t, &State::from_vec(q.to_vec()));
+        (crate::planner::dilf::labels(1)[cmd.label].clone(), cmd)
+    }
+
+    /// The controller's rules on a state where nothing moves between
+    /// samples (no progress): 1.5 cm from the goal (inside the 2 cm
+    /// tolerance, outside its half) Eq. 18 runs for `handover_time`, then
+    /// the platform turns in place; once aligning it keeps aligning up to
+    /// the tolerance and not beyond. 0.5 m from the goal the same lack of
+    /// progress ends the run after `time`, with zero input.
+    #[test]
+    fn the_controller_hands_over_latches_and_stops() {
+        let (mut c, goal) = controller();
+        // Off the dipole plane x = 0 (V = 0 there), `d` from the goal.
+        let at = |d: f64| {
+            let mut q = goal.clone();
+            q[0] = -0.009;
+            q[1] = (d * d - 0.009f64.powi(2)).sqrt();
+            q[2] = 0.5;
+            q
+        };
+        let q = at(0.015);
+        let s = StallParams::default();
+        let mut first_align = None;
+        for k in 0..250 {
+            let t = 0.02 * k as f64;
+            let (l, _) = label(&mut c, t, &q);
+            if l.starts_with("align") {
+                first_align.get_or_insert(t);
+            } else {
+                assert!(first_align.is_none(), "left the alignment at {t} s: {l}");
+            }
+        }
+        let t = first_align.expect("never handed over");
+        assert!(t > s.handover_time && t <= s.handover_time + 0.021, "{t}");
+        // Latched: 1.9 cm still aligns, 2.1 cm no longer, nor 1.9 cm again.
+        assert!(label(&mut c, 5.0, &at(0.019)).0.starts_with("align"));
+        assert!(!label(&mut c, 5.02, &at(0.021)).0.starts_with("align"));
+        assert!(!label(&mut c, 5.04, &at(0.019)).0.starts_with("align"));
+
+        let (mut c, goal) = controller();
+        let mut q = goal.clone();
+        q[0] = -0.5;
+        q[2] = 0.3;
+        let mut stop = None;
+        for k in 0..1000 {
+            let t = 0.02 * k as f64;
+            let (l, cmd) = label(&mut c, t, &q);
+            if l == "stalled" {
+                assert!(cmd.done && cmd.u.iter().all(|u| *u == 0.0));
+                stop = Some(t);
+                break;
+            }
+        }
+        let t = stop.expect("never stalled");
+        assert!(t > s.time && t <= s.time + 0.021, "{t}");
+    }
 
     /// V rising by less than the gain is no progress; by more, it is. The
     /// stop comes `time` after the last progress, the hand-over after
@@ -174,11 +283,15 @@ mod tests {
         }
         let last = g.since();
         assert!(last > 1.4, "{last}");
-        // Then a creep of 0.3 % in total: never progress again.
+        // Then a creep to 0.9 % above the last progress: never progress again.
+        let best = g.best_ln_v.exp();
         let mut verdicts = Vec::new();
         for k in 0..400 {
             let t = 2.0 + k as f64 * dt;
-            verdicts.push((t, g.observe(t, v * (1.0 + 0.003 * k as f64 / 400.0), None)));
+            verdicts.push((
+                t,
+                g.observe(t, best * (1.0 + 0.009 * k as f64 / 400.0), None),
+            ));
         }
         let first = |want| verdicts.iter().find(|(_, x)| *x == want).unwrap().0;
         assert!((first(Verdict::HandOver) - (last + 0.5)).abs() <= dt + 1e-9);

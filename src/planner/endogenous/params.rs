@@ -1,4 +1,5 @@
 //! Planner parameters, control constraints and the iteration settings.
+use schemars::JsonSchema;
 
 /// Value (order 0) or first time derivative (order 1) of the control.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Serialize)]
@@ -21,7 +22,7 @@ pub struct ControlConstraint {
 }
 
 /// Continuity imposed on u at the joins between segments.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize, serde::Serialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, serde::Deserialize, serde::Serialize, JsonSchema)]
 #[serde(rename_all = "lowercase")]
 pub enum Continuity {
     /// Segments are planned independently (u may jump, scenario S1).
@@ -35,7 +36,7 @@ pub enum Continuity {
 /// A prescribed control value and/or derivative at a global time (a via
 /// point of the control when strictly inside a segment). At a join time it
 /// applies to both adjacent segments.
-#[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize)]
+#[derive(Debug, Clone, PartialEq, serde::Deserialize, serde::Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ControlPoint {
     /// Global time, s.
@@ -48,34 +49,46 @@ pub struct ControlPoint {
     pub derivative: Option<Vec<f64>>,
 }
 
-/// Planner parameters. Control constraints are in model units (rad/s,
+/// Seed 001 endogenous-configuration-space planner: Legendre-series controls
+/// iterated on the end-point map (Eq. 26). Control constraints are in model units (rad/s,
 /// rad/s²) like the paper's du/dt(0) = 0.01; only waypoints are in degrees.
-#[derive(Debug, Clone, serde::Deserialize, serde::Serialize)]
+#[derive(Debug, Clone, serde::Deserialize, serde::Serialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct EndogenousParams {
     /// Duration T of every segment, s (paper: 20).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub segment_time: f64,
     /// Intermediate targets y1, y2, … (full states, degrees), reached at T, 2T, …;
     /// the goal is reached at (len + 1) T.
     pub via_deg: Vec<Vec<f64>>,
-    /// Legendre terms per input (s = m · basis_terms parameters per segment).
+    /// Legendre terms per input (s = m · basis_terms parameters per segment); the
+    /// parameters must at least match the segment's task and constraint rows.
+    #[schemars(range(min = 1, max = 64))]
     pub basis_terms: usize,
     /// Error decay rate γ of Eq. 26 (paper: 0.02).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub gamma: f64,
     /// Euler step Δϑ of the ϑ-integration of Eq. 26 (γΔϑ ≤ 1; 1 = Newton step).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub dtheta: f64,
     /// Below this error (rad) the step becomes a full Gauss–Newton step
     /// (γΔϑ = 1) to finish quickly; 0 follows Eq. 26 to the end.
+    #[schemars(range(min = 0))]
     pub newton_below: f64,
     /// Fixed RK4 steps per segment for the state and variational system.
+    #[schemars(range(min = 1, max = 1000000))]
     pub rk4_steps: usize,
     /// Iteration cap per segment.
+    #[schemars(range(min = 1))]
     pub max_iterations: usize,
     /// Stop when ‖q(T) − y‖ ≤ tolerance (rad).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub tolerance: f64,
     /// Relative SVD cut-off of the pseudo-inverse.
+    #[schemars(extend("exclusiveMinimum" = 0, "exclusiveMaximum" = 1))]
     pub rcond: f64,
     /// Give up when the best error has not dropped by 0.1 % for this many iterations.
+    #[schemars(range(min = 1))]
     pub stall_iterations: usize,
     /// u(0), rad/s per input.
     pub u_start: Option<Vec<f64>>,

@@ -2,6 +2,7 @@
 
 use super::invalid;
 use crate::planner::PlanError;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// The paper's λ for ABCD (seed 000 §4.1), degrees.
@@ -10,7 +11,7 @@ pub const PAPER_LAMBDA_DEG: f64 = 125.0;
 pub const PAPER_GAMMA_DEG: f64 = 75.0;
 
 /// Which side of the rectangle is given; the other is solved from Eq. 20.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum FixedSide {
     /// Try the paper's λ = 125° and γ = 75°, each also mirrored about the
@@ -23,7 +24,7 @@ pub enum FixedSide {
 }
 
 /// What "cheapest" means when several rectangles are feasible.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize)]
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum Cost {
     /// Plan duration under the rate limits.
@@ -32,8 +33,9 @@ pub enum Cost {
     Travel,
 }
 
-/// Parameters of the planner. Angles in degrees.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+/// Seed 000 §4.1 Stokes planner for the space robot: rectangles in the joint
+/// plane whose enclosed area turns the vehicle. Angles in degrees.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct StokesSpaceParams {
     /// Which side is fixed (`auto`: search, see [`FixedSide::Auto`]).
@@ -48,22 +50,28 @@ pub struct StokesSpaceParams {
     /// What the search minimises among feasible plans.
     pub cost: Cost,
     /// Number of cycles n tried first.
+    #[schemars(range(min = 1, max = 10000))]
     pub cycles: usize,
-    /// Most cycles tried when the rectangle violates the joint limit.
+    /// Most cycles tried when the rectangle violates the joint limit; at least `planner.cycles`.
+    #[schemars(range(min = 1, max = 10000))]
     pub max_cycles: usize,
     /// Joint-1 limit |θ1| ≤ L (paper: 120); `None` = unconstrained.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub theta1_limit_deg: Option<f64>,
     /// Translation of the rectangle along BA in [0, |w|] (0 = ABCD-type,
     /// |w| = ADMN-type); `None` = automatic (0, then |w|, then the smallest
     /// translation meeting the joint limit).
+    #[schemars(range(min = 0))]
     pub shift_deg: Option<f64>,
     /// Wrap the required rotation θ̄0 to (−180°, 180°] and also try the
     /// neighbouring branches θ̄0 ± 360°; `false`: θ̄0 exactly as written.
     pub wrap_vehicle_angle: bool,
     /// Plans whose total joint travel |Δθ1| + |Δθ2| exceeds this (degrees)
     /// are rejected (degenerate rectangles turn joint 1 dozens of times).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub max_joint_travel_deg: f64,
     /// Plans longer than this (s, under the rate limits) are rejected.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub max_duration_s: f64,
     /// Corner letters used in labels, starting with the loop's start point
     /// (e.g. "ADMN"); default "ABCDE".

@@ -5,11 +5,12 @@
 use crate::model::ellipsoid::Superellipsoid;
 use crate::physics::beam::BeamOptions;
 use crate::physics::mobile_manipulator::ArmServo;
+use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::PathBuf;
 
 /// One obstacle as written in the scenario.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct ObstacleConfig {
     /// Name (unique; used in messages and logs).
@@ -17,9 +18,11 @@ pub struct ObstacleConfig {
     /// Centre, m.
     pub center: [f64; 3],
     /// Semi-axes a, b, c, m (> 0).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub semi_axes: [f64; 3],
     /// Exponent n ≥ ½ (1: ellipsoid; large: box-like).
     #[serde(default = "one")]
+    #[schemars(range(min = 0.5, max = 32))]
     pub exponent: f64,
     /// Orientation, URDF roll-pitch-yaw in degrees.
     #[serde(default)]
@@ -43,7 +46,7 @@ impl ObstacleConfig {
 }
 
 /// `model.beam.bound`: which admissible set enters b_f.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum BoundKind {
     /// Eq. 11's balls on the nodes of q_f (radius `max_deformation`).
@@ -53,11 +56,12 @@ pub enum BoundKind {
     Wrench,
 }
 
-/// Default F_max of the wrench bound, N: about a quarter of the force that
-/// tips a platform at Table I's grasp height (~1.06 m) in its weakest
-/// direction, and with [`DEFAULT_MAX_MOMENT`] within the PUMA's wrist
-/// torques (derived in the seed-004 docs; test
-/// `the_wrench_bound_defaults_keep_the_platforms_and_wrists_safe`).
+/// Default F_max of the wrench bound, N: about a fifth of the 282 N that
+/// tips a platform at Table I's grasp height (1.06 m) in its weakest
+/// direction (158 kg, its centre of mass 0.19 m inside the edge between a
+/// drive wheel and the front caster), a margin for the platforms' rocking
+/// under acceleration; with [`DEFAULT_MAX_MOMENT`] within the PUMA's wrist
+/// torques (derived in docs/src/research/seed-004.md).
 pub const DEFAULT_MAX_FORCE: f64 = 60.0;
 /// Default M_max of the wrench bound, N m: with F_max at the 0.16 m from
 /// the wrist centre to the grasp, M_max + 0.16 F_max = 17.6 N m stays below
@@ -66,23 +70,28 @@ pub const DEFAULT_MAX_MOMENT: f64 = 8.0;
 
 /// `[model.beam]`: the deformable beam two robots carry (seed 004 §II, §VI).
 /// Defaults: a 10 mm pultruded GFRP rod ([`crate::model::beam::GFRP_ROD_10MM`]).
-#[derive(Debug, Clone, Deserialize, Serialize)]
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct BeamConfig {
     /// Young's modulus E, Pa.
     #[serde(default = "default_e")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub youngs_modulus: f64,
     /// Shear modulus G, Pa.
     #[serde(default = "default_g")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub shear_modulus: f64,
     /// Density, kg/m³.
     #[serde(default = "default_rho")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub density: f64,
     /// Outer diameter of the solid round section, m.
     #[serde(default = "default_diameter")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub diameter: f64,
     /// Rest length between the grasps, m; default: their distance at the start
     /// (the beam is straight there). Given, it must match that distance.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub length: Option<f64>,
     /// The admissible set: `"printed"` (Eq. 11's balls on q_f, radius
     /// `max_deformation`) or `"wrench"` (the grasp wrenches within
@@ -91,25 +100,34 @@ pub struct BeamConfig {
     pub bound: BoundKind,
     /// q_F of Eq. 5, the bound on ‖q_f‖∞ (m and rad, SI reading of the
     /// paper's units); required with `bound = "printed"`.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub max_deformation: Option<f64>,
     /// F_max of the wrench bound: the force each gripper may apply to the
-    /// beam, N (default [`DEFAULT_MAX_FORCE`]).
+    /// beam, N (default 60: about a fifth of the 282 N that tips a
+    /// platform at Table I's grasp height).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub max_force: Option<f64>,
     /// M_max of the wrench bound: the moment each gripper may apply to the
-    /// beam about the grasp point, N m (default [`DEFAULT_MAX_MOMENT`]).
+    /// beam about the grasp point, N m (default 8: with F_max at 0.16 m it
+    /// stays below the weakest wrist joint's 20.1 N m).
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub max_moment: Option<f64>,
     /// Bound on the grasps' stretch or shortening along the beam, m
     /// (ours; none by default: Eq. 5 alone). See `Carried::with_max_stretch`.
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub max_stretch: Option<f64>,
     /// Ellipsoids along the beam (obstacles of the robot parts).
     #[serde(default = "default_segments")]
+    #[schemars(range(min = 1, max = 64))]
     pub segments: usize,
     /// Their cross semi-axes, m (the rod's radius plus a margin).
     #[serde(default = "default_beam_radius")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
     pub radius: f64,
     /// Compliant joints of the physics beam's chain (even, 2..=40; N + 1
     /// rigid segments, see `physics::beam`).
     #[serde(default = "default_physics_segments")]
+    #[schemars(range(min = 2, max = 40))]
     pub physics_segments: usize,
 }
 
@@ -234,7 +252,7 @@ impl BeamConfig {
 /// (ours; see [`crate::model::mobile_manipulator::Wrist`]). Per-axis arrays
 /// are in the tool frame at the grasp point: x, y, z then rotations about
 /// x, y, z.
-#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize)]
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize, JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum WristConfig {
     /// The gripper fixed to the flange (default: the paper's rigid grasp).
@@ -242,14 +260,21 @@ pub enum WristConfig {
     Rigid,
     /// A spring–damper per axis with a hard stop at ± travel.
     Compliant {
-        /// N/m (translations), N m/rad (rotations); > 0.
+        /// N/m (translations), N m/rad (rotations); > 0. Default
+        /// [400, 400, 400, 50, 50, 50]: at F_max = 60 N a wrist deflects
+        /// 15 cm, at M_max = 8 N m it turns 0.16 rad.
         #[serde(default = "default_wrist_stiffness")]
+        #[schemars(extend("exclusiveMinimum" = 0))]
         stiffness: [f64; 6],
-        /// N s/m, N m s/rad; ≥ 0.
+        /// N s/m, N m s/rad; ≥ 0. Default [25, 25, 25, 2, 2, 2] (about 0.7
+        /// of critical for the gripper and half the rod).
         #[serde(default = "default_wrist_damping")]
+        #[schemars(extend("minimum" = 0))]
         damping: [f64; 6],
-        /// m, rad each way; > 0 (rotations below 90°).
+        /// m, rad each way; > 0 (rotations below 90°). Default
+        /// [0.2, 0.2, 0.2, 0.35, 0.35, 0.35].
         #[serde(default = "default_wrist_travel")]
+        #[schemars(extend("exclusiveMinimum" = 0))]
         travel: [f64; 6],
     },
 }
@@ -301,14 +326,17 @@ impl WristConfig {
     }
 }
 
-/// `[model] kind = "mobile_manipulator"`.
-#[derive(Debug, Clone, Deserialize, Serialize)]
+/// Mobile manipulators (seed 004): differential-drive platforms with PUMA 560
+/// arms among superellipsoid obstacles; one robot, or two carrying a
+/// deformable beam.
+#[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MobileManipulatorConfig {
     /// URDF file (one robot), relative to the scenario file.
     pub urdf: PathBuf,
     /// Number of robots (1, or 2 carrying `[model.beam]`).
     #[serde(default = "one_robot")]
+    #[schemars(range(min = 1, max = 2))]
     pub robots: usize,
     /// The beam two robots carry (required with `robots = 2`).
     pub beam: Option<BeamConfig>,
@@ -325,7 +353,7 @@ pub struct MobileManipulatorConfig {
 
 /// `[model.arm_servo]`: the arms' joint servos in physics (the planner is
 /// kinematic and does not see them).
-#[derive(Debug, Clone, PartialEq, Deserialize, Serialize)]
+#[derive(Debug, Clone, PartialEq, Deserialize, Serialize, JsonSchema)]
 #[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
 pub enum ArmServoConfig {
     /// Stiff position servos tracking the integral of the commanded rates
@@ -334,15 +362,19 @@ pub enum ArmServoConfig {
         /// Largest torque per joint, N m (> 0); default: `sim.motor_max_torque`
         /// for every joint. The PUMA 560's published limits are
         /// `[97.6, 186.4, 89.4, 24.2, 20.1, 21.3]`.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         max_torque: Option<[f64; 6]>,
     },
     /// Joint-space impedance with gravity compensation.
     Impedance {
         /// K per joint, N m/rad (> 0).
+        #[schemars(extend("exclusiveMinimum" = 0))]
         stiffness: [f64; 6],
         /// D per joint, N m s/rad (≥ 0).
+        #[schemars(extend("minimum" = 0))]
         damping: [f64; 6],
         /// As for `stiff`.
+        #[schemars(extend("exclusiveMinimum" = 0))]
         max_torque: Option<[f64; 6]>,
     },
 }

@@ -139,3 +139,31 @@ pub fn analysis(
     }
     (metrics, series)
 }
+
+/// The report's paper table for Table I (`dilf_paper`): the grasps'
+/// relative pose changes between the printed start and goal, which no
+/// solid object allows (test `table_i_cannot_carry_a_rigid_object`).
+pub fn table_i_rows(start: &[f64], goal: &[f64]) -> Vec<crate::paper::PaperRow> {
+    use crate::planner::dilf::object::{relative_grasp_change, table_i_goal, table_i_start};
+    let near = |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-6);
+    if !(near(start, &table_i_start()) && near(goal, &table_i_goal())) {
+        return Vec::new();
+    }
+    let (dt, dr) = relative_grasp_change(start, goal);
+    vec![
+        crate::paper::row(
+            "Table I: change of the grasps' relative translation, start to goal (a solid object needs 0)",
+            "0",
+            dt,
+            "m",
+            "Table I cannot be carried by a solid object: the platforms' spacing (3 m to 4 m) and the shoulders' turn move the grasps |(4 sin 60° − 3, 4 cos 60°)| = 2.053 m relative to each other, for any arm on a vertical first joint",
+        ),
+        crate::paper::row(
+            "Table I: change of the grasps' relative rotation, start to goal (a solid object needs 0)",
+            "0",
+            dr.to_degrees(),
+            "deg",
+            "robot 2's q5 (−45° to −30°)",
+        ),
+    ]
+}

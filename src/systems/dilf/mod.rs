@@ -325,6 +325,13 @@ fn along(scene: &Scene, gains: &Gains, tr: &Trajectory, samples: &[usize], name:
 }
 
 impl System for Dilf {
+    fn paper(&self, start: &State, goal: &State, _plan: &Plan) -> Vec<crate::paper::PaperRow> {
+        if self.beam.is_none() {
+            return Vec::new();
+        }
+        grasp::table_i_rows(start.as_slice(), goal.as_slice())
+    }
+
     fn model(&self) -> &dyn KinematicModel {
         &self.model
     }
@@ -348,6 +355,9 @@ impl System for Dilf {
             }
         })?;
         dilf::plan(Arc::new(scene), start, &self.params)
+    }
+    fn urdf_names(&self) -> Vec<crate::physics::required::Named> {
+        crate::physics::required::defaults(&crate::physics::mobile_manipulator::REQUIRED)
     }
     fn physics(
         &self,
