@@ -12,7 +12,7 @@ pub fn cases(c: &mut Corpus) {
             "kind = \"compliant\"\nstiffness = [400.0, -400.0, 400.0, 50.0, 50.0, 50.0]",
         ),
         Some("stiffness = [400.0, -400.0"),
-        Some("model.wrist.stiffness"),
+        Some("model.wrist.stiffness[1]"),
     );
     c.sc(
         "wrist travel zero",
@@ -22,7 +22,7 @@ pub fn cases(c: &mut Corpus) {
             "kind = \"compliant\"\ntravel = [0.2, 0.2, 0.0, 0.35, 0.35, 0.35]",
         ),
         Some("travel = [0.2, 0.2, 0.0"),
-        Some("model.wrist.travel"),
+        Some("model.wrist.travel[2]"),
     );
     c.sc(
         "wrist travel negative",
@@ -32,7 +32,7 @@ pub fn cases(c: &mut Corpus) {
             "kind = \"compliant\"\ntravel = [0.2, 0.2, 0.2, -0.35, 0.35, 0.35]",
         ),
         Some("travel = [0.2, 0.2, 0.2, -0.35"),
-        Some("model.wrist.travel"),
+        Some("model.wrist.travel[3]"),
     );
     c.sc(
         "wrench bound force zero",
@@ -78,7 +78,7 @@ pub fn cases(c: &mut Corpus) {
             "max_torque = [97.6, 186.4, 0.0, 24.2, 20.1, 21.3]",
         ),
         Some("max_torque"),
-        Some("model.arm_servo.max_torque"),
+        Some("model.arm_servo.max_torque[2]"),
     );
     c.sc(
         "unknown grasps source",

@@ -731,6 +731,17 @@ pub(crate) mod tests {
     /// central differences at h = 1e-6 are off by 1e-5 (h → 1e-8 converges
     /// to the exact value there).
     pub(crate) fn assert_field_is_scaled_gradient(s: &Scene, q: &[f64], rel: f64, what: &str) {
+        assert_field_is_scaled_gradient_at(s, q, rel, 1e-6, what);
+    }
+
+    /// As [`assert_field_is_scaled_gradient`], Richardson from steps h/2 and h.
+    pub(crate) fn assert_field_is_scaled_gradient_at(
+        s: &Scene,
+        q: &[f64],
+        rel: f64,
+        h: f64,
+        what: &str,
+    ) {
         let (e, f) = s.field(q, &mut s.warm()).unwrap();
         let dp = e.d.powf(s.params.field_power);
         let v = |q: &[f64]| s.evaluate::<f64>(q, &mut s.warm()).unwrap().v;
@@ -742,7 +753,7 @@ pub(crate) mod tests {
                 qm[i] -= h;
                 (v(&qp) - v(&qm)) / (2.0 * h)
             };
-            let fd = (4.0 * central(5e-7) - central(1e-6)) / 3.0;
+            let fd = (4.0 * central(0.5 * h) - central(h)) / 3.0;
             let exact = f[i] / dp;
             assert!(
                 (fd - exact).abs() <= rel * scale.max(exact.abs()),
