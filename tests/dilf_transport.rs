@@ -104,8 +104,14 @@ fn the_paper_table_shows_that_table_i_admits_no_solid_object() {
     };
     let r = rows("dilf_paper.toml");
     assert_eq!(r.len(), 2, "{r:?}");
-    assert!((r[0].computed - 2.053).abs() < 5e-4 && r[0].unit == "m", "{r:?}");
-    assert!((r[1].computed - 15.0).abs() < 1e-6 && r[1].unit == "deg", "{r:?}");
+    assert!(
+        (r[0].computed - 2.053).abs() < 5e-4 && r[0].unit == "m",
+        "{r:?}"
+    );
+    assert!(
+        (r[1].computed - 15.0).abs() < 1e-6 && r[1].unit == "deg",
+        "{r:?}"
+    );
     assert!(r.iter().all(|x| !x.agrees && x.printed == "0"));
     assert!(rows("dilf_table_i_rigid_goal.toml").is_empty());
 }

@@ -412,13 +412,19 @@ impl CompliantWrist {
         if !ok(&self.stiffness, false) {
             return Err((
                 "stiffness",
-                format!("every axis must be > 0 (N/m, N m/rad), got {:?}", self.stiffness),
+                format!(
+                    "every axis must be > 0 (N/m, N m/rad), got {:?}",
+                    self.stiffness
+                ),
             ));
         }
         if !ok(&self.damping, true) {
             return Err((
                 "damping",
-                format!("every axis must be ≥ 0 (N s/m, N m s/rad), got {:?}", self.damping),
+                format!(
+                    "every axis must be ≥ 0 (N s/m, N m s/rad), got {:?}",
+                    self.damping
+                ),
             ));
         }
         if !ok(&self.travel, false) {
@@ -427,10 +433,16 @@ impl CompliantWrist {
                 format!("every axis must be > 0 (m, rad), got {:?}", self.travel),
             ));
         }
-        if self.travel[3..].iter().any(|t| *t >= std::f64::consts::FRAC_PI_2) {
+        if self.travel[3..]
+            .iter()
+            .any(|t| *t >= std::f64::consts::FRAC_PI_2)
+        {
             return Err((
                 "travel",
-                format!("rotational travel must be below 90° (rad), got {:?}", &self.travel[3..]),
+                format!(
+                    "rotational travel must be below 90° (rad), got {:?}",
+                    &self.travel[3..]
+                ),
             ));
         }
         Ok(())

@@ -128,9 +128,9 @@ pub fn replay_with(
     let mut clock = hold.map(|p| crate::integrate::SampleClock::new(p, dt));
     let q0 = sys.state();
     let sample = |ctl: &mut Box<dyn crate::plan::Controller>,
-                      sys: &dyn PhysicsSystem,
-                      t: f64,
-                      q: &State| match sys.measurement() {
+                  sys: &dyn PhysicsSystem,
+                  t: f64,
+                  q: &State| match sys.measurement() {
         Some(m) => ctl.command_measured(t, q, &m),
         None => ctl.command(t, q),
     };

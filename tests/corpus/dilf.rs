@@ -36,19 +36,31 @@ pub fn cases(c: &mut Corpus) {
     );
     c.sc(
         "wrench bound force zero",
-        edit(&po, "bound = \"wrench\"", "bound = \"wrench\"\nmax_force = 0.0"),
+        edit(
+            &po,
+            "bound = \"wrench\"",
+            "bound = \"wrench\"\nmax_force = 0.0",
+        ),
         Some("max_force"),
         Some("model.beam.max_force"),
     );
     c.sc(
         "wrench bound force negative",
-        edit(&po, "bound = \"wrench\"", "bound = \"wrench\"\nmax_force = -60.0"),
+        edit(
+            &po,
+            "bound = \"wrench\"",
+            "bound = \"wrench\"\nmax_force = -60.0",
+        ),
         Some("max_force"),
         Some("model.beam.max_force"),
     );
     c.sc(
         "wrench bound moment zero",
-        edit(&po, "bound = \"wrench\"", "bound = \"wrench\"\nmax_moment = 0.0"),
+        edit(
+            &po,
+            "bound = \"wrench\"",
+            "bound = \"wrench\"\nmax_moment = 0.0",
+        ),
         Some("max_moment"),
         Some("model.beam.max_moment"),
     );
@@ -66,7 +78,11 @@ pub fn cases(c: &mut Corpus) {
     );
     c.sc(
         "q_F with the wrench bound",
-        edit(&po, "bound = \"wrench\"", "bound = \"wrench\"\nmax_deformation = 0.3"),
+        edit(
+            &po,
+            "bound = \"wrench\"",
+            "bound = \"wrench\"\nmax_deformation = 0.3",
+        ),
         Some("max_deformation"),
         Some("model.beam.max_deformation"),
     );

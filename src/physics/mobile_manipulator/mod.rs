@@ -638,9 +638,8 @@ fn settle_wrists(
     let fe = FeBeam::new(&spec.beam)?;
     let k = spec.grasp.map(|g| w.stiffness_in(&g.r));
     let statics = GraspStatics::new(&fe, [Some(k[0]), Some(k[1])])?;
-    let flange = |world: &PhysicsWorld, r: &RobotBodies| {
-        rl::to_spatial(world.bodies[r.arm[5]].position())
-    };
+    let flange =
+        |world: &PhysicsWorld, r: &RobotBodies| rl::to_spatial(world.bodies[r.arm[5]].position());
     let gw = world.gravity;
     let g = [f(gw.x), f(gw.y), f(gw.z)];
     let end0 = flange(world, &robots[0]).then(&spec.grasp[0]);

@@ -22,13 +22,13 @@ fn rig(w: &CompliantWrist, gravity: f64) -> (PhysicsWorld, RigidBodyHandle) {
     world.gravity = vector(0.0, 0.0, -gravity);
     world.integration_parameters.dt = rl::r(DT);
     let flange = world.insert_body(RigidBodyBuilder::fixed());
-    let gripper = world.insert_body(
-        RigidBodyBuilder::dynamic().additional_mass_properties(MassProperties::new(
+    let gripper = world.insert_body(RigidBodyBuilder::dynamic().additional_mass_properties(
+        MassProperties::new(
             vector(0.0, 0.0, GRASP_OFFSET),
             rl::r(1.0),
             vector(0.01, 0.01, 0.01),
-        )),
-    );
+        ),
+    ));
     world.insert_impulse_joint(flange, gripper, compliant_wrist_joint(w));
     (world, gripper)
 }
@@ -58,7 +58,10 @@ fn the_wrist_spring_follows_the_mass_spring_damper_closed_form() {
         let p = world.bodies[gripper].translation();
         let z = rl::f(p.z);
         worst = worst.max((z - closed(t)).abs());
-        assert!(rl::f(p.x).abs() < 1e-6 && rl::f(p.y).abs() < 1e-6, "t {t}: {p:?}");
+        assert!(
+            rl::f(p.x).abs() < 1e-6 && rl::f(p.y).abs() < 1e-6,
+            "t {t}: {p:?}"
+        );
     }
     let z = rl::f(world.bodies[gripper].translation().z);
     eprintln!(
@@ -70,7 +73,10 @@ fn the_wrist_spring_follows_the_mass_spring_damper_closed_form() {
     assert!((z + delta).abs() < 0.01 * delta, "static {z} vs −{delta}");
     // 3 % of δ over the first 3 s: the implicit spring's period error at
     // ω dt = 0.02 accumulates over the ~10 ringing periods.
-    assert!(worst < 0.03 * delta, "transient off the closed form by {worst} m");
+    assert!(
+        worst < 0.03 * delta,
+        "transient off the closed form by {worst} m"
+    );
 }
 
 /// A constant moment about each rotation axis turns the gripper by M / k,

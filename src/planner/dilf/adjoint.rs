@@ -230,8 +230,7 @@ fn beam_wrenches(
     ln_bar: f64,
 ) -> [(V3<f64>, V3<f64>); 2] {
     let q_f: [D15; 12] = std::array::from_fn(|i| D15::from_re(st.q_f[i]).derivative(i));
-    let grav: [D15; 3] =
-        std::array::from_fn(|i| D15::from_re(st.gravity[i]).derivative(12 + i));
+    let grav: [D15; 3] = std::array::from_fn(|i| D15::from_re(st.gravity[i]).derivative(12 + i));
     let mut a = [0.0; 15];
     if let Some(l) = o.ln_admissible(&q_f, &grav) {
         add_eps(&mut a, &l, ln_bar);

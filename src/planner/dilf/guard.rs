@@ -60,7 +60,9 @@ impl Barriers {
         measured: Option<&GraspCorrection>,
         warm: &mut Warm,
     ) -> Result<Barriers, ContactError> {
-        Ok(Barriers::of(&scene.evaluate_with::<f64>(q, measured, warm)?))
+        Ok(Barriers::of(
+            &scene.evaluate_with::<f64>(q, measured, warm)?,
+        ))
     }
 
     /// Whether `next` keeps every barrier of `self` at least at [`KEEP`] of its value.

@@ -636,7 +636,12 @@ pub(crate) mod tests {
             moment: 8.0,
         };
         let mut s = scene(&q0, goal, 1.0);
-        let c = s.object.take().unwrap().with_grasps(bound, soft_wrist()).unwrap();
+        let c = s
+            .object
+            .take()
+            .unwrap()
+            .with_grasps(bound, soft_wrist())
+            .unwrap();
         s = s.with_object(c);
         // Each flange 1 cm off and tilted by 0.01 rad (a platform rocking on
         // its casters).
@@ -652,7 +657,11 @@ pub(crate) mod tests {
         ];
         let (e, f) = s.field_with(&q0, Some(&corr), &mut s.warm()).unwrap();
         let dp = e.d.powf(s.params.field_power);
-        let v = |q: &[f64]| s.evaluate_with::<f64>(q, Some(&corr), &mut s.warm()).unwrap().v;
+        let v = |q: &[f64]| {
+            s.evaluate_with::<f64>(q, Some(&corr), &mut s.warm())
+                .unwrap()
+                .v
+        };
         let scale = f.iter().map(|x| x.abs()).fold(0.0, f64::max) / dp;
         for i in 0..q0.len() {
             let central = |h: f64| {

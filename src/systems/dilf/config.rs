@@ -193,7 +193,10 @@ impl BeamConfig {
                             .into(),
                     );
                 }
-                for (key, v) in [("max_force", self.max_force), ("max_moment", self.max_moment)] {
+                for (key, v) in [
+                    ("max_force", self.max_force),
+                    ("max_moment", self.max_moment),
+                ] {
                     if v.is_some() {
                         return Err(format!(
                             "key `model.beam.{key}`: belongs to bound = \"wrench\" (this beam's bound is \"printed\")"

@@ -99,7 +99,9 @@ pub fn analysis(
             .collect();
         let (lo, hi) = span
             .iter()
-            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| (l.min(*x), h.max(*x)));
+            .fold((f64::INFINITY, f64::NEG_INFINITY), |(l, h), x| {
+                (l.min(*x), h.max(*x))
+            });
         let range = if lo <= hi { vec![lo, hi] } else { Vec::new() };
         metrics.push(("ideal_grasp_wrench_ratio".to_string(), ratio));
         metrics.push(("sim_grasp_wrench_ratio".to_string(), sim_ratio));
@@ -145,7 +147,9 @@ pub fn analysis(
 /// solid object allows (test `table_i_cannot_carry_a_rigid_object`).
 pub fn table_i_rows(start: &[f64], goal: &[f64]) -> Vec<crate::paper::PaperRow> {
     use crate::planner::dilf::object::{relative_grasp_change, table_i_goal, table_i_start};
-    let near = |a: &[f64], b: &[f64]| a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-6);
+    let near = |a: &[f64], b: &[f64]| {
+        a.len() == b.len() && a.iter().zip(b).all(|(x, y)| (x - y).abs() < 1e-6)
+    };
     if !(near(start, &table_i_start()) && near(goal, &table_i_goal())) {
         return Vec::new();
     }

@@ -103,7 +103,9 @@ fn dilf(cfg: &MobileManipulatorConfig, params: &DilfParams) -> Result<Dilf, Stri
     let arm = cfg.arm_servo.servo()?;
     let wrist = cfg.wrist.wrist()?;
     if cfg.robots == 1 && wrist != Wrist::Rigid {
-        return Err("key `model.wrist`: a compliant wrist holds the carried beam (robots = 2)".into());
+        return Err(
+            "key `model.wrist`: a compliant wrist holds the carried beam (robots = 2)".into(),
+        );
     }
     let mut obstacles = Vec::new();
     for (i, o) in cfg.obstacles.iter().enumerate() {
@@ -151,24 +153,18 @@ impl Dilf {
         let Some(b) = &self.beam else {
             return Ok(scene);
         };
-        let carried = Carried::at_rest(
-            &b.beam()?,
-            b.length,
-            start,
-            b.q_max(),
-            b.segments,
-            b.radius,
-        )
-        .map_err(|e| {
-            let key = if b.length.is_some() {
-                "model.beam.length"
-            } else {
-                "start"
-            };
-            format!("key `{key}`: {e}")
-        })?
-        .with_grasps(b.bound(), self.wrist)
-        .map_err(|e| format!("key `model.beam`: {e}"))?;
+        let carried =
+            Carried::at_rest(&b.beam()?, b.length, start, b.q_max(), b.segments, b.radius)
+                .map_err(|e| {
+                    let key = if b.length.is_some() {
+                        "model.beam.length"
+                    } else {
+                        "start"
+                    };
+                    format!("key `{key}`: {e}")
+                })?
+                .with_grasps(b.bound(), self.wrist)
+                .map_err(|e| format!("key `model.beam`: {e}"))?;
         Ok(scene.with_object(carried.with_max_stretch(b.max_stretch)))
     }
 
