@@ -218,8 +218,8 @@ mod tests {
         // Gravity alone: each grasp carries half the weight, upwards.
         let w = s.wrenches(&[0.0; 6], &g);
         let half = 0.5 * b.mass_per_length() * 9.81 * l;
-        for e in 0..2 {
-            assert!((w[e][2] - half).abs() < 1e-9 * half, "{:?}", w[e]);
+        for e in &w {
+            assert!((e[2] - half).abs() < 1e-9 * half, "{e:?}");
         }
     }
 
