@@ -43,6 +43,13 @@ pub trait Controller: Send {
     fn fault(&self) -> Option<String> {
         None
     }
+
+    /// The command when the replay also measures what the model
+    /// coordinates leave out (a physics system's `measurement`, e.g. the
+    /// 3D poses of the mobile manipulators' flanges). Default: ignore it.
+    fn command_measured(&mut self, t: f64, q: &State, _measured: &[f64]) -> Command {
+        self.command(t, q)
+    }
 }
 
 /// A controller asked at most once per sample: a call with the same `t`

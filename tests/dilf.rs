@@ -104,7 +104,7 @@ fn non_positive_semi_axis_is_bad_input() {
     let wall = WALL.replace("[0.1, 2.0, 1.0]", "[0.1, 0.0, 1.0]");
     bad(
         &dilf_text(START, GOAL, &wall),
-        "model.obstacles[0].semi_axes",
+        "model.obstacles[0].semi_axes[1]",
         "semi_axes",
     );
 }
@@ -330,6 +330,8 @@ fn the_pair_holds_the_beam_at_rest_as_the_fe_model_says() {
         obstacles: &[],
         beam: Some(&spec),
         arm: Default::default(),
+        arm_max_torque: None,
+        wrist: Default::default(),
     };
     let mut sys = MobileManipulatorPhysics::new(&robot, &path, &settings, &setup).unwrap();
     let names = sys.channel_names();
@@ -646,12 +648,12 @@ fn bad_stretch_bounds_and_servo_gains_are_bad_input() {
     );
     bad(
         &servo(&k.replace("200.0", "-1.0"), d),
-        "model.arm_servo.stiffness",
+        "model.arm_servo.stiffness[2]",
         "stiffness =",
     );
     bad(
         &servo(k, &d.replace("25.0", "-25.0")),
-        "model.arm_servo.damping",
+        "model.arm_servo.damping[2]",
         "damping =",
     );
 }
@@ -783,6 +785,8 @@ fn impedance_servos_hold_the_arm_against_gravity() {
             obstacles: &[],
             beam: None,
             arm,
+            arm_max_torque: None,
+            wrist: Default::default(),
         };
         let mut sys = MobileManipulatorPhysics::new(&robot, &path, &settings, &setup).unwrap();
         let zero = anholonomy::model::Input::zeros(8);

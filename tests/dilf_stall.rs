@@ -365,7 +365,7 @@ fn random_door_tasks_converge_or_stall_early() {
     );
 }
 
-/// `dilf_pair_open`'s ideal run: both platforms come within the position
+/// `dilf_pair_open_printed`'s ideal run (the printed bound, rigid grasps): both platforms come within the position
 /// tolerance (2 cm) but not within half of it, where the alignment starts,
 /// and Eq. 18's hold branch turns them there without raising V. With the
 /// hand-over (no progress for `handover_time`: align) the pair converges;
@@ -373,7 +373,7 @@ fn random_door_tasks_converge_or_stall_early() {
 /// 40 s horizon, its headings drifting further off.
 #[test]
 fn the_pair_is_handed_over_to_the_alignment_within_the_tolerance() {
-    let text = std::fs::read_to_string(scenario("dilf_pair_open.toml"))
+    let text = std::fs::read_to_string(scenario("dilf_pair_open_printed.toml"))
         .unwrap()
         .replace(
             "../models/",

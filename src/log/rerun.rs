@@ -705,11 +705,25 @@ fn blueprint(rec: &RunRecord<'_>) -> (Blueprint, Vec<Property>) {
         lower.push(Grid::new(channel_views).with_name("sim channels").into());
     }
     if !rec.series.is_empty() {
-        lower.push(
-            TimeSeriesView::new("analysis")
-                .with_origin("/analysis")
-                .into(),
-        );
+        // One plot per group (the first path component: `V`, `grasp_force`,
+        // ...), so a quantity shares its axis with its bound, not with
+        // quantities of other units.
+        let mut groups: Vec<&str> = Vec::new();
+        for s in rec.series.iter() {
+            let g = s.name.split('/').find(|p| !p.is_empty()).unwrap_or("");
+            if !groups.contains(&g) {
+                groups.push(g);
+            }
+        }
+        let views: Vec<ContainerLike> = groups
+            .iter()
+            .map(|g| {
+                TimeSeriesView::new(*g)
+                    .with_origin(ep(&["analysis", g]).to_string())
+                    .into()
+            })
+            .collect();
+        lower.push(Grid::new(views).with_name("analysis").into());
     }
     lower.push(TextLogView::new("segments").with_origin("/segment").into());
 

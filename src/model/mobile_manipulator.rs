@@ -344,6 +344,111 @@ pub fn default_parts() -> Vec<Part> {
     ]
 }
 
+/// The passive wrist between a robot's flange and its gripper (ours; seed
+/// 004 grasps rigidly).
+///
+/// A compliant wrist is a six-axis spring–damper whose centre of compliance
+/// is the grasp point ([`GRASP_OFFSET`] on the tool's z axis), its axes the
+/// tool frame's: a remote-centre-compliance device, so a force at the grasp
+/// translates the gripper without turning it and a moment turns it about
+/// the grasp point. Each axis has its own stiffness, damping and travel (a
+/// hard stop at ± travel).
+#[derive(Debug, Clone, Copy, PartialEq, Default)]
+pub enum Wrist {
+    /// The gripper is fixed to the flange (the paper's rigid grasp).
+    #[default]
+    Rigid,
+    /// A spring–damper per axis ([`CompliantWrist`]).
+    Compliant(CompliantWrist),
+}
+
+/// Per-axis spring, damper and travel of a compliant [`Wrist`], in the tool
+/// frame at the grasp point: translations x, y, z (N/m, N s/m, m), then
+/// rotations about x, y, z (N m/rad, N m s/rad, rad).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CompliantWrist {
+    /// Stiffness per axis (> 0).
+    pub stiffness: [f64; 6],
+    /// Damping per axis (≥ 0).
+    pub damping: [f64; 6],
+    /// Travel per axis, each way (> 0).
+    pub travel: [f64; 6],
+}
+
+impl CompliantWrist {
+    /// The wrench (force, moment about the grasp point; tool axes) the
+    /// spring–damper exerts on the gripper at deflection `x` (the gripper's
+    /// translation and small rotation from the flange's rest pose, tool axes)
+    /// and deflection rate `v`: −K x − D v per axis (the closed form the
+    /// physics joint reproduces).
+    pub fn wrench(&self, x: [f64; 6], v: [f64; 6]) -> [f64; 6] {
+        std::array::from_fn(|i| -self.stiffness[i] * x[i] - self.damping[i] * v[i])
+    }
+
+    /// The 6 × 6 stiffness (translations, then rotations, about the grasp
+    /// point) in the axes of a frame whose axes, in tool coordinates, are
+    /// the columns of `r`: Rᵀ K R per 3 × 3 block.
+    pub fn stiffness_in(&self, r: &spatial::M3<f64>) -> nalgebra::SMatrix<f64, 6, 6> {
+        let r = nalgebra::Matrix3::from_fn(|i, j| r[i][j]);
+        let block = |k: &[f64]| {
+            r.transpose()
+                * nalgebra::Matrix3::from_diagonal(&nalgebra::Vector3::from_column_slice(k))
+                * r
+        };
+        let mut m = nalgebra::SMatrix::<f64, 6, 6>::zeros();
+        m.fixed_view_mut::<3, 3>(0, 0)
+            .copy_from(&block(&self.stiffness[..3]));
+        m.fixed_view_mut::<3, 3>(3, 3)
+            .copy_from(&block(&self.stiffness[3..]));
+        m
+    }
+
+    /// Why the wrist is unusable, if it is: `(field, message)`.
+    pub fn validate(&self) -> Result<(), (&'static str, String)> {
+        let ok = |v: &[f64; 6], zero: bool| {
+            v.iter()
+                .all(|x| x.is_finite() && (*x > 0.0 || zero && *x == 0.0))
+        };
+        if !ok(&self.stiffness, false) {
+            return Err((
+                "stiffness",
+                format!(
+                    "every axis must be > 0 (N/m, N m/rad), got {:?}",
+                    self.stiffness
+                ),
+            ));
+        }
+        if !ok(&self.damping, true) {
+            return Err((
+                "damping",
+                format!(
+                    "every axis must be ≥ 0 (N s/m, N m s/rad), got {:?}",
+                    self.damping
+                ),
+            ));
+        }
+        if !ok(&self.travel, false) {
+            return Err((
+                "travel",
+                format!("every axis must be > 0 (m, rad), got {:?}", self.travel),
+            ));
+        }
+        if self.travel[3..]
+            .iter()
+            .any(|t| *t >= std::f64::consts::FRAC_PI_2)
+        {
+            return Err((
+                "travel",
+                format!(
+                    "rotational travel must be below 90° (rad), got {:?}",
+                    &self.travel[3..]
+                ),
+            ));
+        }
+        Ok(())
+    }
+}
+
 /// World poses of one robot's bodies.
 #[derive(Debug, Clone, Copy)]
 pub struct RobotFrames<T: Scalar> {

@@ -127,6 +127,13 @@ pub const INERTIA: [LinkInertia; 6] = [
     },
 ];
 
+/// Largest torque of each joint, N m: the PUMA 560's maximum joint torques
+/// as tabulated with Corke's Robotics Toolbox model (`mdl_puma560`) in
+/// robotics course material, next to the arm's joint speed limits (8, 10,
+/// 10, 5, 5, 5) rad/s and breakaway friction torques (6.3, 5.5, 2.6, 1.3,
+/// 1.0, 1.2) N m. The wrist joints (4–6) hold about a tenth of the shoulder.
+pub const MAX_TORQUE: [f64; 6] = [97.6, 186.4, 89.4, 24.2, 20.1, 21.3];
+
 /// The constant part Tz(d) Tx(a) Rx(α) of row `i`.
 pub fn row_offset<T: Scalar>(i: usize) -> Pose<T> {
     let r = DH[i];

@@ -54,6 +54,12 @@ pub trait PhysicsSystem {
     fn channels(&self) -> Vec<f64> {
         Vec::new()
     }
+    /// What a feedback law may measure besides the model coordinates
+    /// (handed to [`crate::plan::Controller::command_measured`] at every
+    /// policy sample), or `None`.
+    fn measurement(&self) -> Option<Vec<f64>> {
+        None
+    }
 }
 
 /// What [`replay_with`] records besides states, commands and channels.
@@ -181,7 +187,14 @@ pub fn replay_perturbed(
     let hold = plan.hold_period();
     let mut clock = hold.map(|p| crate::integrate::SampleClock::new(p, dt));
     let q0 = sys.state();
-    let mut held = ctl.command(0.0, &q0);
+    let sample = |ctl: &mut Box<dyn crate::plan::Controller>,
+                  sys: &dyn PhysicsSystem,
+                  t: f64,
+                  q: &State| match sys.measurement() {
+        Some(m) => ctl.command_measured(t, q, &m),
+        None => ctl.command(t, q),
+    };
+    let mut held = sample(&mut ctl, sys, 0.0, &q0);
     if let Some(fault) = ctl.fault() {
         return Err(ReplayError::Law(fault));
     }
@@ -216,7 +229,7 @@ pub fn replay_perturbed(
                         held = if reality.observes() {
                             ctl.command(t, &reality.observe(&out.traj.q, k))
                         } else {
-                            ctl.command(t, q)
+                            sample(&mut ctl, sys, t, q)
                         };
                         if let Some(fault) = ctl.fault() {
                             return Err(ReplayError::Law(fault));

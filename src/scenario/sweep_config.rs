@@ -56,6 +56,11 @@ pub struct SweepConfig {
     #[serde(default)]
     #[schemars(range(min = 0, max = 1))]
     pub min_success_rate: f64,
+    /// A variant succeeds only if it also passes every `[thresholds]` and
+    /// `[minimums]` gate of the scenario (for verdicts made of several
+    /// criteria: position, heading, contacts, tilt, ...).
+    #[serde(default)]
+    pub success_requires_gates: bool,
 }
 
 /// How a swept key's value is chosen for each variant.
@@ -321,6 +326,7 @@ mod tests {
             success_max: 1.0,
             time_metric: Some("t".into()),
             min_success_rate: 0.0,
+            success_requires_gates: false,
         }
     }
 

@@ -173,7 +173,8 @@ fn run_variant(prep: &Prepared, cfg: &SweepConfig, v: &Variant, cancel: &Cancel)
             let final_error = finite(o.metric(&cfg.success_metric));
             Record {
                 variant: v,
-                success: final_error.is_some_and(|e| e <= cfg.success_max),
+                success: final_error.is_some_and(|e| e <= cfg.success_max)
+                    && (o.passed || !cfg.success_requires_gates),
                 final_error,
                 time_to_goal: cfg.time_metric.as_ref().and_then(|m| finite(o.metric(m))),
                 steps: o.steps,

@@ -136,6 +136,7 @@ pub fn no_line(file: &str) -> Shape {
     }
 }
 
+mod dilf;
 mod files;
 mod own_plan;
 mod runaway;
@@ -145,6 +146,7 @@ mod tables;
 pub fn corpus() -> Vec<Case> {
     let mut c = Corpus(Vec::new());
     tables::cases(&mut c);
+    dilf::cases(&mut c);
     files::cases(&mut c);
     own_plan::cases(&mut c);
     runaway::cases(&mut c);

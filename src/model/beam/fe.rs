@@ -154,12 +154,17 @@ impl FeBeam {
     /// (clamped) in the end-0 frame: origin on the centreline, x axis along
     /// the unit tangent, turned about it by the interpolated twist.
     pub fn centerline<T: Scalar>(&self, q_f: &[T; 12], s: f64) -> Pose<T> {
+        self.centerline_of_nodes(&Self::nodal_displacements(q_f), s)
+    }
+
+    /// As [`FeBeam::centerline`], from the three nodes' displacements (node
+    /// 0 need not be clamped: a compliant wrist moves it).
+    pub fn centerline_of_nodes<T: Scalar>(&self, nodes: &[[T; 6]; 3], s: f64) -> Pose<T> {
         let l = self.beam.length;
         let le = l / 2.0;
         let s = s.clamp(0.0, l);
         let e = usize::from(s > le);
         let xi = (s - e as f64 * le) / le;
-        let nodes = Self::nodal_displacements(q_f);
         let (a, b) = (&nodes[e], &nodes[e + 1]);
         // Hermite shape functions and their x-derivatives.
         let (x2, x3) = (xi * xi, xi * xi * xi);

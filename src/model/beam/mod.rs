@@ -20,9 +20,11 @@ pub mod fe;
 #[cfg(test)]
 mod fe_tests;
 pub mod se3;
+pub mod statics;
 
 pub use fe::FeBeam;
 pub use se3::{se3_exp, se3_log};
+pub use statics::{GraspStatics, WristStiffness};
 
 use serde::{Deserialize, Serialize};
 

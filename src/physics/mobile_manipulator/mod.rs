@@ -31,6 +31,8 @@
 
 mod carried;
 mod urdf;
+#[cfg(test)]
+mod wrist_tests;
 
 pub use carried::{link_visuals, robot_link_name, CarriedBeam};
 pub use urdf::urdf;
@@ -44,7 +46,8 @@ use super::urdf::{RobotHandles, SimWorld};
 use super::{angles, PhysicsSystem};
 use crate::model::ellipsoid::Superellipsoid;
 use crate::model::mobile_manipulator::{
-    self as mm, Link, DOF, HALF_TRACK, INPUTS, MOUNT, WHEEL_RADIUS,
+    self as mm, CompliantWrist, Link, Wrist, DOF, GRASP_OFFSET, HALF_TRACK, INPUTS, MOUNT,
+    WHEEL_RADIUS,
 };
 use crate::model::puma560;
 use crate::model::{Input, State};
@@ -141,6 +144,8 @@ struct RobotBodies {
     arm: [RigidBodyHandle; 6],
     arm_joints: [ImpulseJointHandle; 6],
     tool: RigidBodyHandle,
+    /// The joint between the flange (link 6) and the gripper.
+    tool_joint: ImpulseJointHandle,
     /// Every collider of the robot, and those that roll on the ground
     /// (wheels and casters: their ground contacts are not collisions).
     colliders: Vec<ColliderHandle>,
@@ -173,6 +178,9 @@ pub struct MobileManipulatorPhysics {
     dt: f64,
     last_u: Input,
     arm_servo: ArmServo,
+    /// Per-joint torque limits of the arm servos, N m.
+    arm_max_torque: [f64; 6],
+    wrist: Wrist,
 }
 
 /// How the arm joints execute their rate commands.
@@ -207,6 +215,11 @@ pub struct Setup<'a> {
     pub beam: Option<&'a CarriedBeam>,
     /// The arms' joint servos.
     pub arm: ArmServo,
+    /// Per-joint torque limits of the arms' servos, N m (`None`: the
+    /// settings' `motor_max_torque` for every joint).
+    pub arm_max_torque: Option<[f64; 6]>,
+    /// The wrists between flanges and grippers.
+    pub wrist: Wrist,
 }
 
 /// Check the URDF's arm joints against the DH table the planner uses.
@@ -284,6 +297,28 @@ impl MobileManipulatorPhysics {
                 }
             }
         }
+        if let Wrist::Compliant(w) = setup.wrist {
+            for rb in &robots {
+                let j = sw
+                    .world
+                    .impulse_joints
+                    .get_mut(rb.tool_joint, true)
+                    .ok_or("mobile manipulator physics: tool_joint missing")?;
+                j.data = compliant_wrist_joint(&w);
+            }
+            if let Some(spec) = setup.beam {
+                // The URDF's gripper inertial (Rapier's body mass is only
+                // known after a step).
+                let tool = robot
+                    .links
+                    .iter()
+                    .find(|l| l.name == "tool")
+                    .ok_or("URDF has no link `tool`")?;
+                let i = &tool.inertial;
+                let gripper = (i.mass.value, i.origin.xyz.0);
+                settle_wrists(&mut sw.world, &robots, &w, spec, gripper)?;
+            }
+        }
         // Collision groups: each robot against the ground, the obstacles and
         // the other robot; the platform boxes also against the beam.
         for (r, rb) in robots.iter().enumerate() {
@@ -353,6 +388,8 @@ impl MobileManipulatorPhysics {
             dt: sim.dt,
             last_u: Input::zeros(INPUTS * k),
             arm_servo: setup.arm,
+            arm_max_torque: setup.arm_max_torque.unwrap_or([sim.motor_max_torque; 6]),
+            wrist: setup.wrist,
         };
         if let ArmServo::Impedance { .. } = setup.arm {
             for r in 0..me.robots.len() {
@@ -465,6 +502,10 @@ impl MobileManipulatorPhysics {
     }
 }
 
+fn norm3(v: &[f64]) -> f64 {
+    v.iter().map(|x| x * x).sum::<f64>().sqrt()
+}
+
 /// Colliders with their current world AABBs.
 fn with_aabbs(
     cs: &ColliderSet,
@@ -522,6 +563,7 @@ fn place_robot(sw: &mut SimWorld, h: &RobotHandles, q: &[f64]) -> Result<RobotBo
     }
     let tool = h.require_link("tool")?;
     sw.world.bodies[tool].set_position(rl::from_spatial(&frames.tool), true);
+    let tool_joint = h.require_joint("tool_joint")?;
     let mut rolling = Vec::new();
     for name in CASTERS {
         let b = h.require_link(name)?;
@@ -543,6 +585,7 @@ fn place_robot(sw: &mut SimWorld, h: &RobotHandles, q: &[f64]) -> Result<RobotBo
         arm,
         arm_joints,
         tool,
+        tool_joint,
         colliders: h.colliders.clone(),
         rolling,
         links: h.links.clone(),
@@ -550,6 +593,104 @@ fn place_robot(sw: &mut SimWorld, h: &RobotHandles, q: &[f64]) -> Result<RobotBo
         q: std::array::from_fn(|i| q[3 + i]),
         q_ref: std::array::from_fn(|i| q[3 + i]),
     })
+}
+
+/// The grasp frame on the flange and on the gripper: the tool frame
+/// moved to the grasp point (the URDF's `tool_joint` has the identity origin).
+fn grasp_frame() -> super::rapier::math::Pose {
+    super::rapier::math::Pose::from_translation(vector(0.0, 0.0, GRASP_OFFSET))
+}
+
+/// Channels of compliant wrists (after the pair's): each wrist's deflection,
+/// translation (m) and rotation (rad) of the gripper's grasp frame against
+/// the flange's, and their largest share of the travel on any axis.
+pub const WRIST_CHANNELS: [&str; 6] = [
+    "wrist1_deflection",
+    "wrist1_rotation",
+    "wrist1_travel_used",
+    "wrist2_deflection",
+    "wrist2_rotation",
+    "wrist2_travel_used",
+];
+
+/// The compliant wrist as an impulse joint between link 6 (the flange) and
+/// the gripper: all six axes free, each with a force-based spring–damper
+/// (Rapier integrates its motors implicitly) towards zero and a hard stop at
+/// ± travel, about the grasp point in the tool's axes (the model's
+/// [`CompliantWrist`]).
+fn compliant_wrist_joint(w: &CompliantWrist) -> GenericJoint {
+    let mut j = GenericJoint::new(JointAxesMask::empty());
+    j.set_local_frame1(grasp_frame())
+        .set_local_frame2(grasp_frame())
+        .set_contacts_enabled(false);
+    let axes = [
+        JointAxis::LinX,
+        JointAxis::LinY,
+        JointAxis::LinZ,
+        JointAxis::AngX,
+        JointAxis::AngY,
+        JointAxis::AngZ,
+    ];
+    for (i, axis) in axes.into_iter().enumerate() {
+        j.set_motor_model(axis, MotorModel::ForceBased)
+            .set_motor(axis, 0.0, 0.0, rl::r(w.stiffness[i]), rl::r(w.damping[i]))
+            .set_limits(axis, [rl::r(-w.travel[i]), rl::r(w.travel[i])]);
+    }
+    j
+}
+
+/// Put each gripper where its compliant wrist holds it at rest under the
+/// gripper's weight (`m`, centre of mass `com` in the tool frame) and its share of the beam's (the carried chain's statics
+/// at the start, see `model::beam::statics`), so the replay does not start
+/// with the grippers dropping into their springs.
+fn settle_wrists(
+    world: &mut PhysicsWorld,
+    robots: &[RobotBodies],
+    w: &CompliantWrist,
+    spec: &CarriedBeam,
+    (m, com): (f64, [f64; 3]),
+) -> Result<(), String> {
+    use crate::model::beam::{FeBeam, GraspStatics};
+    use crate::model::spatial::{self, Pose as SPose};
+    let fe = FeBeam::new(&spec.beam)?;
+    let k = spec.grasp.map(|g| w.stiffness_in(&g.r));
+    let statics = GraspStatics::new(&fe, [Some(k[0]), Some(k[1])])?;
+    let flange =
+        |world: &PhysicsWorld, r: &RobotBodies| rl::to_spatial(world.bodies[r.arm[5]].position());
+    let gw = world.gravity;
+    let g = [f(gw.x), f(gw.y), f(gw.z)];
+    let end0 = flange(world, &robots[0]).then(&spec.grasp[0]);
+    let on_beam = statics.wrenches(&[0.0; 6], &spatial::mul_mtv(&end0.r, g));
+    for (r, rb) in robots.iter().enumerate() {
+        let tool = flange(world, rb);
+        // On the gripper, tool axes, about the grasp point: the beam's
+        // reaction (end axes → tool axes by the grasp offset) and its weight.
+        let rot = &spec.grasp[r].r;
+        let wr = &on_beam[r];
+        let fb = spatial::mul_mv(rot, [-wr[0], -wr[1], -wr[2]]);
+        let mb = spatial::mul_mv(rot, [-wr[3], -wr[4], -wr[5]]);
+        let fg = spatial::scale(spatial::mul_mtv(&tool.r, g), m);
+        let mg = spatial::cross(spatial::sub(com, [0.0, 0.0, GRASP_OFFSET]), fg);
+        let load = [
+            fb[0] + fg[0],
+            fb[1] + fg[1],
+            fb[2] + fg[2],
+            mb[0] + mg[0],
+            mb[1] + mg[1],
+            mb[2] + mg[2],
+        ];
+        let d: [f64; 6] =
+            std::array::from_fn(|i| (load[i] / w.stiffness[i]).clamp(-w.travel[i], w.travel[i]));
+        let grasp = SPose::translation([0.0, 0.0, GRASP_OFFSET]);
+        let rvec = [d[3], d[4], d[5]];
+        let deflect = SPose {
+            r: crate::model::beam::se3_exp(&[0.0, 0.0, 0.0, rvec[0], rvec[1], rvec[2]]).r,
+            p: [d[0], d[1], d[2]],
+        };
+        let pose = tool.then(&grasp).then(&deflect).then(&grasp.inverse());
+        world.bodies[rb.tool].set_position(rl::from_spatial(&pose), true);
+    }
+    Ok(())
 }
 
 /// Whether collider `c` is a platform box: a cuboid on the base body.
@@ -607,7 +748,7 @@ impl PhysicsSystem for MobileManipulatorPhysics {
                             rl::r(stiff),
                             rl::r(damp),
                         )
-                        .set_motor_max_force(JointAxis::AngX, rl::r(tmax));
+                        .set_motor_max_force(JointAxis::AngX, rl::r(self.arm_max_torque[a]));
                 }
             }
         }
@@ -678,7 +819,27 @@ impl PhysicsSystem for MobileManipulatorPhysics {
                 .flatten()
                 .map(String::from),
         )
+        .chain(
+            matches!(self.wrist, Wrist::Compliant(_))
+                .then_some(WRIST_CHANNELS)
+                .into_iter()
+                .flatten()
+                .map(String::from),
+        )
         .collect()
+    }
+
+    /// Each flange's world pose (link 6, the frame the wrist hangs from):
+    /// position then rotation matrix row by row, 12 numbers per robot.
+    fn measurement(&self) -> Option<Vec<f64>> {
+        let b = &self.sim.world.bodies;
+        let mut out = Vec::with_capacity(12 * self.robots.len());
+        for r in &self.robots {
+            let p = rl::to_spatial(b[r.arm[5]].position());
+            out.extend(p.p);
+            out.extend(p.r.iter().flatten());
+        }
+        Some(out)
     }
 
     fn channels(&self) -> Vec<f64> {
@@ -706,6 +867,11 @@ impl PhysicsSystem for MobileManipulatorPhysics {
             ]);
             if let Some(b) = &self.beam {
                 out.extend(b.channels(&self.sim.world));
+            }
+        }
+        if let Wrist::Compliant(w) = self.wrist {
+            for r in &self.robots {
+                out.extend(self.wrist_deflection(r, &w));
             }
         }
         out
@@ -779,6 +945,22 @@ impl MobileManipulatorPhysics {
                 bodies[parent].add_torque(-torque[k], true);
             }
         }
+    }
+
+    /// A compliant wrist's deflection: |translation| (m) and rotation angle
+    /// (rad) of the gripper's grasp frame in the flange's, and the largest
+    /// |deflection| / travel over the six axes.
+    fn wrist_deflection(&self, r: &RobotBodies, w: &CompliantWrist) -> [f64; 3] {
+        let b = &self.sim.world.bodies;
+        let g = grasp_frame();
+        let rel = (*b[r.arm[5]].position() * g).inverse() * (*b[r.tool].position() * g);
+        let t = rel.translation;
+        let rot = rel.rotation.to_scaled_axis();
+        let axes = [t.x, t.y, t.z, rot.x, rot.y, rot.z].map(f);
+        let used = (0..6)
+            .map(|i| axes[i].abs() / w.travel[i])
+            .fold(0.0, f64::max);
+        [norm3(&axes[..3]), norm3(&axes[3..]), used]
     }
 
     /// Largest |measured − commanded| joint rate of robot `k`, rad/s.

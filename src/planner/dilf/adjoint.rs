@@ -28,7 +28,9 @@
 use super::contact::{Contact, ContactError};
 use super::object::{BeamState, Carried};
 use super::point_world::{switch_exponent, switch_log};
-use super::potential::{placed_generic, DipoleProduct, Evaluation, GoalFrame, Scene, Warm};
+use super::potential::{
+    placed_generic, DipoleProduct, Evaluation, GoalFrame, GraspCorrection, Scene, Warm,
+};
 use crate::model::ellipsoid::PlacedEllipsoid;
 use crate::model::mobile_manipulator::{self as mm, Link, Part, RobotFrames, DOF};
 use crate::model::spatial::{self, Pose, M3, V3};
@@ -38,6 +40,8 @@ use num_dual::DualSVec64;
 type D12 = DualSVec64<12>;
 /// Derivatives with respect to one arm's six joints.
 type D6 = DualSVec64<6>;
+/// Derivatives with respect to the beam's q_f and gravity in its end-0 frame.
+type D15 = DualSVec64<15>;
 
 /// One shape of a contact pair.
 #[derive(Debug, Clone, Copy)]
@@ -209,11 +213,14 @@ fn moved_frame(p: &Pose<f64>, off: usize) -> Pose<D12> {
 
 /// Wrenches (force, moment about the origin) on the two robots' tool frames
 /// from the beam segments' adjoints and ∂V/∂ln b_f (`ln_bar`). The segments
-/// are end0 ∘ (their frame in end 0, a function of q_f): they move rigidly
-/// with end 0, i.e. with robot 1's tool, and deform with q_f, which depends
-/// on both tools. The first part is a plain wrench; the second is ∂/∂q_f in
-/// dual numbers over q_f, chained through q_f's derivatives over rigid
-/// motions of the tools (12-wide, but only the FE map, not the segments).
+/// are end0 ∘ (their frame in end 0, a function of q_f and of gravity in
+/// the end-0 frame g): they move rigidly with end 0, i.e. with robot 1's
+/// tool, and deform with (q_f, g), which depend on both tools. The first
+/// part is a plain wrench; the second is ∂/∂(q_f, g) in dual numbers over
+/// those 15, chained through their derivatives over rigid motions of the
+/// tools (12-wide, but only the FE map, not the segments). With the printed
+/// bound and rigid wrists nothing depends on g directly, and its three
+/// adjoints are zero.
 fn beam_wrenches(
     o: &Carried,
     st: &BeamState<f64>,
@@ -222,9 +229,10 @@ fn beam_wrenches(
     seg_bar: &[(V3<f64>, M3<f64>)],
     ln_bar: f64,
 ) -> [(V3<f64>, V3<f64>); 2] {
-    let q_f: [D12; 12] = std::array::from_fn(|i| D12::from_re(st.q_f[i]).derivative(i));
-    let mut a = [0.0; 12];
-    if let Some(l) = o.ln_admissible(&q_f) {
+    let q_f: [D15; 12] = std::array::from_fn(|i| D15::from_re(st.q_f[i]).derivative(i));
+    let grav: [D15; 3] = std::array::from_fn(|i| D15::from_re(st.gravity[i]).derivative(12 + i));
+    let mut a = [0.0; 15];
+    if let Some(l) = o.ln_admissible(&q_f, &grav) {
         add_eps(&mut a, &l, ln_bar);
     }
     let r0 = &st.end0.r;
@@ -241,7 +249,7 @@ fn beam_wrenches(
         f = spatial::add(f, *cb);
         m = spatial::add(m, spatial::add(spatial::cross(e.center, *cb), tau));
         // Deformation: the adjoints in end-0 coordinates, R₀ᵀ c̄ and R₀ᵀ R̄.
-        let frame = o.segment_frame(&q_f, j);
+        let frame = o.segment_frame(&q_f, &grav, j);
         let cl = spatial::mul_mtv(r0, *cb);
         for (x, w) in frame.p.iter().zip(cl) {
             add_eps(&mut a, x, w);
@@ -257,6 +265,11 @@ fn beam_wrenches(
     let mut g = [0.0; 12];
     for (x, w) in moved_st.q_f.iter().zip(a) {
         add_eps(&mut g, x, w);
+    }
+    if a[12..].iter().any(|w| *w != 0.0) {
+        for (x, w) in moved_st.gravity.iter().zip(&a[12..]) {
+            add_eps(&mut g, x, *w);
+        }
     }
     [
         (
@@ -281,6 +294,17 @@ impl Scene {
         q: &[f64],
         warm: &mut Warm,
     ) -> Result<(Evaluation<f64>, Vec<f64>), ContactError> {
+        self.field_with(q, None, warm)
+    }
+
+    /// As [`Scene::field`], with the beam at the measured flanges
+    /// ([`GraspCorrection`]).
+    pub fn field_with(
+        &self,
+        q: &[f64],
+        measured: Option<&GraspCorrection>,
+        warm: &mut Warm,
+    ) -> Result<(Evaluation<f64>, Vec<f64>), ContactError> {
         let Warm { slots, scratch: s } = warm;
         let (n, k) = (self.parts.len(), self.robots);
         s.frames.clear();
@@ -296,13 +320,18 @@ impl Scene {
         }
         // The beam (its derivatives come in the reverse pass).
         s.segs.clear();
+        let tools = match (measured, self.object.is_some()) {
+            (Some(c), true) => [s.frames[0].tool.then(&c[0]), s.frames[1].tool.then(&c[1])],
+            (_, true) => [s.frames[0].tool, s.frames[1].tool],
+            _ => [Pose::identity(); 2],
+        };
         let beam = self.object.as_ref().map(|o| {
-            let st = o.state_from_tools(&s.frames[0].tool, &s.frames[1].tool);
+            let st = o.state_from_tools(&tools[0], &tools[1]);
             s.segs.extend((0..o.segments).map(|j| o.segment(&st, j)));
             (
-                o.ln_admissible(&st.q_f),
+                o.ln_admissible(&st.q_f, &st.gravity),
                 st.max_deformation(),
-                o.margin(&st.q_f),
+                o.margin(&st.q_f, &st.gravity),
                 st,
             )
         });
@@ -589,8 +618,7 @@ impl Scene {
             sink.force(Side::Segment(j), spatial::scale(g, -beta_bar * mu), x);
         }
         if let (Some(o), Some(st)) = (&self.object, &beam) {
-            let tools = [&s.frames[0].tool, &s.frames[1].tool];
-            let w = beam_wrenches(o, st, tools, &s.segs, &s.seg_bar, ln_bar);
+            let w = beam_wrenches(o, st, [&tools[0], &tools[1]], &s.segs, &s.seg_bar, ln_bar);
             for (r, (f, m)) in w.into_iter().enumerate() {
                 let t = &mut s.wrench[r][6];
                 t.0 = spatial::add(t.0, f);

@@ -23,7 +23,7 @@
 //! so the halving ends.
 
 use super::contact::ContactError;
-use super::potential::{Evaluation, Scene, Warm};
+use super::potential::{Evaluation, GraspCorrection, Scene, Warm};
 use crate::model::mobile_manipulator::{DOF, INPUTS};
 
 /// Each barrier may lose at most this fraction of its value over one hold.
@@ -52,9 +52,17 @@ impl Barriers {
         }
     }
 
-    /// The barriers at `q` (f64 evaluation of V's terms).
-    pub fn at(scene: &Scene, q: &[f64], warm: &mut Warm) -> Result<Barriers, ContactError> {
-        Ok(Barriers::of(&scene.evaluate::<f64>(q, warm)?))
+    /// The barriers at `q` (f64 evaluation of V's terms; the beam at the
+    /// measured flanges when given).
+    pub fn at(
+        scene: &Scene,
+        q: &[f64],
+        measured: Option<&GraspCorrection>,
+        warm: &mut Warm,
+    ) -> Result<Barriers, ContactError> {
+        Ok(Barriers::of(
+            &scene.evaluate_with::<f64>(q, measured, warm)?,
+        ))
     }
 
     /// Whether `next` keeps every barrier of `self` at least at [`KEEP`] of its value.
@@ -100,13 +108,14 @@ pub fn predict(q: &[f64], u: &[f64], t: f64) -> Vec<f64> {
 pub fn guard(
     scene: &Scene,
     q: &[f64],
+    measured: Option<&GraspCorrection>,
     now: &Barriers,
     u: &mut [f64],
     period: f64,
     warm: &mut Warm,
 ) -> u32 {
     for k in 0..=MAX_HALVINGS {
-        let next = Barriers::at(scene, &predict(q, u, period), warm);
+        let next = Barriers::at(scene, &predict(q, u, period), measured, warm);
         if next.is_ok_and(|b| now.kept_by(&b)) {
             return k;
         }

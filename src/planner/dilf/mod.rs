@@ -24,12 +24,12 @@ pub mod point_world;
 pub mod potential;
 pub mod stall;
 
-use crate::model::mobile_manipulator::{DOF, INPUTS};
+use crate::model::mobile_manipulator::{self as mm, DOF, INPUTS};
 use crate::model::{Input, State};
 use crate::plan::{Command, ControlLaw, Controller, Plan, PolicyFactory};
 use crate::planner::{check_param, PlanError};
 use control::{Branch, Gains};
-use potential::{DipoleProduct, GoalFrame, Scene, SingularityEnclosure, Warm};
+use potential::{DipoleProduct, GoalFrame, GraspCorrection, Scene, SingularityEnclosure, Warm};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use stall::{Progress, StallParams, Verdict};
@@ -154,6 +154,23 @@ pub struct DilfParams {
     /// alignment ([`stall`]).
     #[serde(default)]
     pub stall: StallParams,
+    /// Where the law reads a carried beam's grasps in the physics replay
+    /// ([`Grasps`]).
+    #[serde(default)]
+    pub grasps: Grasps,
+}
+
+/// Where the law reads the flanges that hold a beam (its q_f, its
+/// ellipsoids, the grasp wrench) in the physics replay.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Grasps {
+    /// From the planar state through the kinematic model (as in the ideal run).
+    #[default]
+    Model,
+    /// From the simulated 3D flange poses (ours): a tipped platform or an
+    /// arm pulled off its servo reference moves them, the planar state not.
+    Measured,
 }
 
 fn default_hold_guard() -> bool {
@@ -312,6 +329,7 @@ struct Policy {
     period: f64,
     hold_guard: bool,
     stall: StallParams,
+    grasps: Grasps,
 }
 
 struct DilfController {
@@ -367,6 +385,35 @@ impl DilfController {
 
 impl Controller for DilfController {
     fn command(&mut self, t: f64, q: &State) -> Command {
+        self.decide(t, q.as_slice(), None)
+    }
+
+    /// With `grasps = "measured"` and a carried beam, the flanges' 3D poses
+    /// (12 numbers per robot: position, rotation row by row) replace the
+    /// kinematic ones for the beam ([`GraspCorrection`]).
+    fn command_measured(&mut self, t: f64, q: &State, measured: &[f64]) -> Command {
+        let q = q.as_slice();
+        let p = &self.policy;
+        if p.grasps != Grasps::Measured || p.scene.object.is_none() || measured.len() < 24 {
+            return self.decide(t, q, None);
+        }
+        let corr: GraspCorrection = std::array::from_fn(|r| {
+            let m = &measured[12 * r..12 * (r + 1)];
+            let flange = crate::model::spatial::Pose {
+                p: [m[0], m[1], m[2]],
+                r: std::array::from_fn(|i| std::array::from_fn(|j| m[3 + 3 * i + j])),
+            };
+            mm::frames::<f64>(&q[DOF * r..DOF * (r + 1)])
+                .tool
+                .inverse()
+                .then(&flange)
+        });
+        self.decide(t, q, Some(&corr))
+    }
+}
+
+impl DilfController {
+    fn decide(&mut self, t: f64, q: &[f64], measured: Option<&GraspCorrection>) -> Command {
         let p = &self.policy;
         let robots = p.scene.robots;
         let stop = |label: usize| Command {
@@ -374,12 +421,11 @@ impl Controller for DilfController {
             label,
             done: true,
         };
-        let q = q.as_slice();
         let done = 2 * self.combos;
         if p.tolerance.reached(q, &p.scene.goal) {
             return stop(done);
         }
-        let (e, f) = match p.scene.field(q, &mut self.warm) {
+        let (e, f) = match p.scene.field_with(q, measured, &mut self.warm) {
             Ok(x) => x,
             Err(_) => return stop(done + 3),
         };
@@ -408,7 +454,8 @@ impl Controller for DilfController {
             .sum();
         if p.hold_guard {
             let now = guard::Barriers::of(&e);
-            if guard::guard(&p.scene, q, &now, &mut u, p.period, &mut self.guard_warm) > 0 {
+            let warm = &mut self.guard_warm;
+            if guard::guard(&p.scene, q, measured, &now, &mut u, p.period, warm) > 0 {
                 label += self.combos;
             }
         }
@@ -461,14 +508,27 @@ pub fn check_configuration(scene: &Scene, q: &[f64], what: &str) -> Result<(), P
         ));
     }
     if let (true, Some(o)) = (e.overstrained(), &scene.object) {
+        let st = o.state::<f64>(q);
         let stretch = o.max_stretch.map_or(String::new(), |eps| {
-            let q_f = o.state::<f64>(q).q_f;
-            format!(", stretch {:.4} m against max_stretch = {eps}", q_f[0])
+            format!(", stretch {:.4} m against max_stretch = {eps}", st.q_f[0])
         });
+        let bound = match (o.bound, o.wrenches(&st.q_f, &st.gravity)) {
+            (object::Bound::Wrench { force, moment }, Some(w)) => {
+                let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
+                format!(
+                    "a grasp wrench leaves |F| ≤ {force} N, |M| ≤ {moment} N m (grasp 1: {:.1} N, \
+                     {:.2} N m; grasp 2: {:.1} N, {:.2} N m)",
+                    norm(&w[0][..3]),
+                    norm(&w[0][3..]),
+                    norm(&w[1][..3]),
+                    norm(&w[1][3..])
+                )
+            }
+            _ => format!("a node leaves the ball ‖q_fi‖ ≤ q_F = {}", o.q_max),
+        };
         return Err(bad(format!(
-            "deforms the beam beyond its bound: a node leaves the ball ‖q_fi‖ ≤ q_F = {} \
-             or the stretch bound (‖q_f‖∞ = {:.3}{stretch}, grasp points {:.3} m apart, beam {:.3} m)",
-            o.q_max,
+            "deforms the beam beyond its bound: {bound} or the stretch bound \
+             (‖q_f‖∞ = {:.3}{stretch}, grasp points {:.3} m apart, beam {:.3} m)",
             e.max_deformation,
             object::grasp_distance(q),
             o.fe.beam().length
@@ -504,6 +564,7 @@ pub fn plan(scene: Arc<Scene>, start: &State, params: &DilfParams) -> Result<Pla
         period: params.period,
         hold_guard: params.hold_guard,
         stall: params.stall,
+        grasps: params.grasps,
     };
     Ok(Plan {
         labels,

@@ -189,6 +189,7 @@ mod tests {
             period: params.period,
             hold_guard: params.hold_guard,
             stall: params.stall,
+            grasps: params.grasps,
             scene: scene.clone(),
         });
         let c = DilfController {

@@ -25,14 +25,18 @@
 //! did; informational: the verdict shows in the time to goal).
 
 mod config;
+mod grasp;
 mod overlay;
 
-pub use config::{ArmServoConfig, BeamConfig, MobileManipulatorConfig, ObstacleConfig};
+pub use config::{
+    ArmServoConfig, BeamConfig, BoundKind, MobileManipulatorConfig, ObstacleConfig, WristConfig,
+    DEFAULT_MAX_FORCE, DEFAULT_MAX_MOMENT,
+};
 
 use super::System;
 use crate::integrate::Trajectory;
 use crate::model::ellipsoid::Superellipsoid;
-use crate::model::mobile_manipulator::{self as mm, MobileManipulator};
+use crate::model::mobile_manipulator::{self as mm, MobileManipulator, Wrist};
 use crate::model::{KinematicModel, State};
 use crate::physics::beam::BeamOptions;
 use crate::physics::mobile_manipulator::{
@@ -56,6 +60,8 @@ use std::sync::Arc;
 struct Dilf {
     model: MobileManipulator,
     arm: ArmServo,
+    arm_max_torque: Option<[f64; 6]>,
+    wrist: Wrist,
     beam: Option<BeamConfig>,
     params: DilfParams,
     obstacles: Vec<(String, Superellipsoid)>,
@@ -96,6 +102,12 @@ fn dilf(cfg: &MobileManipulatorConfig, params: &DilfParams) -> Result<Dilf, Stri
         b.beam()?;
     }
     let arm = cfg.arm_servo.servo()?;
+    let wrist = cfg.wrist.wrist()?;
+    if cfg.robots == 1 && wrist != Wrist::Rigid {
+        return Err(
+            "key `model.wrist`: a compliant wrist holds the carried beam (robots = 2)".into(),
+        );
+    }
     let mut obstacles = Vec::new();
     for (i, o) in cfg.obstacles.iter().enumerate() {
         let shape = o.shape();
@@ -126,6 +138,8 @@ fn dilf(cfg: &MobileManipulatorConfig, params: &DilfParams) -> Result<Dilf, Stri
     Ok(Dilf {
         model: MobileManipulator { robots: cfg.robots },
         arm,
+        arm_max_torque: cfg.arm_servo.max_torque(),
+        wrist,
         beam: cfg.beam.clone(),
         params,
         probe: ClearanceProbe::new(&obstacles),
@@ -140,22 +154,18 @@ impl Dilf {
         let Some(b) = &self.beam else {
             return Ok(scene);
         };
-        let carried = Carried::at_rest(
-            &b.beam()?,
-            b.length,
-            start,
-            b.max_deformation,
-            b.segments,
-            b.radius,
-        )
-        .map_err(|e| {
-            let key = if b.length.is_some() {
-                "model.beam.length"
-            } else {
-                "start"
-            };
-            format!("key `{key}`: {e}")
-        })?;
+        let carried =
+            Carried::at_rest(&b.beam()?, b.length, start, b.q_max(), b.segments, b.radius)
+                .map_err(|e| {
+                    let key = if b.length.is_some() {
+                        "model.beam.length"
+                    } else {
+                        "start"
+                    };
+                    format!("key `{key}`: {e}")
+                })?
+                .with_grasps(b.bound(), self.wrist)
+                .map_err(|e| format!("key `model.beam`: {e}"))?;
         Ok(scene.with_object(carried.with_max_stretch(b.max_stretch)))
     }
 
@@ -318,6 +328,14 @@ impl System for Dilf {
         d.push(Dimension::WheelRadiusScale);
         d
     }
+
+    fn paper(&self, start: &State, goal: &State, _plan: &Plan) -> Vec<crate::paper::PaperRow> {
+        if self.beam.is_none() {
+            return Vec::new();
+        }
+        grasp::table_i_rows(start.as_slice(), goal.as_slice())
+    }
+
     fn model(&self) -> &dyn KinematicModel {
         &self.model
     }
@@ -374,6 +392,8 @@ impl System for Dilf {
             obstacles: &obstacles,
             beam: beam.as_ref(),
             arm: self.arm,
+            arm_max_torque: self.arm_max_torque,
+            wrist: self.wrist,
         };
         Ok(Box::new(MobileManipulatorPhysics::new(
             robot, urdf_dir, sim, &setup,
@@ -444,8 +464,12 @@ impl System for Dilf {
         ]
         .map(String::from)
         .to_vec();
-        if self.beam.is_some() {
+        if let Some(b) = &self.beam {
             names.extend(PAIR_METRICS.map(String::from));
+            names.extend(grasp::metric_names(
+                b.bound == BoundKind::Wrench,
+                self.wrist != Wrist::Rigid,
+            ));
         }
         names
     }
@@ -546,9 +570,19 @@ impl System for Dilf {
                 ("sim_max_tilt_2_deg".into(), max_abs(chan("tilt_2_deg"))),
             ]);
         }
-        (
-            metrics,
-            vec![a_ideal.v, a_sim.v, a_ideal.beta, a_sim.beta, clear],
-        )
+        let mut series = vec![a_ideal.v, a_sim.v, a_ideal.beta, a_sim.beta, clear];
+        if let Some(c) = &scene.object {
+            let dt = match sim.traj.t.as_slice() {
+                [a, b, ..] => b - a,
+                _ => self.params.period,
+            };
+            let every = ((self.params.period / dt).round() as usize).max(1);
+            let samples = self.policy_samples(ideal);
+            let compliant = self.wrist != Wrist::Rigid;
+            let (m, s) = grasp::analysis(c, compliant, ideal, &samples, sim, every);
+            metrics.extend(m);
+            series.extend(s);
+        }
+        (metrics, series)
     }
 }
