@@ -266,6 +266,7 @@ pub fn margin_cmd(a: &MarginArgs) -> Result<u8, Vec<Error>> {
         progress: false,
         pose_rate: DEFAULT_POSE_RATE,
         keep: crate::log::Keep::default(),
+        cancel: Default::default(),
     };
     // Scenarios in parallel (each with its dimensions and levels in
     // parallel): results in input order, whatever the thread count.
