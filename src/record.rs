@@ -183,4 +183,8 @@ pub struct RunRecord<'a> {
     pub metrics: &'a [(String, f64)],
     /// How the logged commands relate to the plan ([`crate::plan::Plan::command_info`]).
     pub command: &'a serde_json::Value,
+    /// Whether the tracking errors mean anything (the commands depend on time alone:
+    /// [`crate::runner::tracking_meaningful`]); a feedback policy's sim run reacts to its own
+    /// state, so its distance to the ideal run is not a tracking error.
+    pub tracking_meaningful: bool,
 }

@@ -445,6 +445,7 @@ fn write_logs(
         links: &links,
         metrics: &outcome.metrics,
         command: &command,
+        tracking_meaningful: outcome.tracking_meaningful,
     };
     // The writers are independent (each file from the same record): on two
     // cores a single run's logs take the longer writer's time, not the sum.

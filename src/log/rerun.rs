@@ -39,7 +39,7 @@ use rr::blueprint::{
 use rr::components::{FillMode, Radius, Scalar};
 use rr::external::re_log_types::BlueprintActivationCommand;
 use rr::external::re_sdk_types::blueprint::archetypes::{
-    EyeControls3D, ScalarAxis, TimeAxis, VisibleTimeRanges,
+    EntityBehavior, EyeControls3D, ScalarAxis, TimeAxis, VisibleTimeRanges,
 };
 use rr::external::re_sdk_types::datatypes::{
     Range1D, TimeInt, TimeRange, TimeRangeBoundary, VisibleTimeRange,
@@ -377,7 +377,9 @@ fn log_paths(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrErro
             &rr::LineStrips3D::new([strip.clone()])
                 .with_colors([rgba(color)])
                 .with_radii([Radius::new_ui_points(1.5)])
-                .with_labels([name]),
+                .with_labels([name])
+                // In 3D the label sits on the robot; colours and hover name it.
+                .with_show_labels(false),
         )?;
         let now = ep(&["paths", name, "now"]);
         stream.log_static(
@@ -398,7 +400,8 @@ fn log_paths(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrErro
             &rr::Points3D::new([at])
                 .with_colors([rgba(GOAL_RGBA)])
                 .with_radii([Radius::new_scene_units(0.5 * s)])
-                .with_labels(["goal"]),
+                .with_labels(["goal"])
+                .with_show_labels(false),
         )?;
         if let Some(h) = heading {
             let len = 3.0 * s;
@@ -580,6 +583,32 @@ fn value_range(values: impl Iterator<Item = f64>) -> [f64; 2] {
     [lo - pad, hi + pad]
 }
 
+/// Overlays logged but hidden in the 3D views until the user switches them on: the
+/// robot's ellipsoid cover (dilf, `ellipsoid_*` on the links) wraps the arms and hides them.
+fn hidden_overlays(rec: &RunRecord<'_>) -> Vec<String> {
+    rec.overlays
+        .iter()
+        .filter_map(|o| match &o.link {
+            Some(link) if o.name.starts_with("ellipsoid_") => {
+                Some(ep(&["robot", link, &o.name]).to_string())
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+/// Per-entity `visible = false` in a view, where the viewer (and the Python SDK's
+/// `overrides=`) keeps entity behaviour: `<view>/ViewContents/overrides/<entity>/visualizers`.
+fn hide_in_view(props: &mut Vec<Property>, view: &str, entities: &[String]) {
+    for e in entities {
+        let e = e.trim_start_matches('/');
+        props.push((
+            format!("{view}/ViewContents/overrides/{e}/visualizers"),
+            Box::new(EntityBehavior::new().with_visible(false)),
+        ));
+    }
+}
+
 /// The layout, plus the view properties the SDK's builders cannot set.
 fn blueprint(rec: &RunRecord<'_>) -> (Blueprint, Vec<Property>) {
     let mut props: Vec<Property> = Vec::new();
@@ -646,7 +675,7 @@ fn blueprint(rec: &RunRecord<'_>) -> (Blueprint, Vec<Property>) {
     }
     let error_views: Vec<ContainerLike> = groups
         .into_iter()
-        .filter(|(_, c, _)| !c.is_empty())
+        .filter(|(_, c, _)| rec.tracking_meaningful && !c.is_empty())
         .map(|(name, contents, data)| {
             series(
                 TimeSeriesView::new(name)
@@ -697,10 +726,13 @@ fn blueprint(rec: &RunRecord<'_>) -> (Blueprint, Vec<Property>) {
             )
         })
         .collect();
-    let mut lower: Vec<ContainerLike> = vec![
-        Grid::new(error_views).with_name("tracking errors").into(),
-        Grid::new(command_views).with_name("commands").into(),
-    ];
+    // A feedback policy's sim run reacts to its own state: its distance to the ideal run is
+    // not a tracking error (the report shows those metrics as n/a), so no such plots.
+    let mut lower: Vec<ContainerLike> = Vec::new();
+    if !error_views.is_empty() {
+        lower.push(Grid::new(error_views).with_name("tracking errors").into());
+    }
+    lower.push(Grid::new(command_views).with_name("commands").into());
     if !channel_views.is_empty() {
         lower.push(Grid::new(channel_views).with_name("sim channels").into());
     }
@@ -730,6 +762,7 @@ fn blueprint(rec: &RunRecord<'_>) -> (Blueprint, Vec<Property>) {
     // 3D: an overview framing the whole run, and a view following the robot when the run
     // is much larger than the robot (the rover: a 0.6 m robot on a 10 m path).
     let (scene, robot) = scene_extent(rec);
+    let hidden = hidden_overlays(rec);
     let overview: ContainerLike = Spatial3DView::new("run overview")
         .with_origin("/")
         .with_contents(["/robot/**", "/paths/**"])
@@ -740,6 +773,7 @@ fn blueprint(rec: &RunRecord<'_>) -> (Blueprint, Vec<Property>) {
             format!("{p}/EyeControls3D"),
             Box::new(eye(scene.center(), radius)),
         ));
+        hide_in_view(&mut props, &p, &hidden);
     }
     let mut left = vec![overview];
     let follow = rec
@@ -761,6 +795,7 @@ fn blueprint(rec: &RunRecord<'_>) -> (Blueprint, Vec<Property>) {
                 .with_eye_up([0.0f32, 0.0, 1.0])
                 .with_tracking_entity(target);
             props.push((format!("{p}/EyeControls3D"), Box::new(follow)));
+            hide_in_view(&mut props, &p, &hidden);
         }
         left.push(c);
     }

@@ -161,6 +161,7 @@ impl Fixture {
             overlays: &[],
             series: &[],
             command: &serde_json::Value::Null,
+            tracking_meaningful: true,
         }
     }
 }
