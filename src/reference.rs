@@ -33,8 +33,8 @@ impl Page {
     /// Every page: the index, the scenario file, each model, each planner.
     pub fn all() -> Vec<Page> {
         let mut out = vec![Page::Index, Page::Scenario];
-        out.extend(ModelConfig::KINDS.iter().map(|k| Page::Model(*k)));
-        out.extend(PlannerConfig::KINDS.iter().map(|k| Page::Planner(*k)));
+        out.extend(ModelConfig::KINDS.iter().map(|k| Page::Model(k)));
+        out.extend(PlannerConfig::KINDS.iter().map(|k| Page::Planner(k)));
         out
     }
 

@@ -372,9 +372,11 @@ fn run_plan(
     outcome.timings.logs = t0.elapsed().as_secs_f64();
     // Planning happened during validation: count it in.
     outcome.timings.total = t_all.elapsed().as_secs_f64() + plan_wall_s;
-    let mut summary = (summarize || unit.is_some())
-        .then(|| summary_json(prep, plan, &ideal, &sim, &outcome))
-        .unwrap_or_default();
+    let mut summary = if summarize || unit.is_some() {
+        summary_json(prep, plan, &ideal, &sim, &outcome)
+    } else {
+        serde_json::Value::default()
+    };
     if let Some(unit) = unit {
         // The summary carries the final timings, so it is written last; then
         // the three files replace the previous run's as one unit.

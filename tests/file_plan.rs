@@ -95,7 +95,7 @@ fn diffs(a: &RunOutcome, b: &RunOutcome, pick: impl Fn(&str) -> bool) -> Vec<(St
 
 fn assert_within(what: &str, d: &[(String, f64)], tol: f64) {
     assert!(!d.is_empty(), "{what}: no metrics");
-    let bad: Vec<_> = d.iter().filter(|(_, x)| !(*x <= tol)).collect();
+    let bad: Vec<_> = d.iter().filter(|(_, x)| x.is_nan() || *x > tol).collect();
     assert!(bad.is_empty(), "{what}: beyond {tol}: {bad:?}");
 }
 

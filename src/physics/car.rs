@@ -421,18 +421,17 @@ impl PhysicsSystem for CarPhysics {
         let next = (self.phi_cmd + self.dt * rate).clamp(-m, m);
         let now_d = ackermann(self.phi_cmd, g.wheelbase, g.front_half_track);
         let next_d = ackermann(next, g.wheelbase, g.front_half_track);
-        for i in 0..2 {
+        for (i, drive) in self.steer_drives.iter_mut().enumerate() {
             let s = g.steer[i].sign;
-            self.steer_drives[i].angle = s * now_d[i];
+            drive.angle = s * now_d[i];
             let r = s * (next_d[i] - now_d[i]) / self.dt;
-            self.sim.drive(&mut self.steer_drives[i], r);
+            self.sim.drive(drive, r);
         }
         self.phi_cmd = next;
         // The electronic differential reads the measured steering angle.
         let v = rear_speeds(u[0], self.q[3], g.wheelbase, g.rear_half_track);
-        for i in 0..2 {
-            let r = self.geom.rear[i].rate(v[i]);
-            self.sim.drive(&mut self.rear_drives[i], r);
+        for ((wheel, drive), v) in self.geom.rear.iter().zip(&mut self.rear_drives).zip(v) {
+            self.sim.drive(drive, wheel.rate(v));
         }
     }
 

@@ -271,9 +271,8 @@ impl PhysicsSystem for DiffDrivePhysics {
     fn apply(&mut self, u: &Input) {
         let b = self.geom.half_track;
         let speeds = [u[0] - u[1] * b, u[0] + u[1] * b];
-        for i in 0..2 {
-            let rate = self.geom.wheels[i].rate(speeds[i]);
-            self.sim.drive(&mut self.drives[i], rate);
+        for ((wheel, drive), speed) in self.geom.wheels.iter().zip(&mut self.drives).zip(speeds) {
+            self.sim.drive(drive, wheel.rate(speed));
         }
     }
 

@@ -6,7 +6,7 @@
 //! define plain parameter structs and never see these enums (nor anything
 //! else of `crate::scenario`); this module picks the system for a pair.
 
-use super::schema::Schema;
+use super::schema::{by_kind, Schema};
 use crate::physics::required::Required;
 use crate::planner::dilf::DilfParams;
 use crate::planner::endogenous::EndogenousParams;
@@ -36,6 +36,8 @@ use toml::Spanned;
 /// `[model]`: the kinematic model and its rigid-body counterpart.
 #[derive(Debug, Clone, Serialize)]
 #[serde(tag = "kind", rename_all = "snake_case")]
+// Parsed once per scenario: the size of the largest variant does not matter.
+#[allow(clippy::large_enum_variant)]
 pub enum ModelConfig {
     /// Seed 000 §4.2 disk rolling without slipping: state (x, y, θ, α), inputs (θ', α').
     RollingDisk(DiskModelConfig),
@@ -142,25 +144,18 @@ impl ModelConfig {
     /// ranges and docs): what the validation pass checks and `keys` prints.
     pub fn schema(kind: &str) -> Option<&'static Schema> {
         static CACHE: OnceLock<Vec<(&'static str, Schema)>> = OnceLock::new();
-        let all = CACHE.get_or_init(|| {
-            Self::KINDS
-                .iter()
-                .filter_map(|k| {
-                    let s = match *k {
-                        "rolling_disk" => Schema::of::<DiskModelConfig>(),
-                        "space_robot" => Schema::of::<SpaceRobotConfig>(),
-                        "rover" => Schema::of::<RoverConfig>(),
-                        "rolling_sphere" => Schema::of::<SphereConfig>(),
-                        "mobile_manipulator" => Schema::of::<MobileManipulatorConfig>(),
-                        "diff_drive" => Schema::of::<DiffDriveConfig>(),
-                        "car" => Schema::of::<CarConfig>(),
-                        _ => return None,
-                    };
-                    Some((*k, s))
-                })
-                .collect()
-        });
-        all.iter().find(|(k, _)| *k == kind).map(|(_, s)| s)
+        by_kind(&CACHE, &Self::KINDS, kind, |k| {
+            Some(match k {
+                "rolling_disk" => Schema::of::<DiskModelConfig>(),
+                "space_robot" => Schema::of::<SpaceRobotConfig>(),
+                "rover" => Schema::of::<RoverConfig>(),
+                "rolling_sphere" => Schema::of::<SphereConfig>(),
+                "mobile_manipulator" => Schema::of::<MobileManipulatorConfig>(),
+                "diff_drive" => Schema::of::<DiffDriveConfig>(),
+                "car" => Schema::of::<CarConfig>(),
+                _ => return None,
+            })
+        })
     }
 
     /// The URDF links and joints the model `kind` looks up, as declared by
@@ -241,27 +236,20 @@ impl PlannerConfig {
     /// The schema of the `[planner]` table of `kind` (see [`ModelConfig::schema`]).
     pub fn schema(kind: &str) -> Option<&'static Schema> {
         static CACHE: OnceLock<Vec<(&'static str, Schema)>> = OnceLock::new();
-        let all = CACHE.get_or_init(|| {
-            Self::KINDS
-                .iter()
-                .filter_map(|k| {
-                    let s = match *k {
-                        "stokes_disk" => Schema::of::<StokesDiskParams>(),
-                        "stokes_space" => Schema::of::<StokesSpaceParams>(),
-                        "endogenous" => Schema::of::<EndogenousParams>(),
-                        "rover_primitives" => Schema::of::<RoverPrimitiveParams>(),
-                        "sphere_geometric" => Schema::of::<SphereGeometricParams>(),
-                        "sphere_triangle" => Schema::of::<SphereTriangleParams>(),
-                        "dilf" => Schema::of::<DilfParams>(),
-                        "file" => Schema::of::<FilePlanParams>(),
-                        "external" => Schema::of::<ExternalParams>(),
-                        _ => return None,
-                    };
-                    Some((*k, s))
-                })
-                .collect()
-        });
-        all.iter().find(|(k, _)| *k == kind).map(|(_, s)| s)
+        by_kind(&CACHE, &Self::KINDS, kind, |k| {
+            Some(match k {
+                "stokes_disk" => Schema::of::<StokesDiskParams>(),
+                "stokes_space" => Schema::of::<StokesSpaceParams>(),
+                "endogenous" => Schema::of::<EndogenousParams>(),
+                "rover_primitives" => Schema::of::<RoverPrimitiveParams>(),
+                "sphere_geometric" => Schema::of::<SphereGeometricParams>(),
+                "sphere_triangle" => Schema::of::<SphereTriangleParams>(),
+                "dilf" => Schema::of::<DilfParams>(),
+                "file" => Schema::of::<FilePlanParams>(),
+                "external" => Schema::of::<ExternalParams>(),
+                _ => return None,
+            })
+        })
     }
 
     /// The planner of `kind` from its table; `Ok(None)` for an unknown kind.

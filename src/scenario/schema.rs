@@ -14,6 +14,7 @@
 
 use schemars::JsonSchema;
 use serde_json::{Map, Value};
+use std::sync::OnceLock;
 
 /// A root schema (with its `$defs`).
 #[derive(Debug, Clone)]
@@ -129,6 +130,22 @@ fn tag(branch: &Value) -> Option<&str> {
         .get("kind")?
         .get("const")?
         .as_str()
+}
+
+/// The schema of `kind` among `kinds`, each built once (`of` maps a kind to
+/// its schema): the lookup behind `ModelConfig::schema` and
+/// `PlannerConfig::schema`.
+pub(crate) fn by_kind(
+    cache: &'static OnceLock<Vec<(&'static str, Schema)>>,
+    kinds: &'static [&'static str],
+    kind: &str,
+    of: fn(&str) -> Option<Schema>,
+) -> Option<&'static Schema> {
+    cache
+        .get_or_init(|| kinds.iter().filter_map(|k| Some((*k, of(k)?))).collect())
+        .iter()
+        .find(|(k, _)| *k == kind)
+        .map(|(_, s)| s)
 }
 
 impl Schema {
