@@ -1,5 +1,6 @@
 //! Figures of the HTML report, drawn with `plotters` into inline SVG strings.
 
+use plotters::coord::types::RangedCoordf64;
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -434,35 +435,13 @@ pub fn scatter(
             .y_label_formatter(&|v| tick(*v))
             .draw()
             .map_err(err)?;
-        for (ok, color, name) in [(true, IDEAL, "success"), (false, RED, "failure")] {
-            let sel: Vec<(f64, f64)> = pts
-                .iter()
-                .filter(|p| p.2 == ok && p.0.is_finite() && p.1.is_finite())
-                .map(|p| (p.0, p.1))
-                .collect();
-            if sel.is_empty() {
-                continue;
-            }
-            chart
-                .draw_series(sel.into_iter().map(|p| Circle::new(p, 3, color.filled())))
-                .map_err(err)?
-                .label(name)
-                .legend(move |(x, y)| Circle::new((x + 7, y), 3, color.filled()));
-        }
-        if let Some((y, name)) = hline {
-            chart
-                .draw_series(DashedLineSeries::new(
-                    [(x0, y), (x1, y)],
-                    6,
-                    4,
-                    RED.stroke_width(1),
-                ))
-                .map_err(err)?
-                .label(name)
-                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], RED));
-        }
-        legend(&mut chart)?;
-        Ok(())
+        points_and_hline(
+            &mut chart,
+            pts.iter().filter(|p| p.0.is_finite()),
+            ["success", "failure"],
+            hline,
+            (x0, x1),
+        )
     })
 }
 
@@ -506,36 +485,57 @@ pub fn scatter_log_x(
             .y_label_formatter(&|v| tick(*v))
             .draw()
             .map_err(err)?;
-        for (ok, color, name) in [(true, IDEAL, "pass"), (false, RED, "fail")] {
-            let sel: Vec<(f64, f64)> = pts
-                .iter()
-                .filter(|p| p.2 == ok && p.0 > 0.0 && p.0.is_finite() && p.1.is_finite())
-                .map(|p| (p.0, p.1))
-                .collect();
-            if sel.is_empty() {
-                continue;
-            }
-            chart
-                .draw_series(sel.into_iter().map(|p| Circle::new(p, 3, color.filled())))
-                .map_err(err)?
-                .label(name)
-                .legend(move |(x, y)| Circle::new((x + 7, y), 3, color.filled()));
-        }
-        if let Some((y, name)) = hline {
-            chart
-                .draw_series(DashedLineSeries::new(
-                    [(x0, y), (x1, y)],
-                    6,
-                    4,
-                    RED.stroke_width(1),
-                ))
-                .map_err(err)?
-                .label(name)
-                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], RED));
-        }
-        legend(&mut chart)?;
-        Ok(())
+        points_and_hline(
+            &mut chart,
+            pts.iter().filter(|p| p.0 > 0.0 && p.0.is_finite()),
+            ["pass", "fail"],
+            hline,
+            (x0, x1),
+        )
     })
+}
+
+/// The points of a scatter chart, green when they pass and red when they
+/// fail (legend `names`), a dashed red line at `hline` across `xs`, and the
+/// legend: shared by the linear and the logarithmic x axis.
+fn points_and_hline<'a, 'p, X>(
+    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, RangedCoordf64>>,
+    pts: impl Iterator<Item = &'p (f64, f64, bool)> + Clone,
+    names: [&str; 2],
+    hline: Option<(f64, &str)>,
+    (x0, x1): (f64, f64),
+) -> Res<()>
+where
+    X: Ranged<ValueType = f64>,
+{
+    for (ok, color, name) in [(true, IDEAL, names[0]), (false, RED, names[1])] {
+        let sel: Vec<(f64, f64)> = pts
+            .clone()
+            .filter(|p| p.2 == ok && p.1.is_finite())
+            .map(|p| (p.0, p.1))
+            .collect();
+        if sel.is_empty() {
+            continue;
+        }
+        chart
+            .draw_series(sel.into_iter().map(|p| Circle::new(p, 3, color.filled())))
+            .map_err(err)?
+            .label(name)
+            .legend(move |(x, y)| Circle::new((x + 7, y), 3, color.filled()));
+    }
+    if let Some((y, name)) = hline {
+        chart
+            .draw_series(DashedLineSeries::new(
+                [(x0, y), (x1, y)],
+                6,
+                4,
+                RED.stroke_width(1),
+            ))
+            .map_err(err)?
+            .label(name)
+            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], RED));
+    }
+    legend(chart)
 }
 
 #[cfg(test)]
