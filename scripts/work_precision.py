@@ -83,8 +83,15 @@ SYSTEMS = [
 # dt as multiples of the shipped one, up to 8x.
 # Below 1: where an engine misses a gate at the shipped step, how small a step it needs.
 FACTORS = [0.25, 0.5, 1, 1.5, 2, 3, 4, 6, 8]
+# The rover's MuJoCo run only approaches its own converged run below a quarter of the
+# shipped dt: one step more.
+FACTORS_OF = {"rover": [0.125] + FACTORS}
 # The converged reference run of each engine: this multiple of the shipped dt.
 REF_FACTOR = 1 / 16
+# The rover's end state after 88 s of open-loop slip is only reproducible to about a goal
+# gate (0.1 m): the harness's own runs at 1/32 and 1/16 of its dt end 0.95 gates apart,
+# those at 1/16 and 1/8 2.3 gates apart. The frontier table adds these looser accuracies.
+LOOSER_OF = {"rover": (3, 10, 30)}
 # Servo gains of the MuJoCo drives: damping (implicit in implicitfast) large
 # against the links' inertia, stiffness so that an angle error halves per step
 # (kp dt / kv = 0.5; the stiffness is explicit, the damping keeps it stable).
@@ -476,6 +483,7 @@ def normalised(metric_values, gates):
 
 def study(args, key, title, scenario, root, tmp):
     goal_gates, track_gates = gates_of(scenario)
+    tracking_gated = bool(track_gates)
     if not track_gates:
         # A sanity gate only (the rover's open-loop replay): report the position tracking.
         track_gates = {"tracking_position_max": 1.0}
@@ -518,7 +526,7 @@ def study(args, key, title, scenario, root, tmp):
     # (classic work-precision: the error that comes from the step alone), run once.
     ref = run_at(dt0 * REF_FACTOR, 1)
     rows = []
-    for factor in FACTORS:
+    for factor in FACTORS_OF.get(key, FACTORS):
         dt = dt0 * factor
         r = run_at(dt, args.repeats)
         t_i, q_i = r["ideal"]
@@ -554,13 +562,14 @@ def study(args, key, title, scenario, root, tmp):
               f" | MuJoCo cpu {k['cpu_s'] * 1e3:8.2f} ms vs ideal: goal {k['goal']:8.3g} track "
               f"{k['tracking']:8.3g}, vs converged: goal {k['converged_goal']:8.3g}", flush=True)
     return {"system": title, "scenario": scenario, "goal_gates": goal_gates, "tracking_gates": track_gates,
-            "reference_dt": dt0 * REF_FACTOR, "rows": rows}
+            "tracking_gated": tracking_gated, "reference_dt": dt0 * REF_FACTOR, "rows": rows}
 
 
 def plot(res, out_dir, key):
     fig, axes = plt.subplots(1, 3, figsize=(15, 4.2), constrained_layout=True)
     for ax, what, label in ((axes[0], "goal", "goal error vs ideal run / gate"),
-                            (axes[1], "tracking", "max tracking error vs ideal run / gate"),
+                            (axes[1], "tracking", "max tracking error vs ideal run / gate"
+                             if res.get("tracking_gated", True) else "max position tracking error vs ideal run, m"),
                             (axes[2], "converged_goal",
                              f"end-state deviation from own run at {res['reference_dt'] * 1e3:g} ms / goal gate")):
         for eng, color, name in (("harness", "tab:orange", "harness (Rapier)"), ("mujoco", "tab:blue", "MuJoCo")):
@@ -573,7 +582,8 @@ def plot(res, out_dir, key):
             for r, xi, yi in zip(rows, x, y):
                 ax.annotate(f"{r['dt'] * 1e3:g}", (xi, yi), textcoords="offset points", xytext=(4, 4),
                             fontsize=7, color=color)
-        ax.axhline(1.0, color="k", lw=0.8, ls="--")
+        if what != "tracking" or res.get("tracking_gated", True):
+            ax.axhline(1.0, color="k", lw=0.8, ls="--")
         ax.set_xscale("log")
         ax.set_yscale("log")
         ax.set_xlabel("CPU time of the physics run, s")
@@ -619,6 +629,24 @@ def extrapolated(res, eng, what):
     return rows[0][eng]["cpu_s"] * rows[0]["dt"] / dt, dt
 
 
+def cpu_cell(cpu_s, dt, approx=""):
+    """'35.4 ms (1.5 ms)', '6.7 s (0.25 ms)', '≈ 79 s (≈ 0.55 µs)'."""
+    t = f"{cpu_s:.2g} s" if cpu_s >= 1 else f"{cpu_s * 1e3:.3g} ms"
+    if approx:
+        sig2 = lambda v: f"{float(f'{v:.2g}'):g}"  # noqa: E731
+        t = f"{sig2(cpu_s)} s" if cpu_s >= 1 else f"{sig2(cpu_s * 1e3)} ms"
+    d = f"{dt * 1e3:.2g} ms" if dt >= 1e-4 else f"{dt * 1e6:.2g} µs"
+    return f"{approx}{t} ({approx}{d})"
+
+
+def ratio_cell(cpu, approx):
+    if not all(cpu):
+        return "–"
+    r = cpu[1] / cpu[0]
+    text = f"{r:.2g}" if r < 100 else f"{float(f'{r:.2g}'):.0f}"
+    return ("≈ " if approx else "") + text
+
+
 def table(out_dir):
     """The frontier table (markdown) from the per-system JSONs in out_dir."""
     print("| system | gates against | harness CPU (dt) | MuJoCo CPU (dt) | MuJoCo / harness |")
@@ -633,18 +661,30 @@ def table(out_dir):
                                       ("converged_goal",))):
             if key == "rover" and which == "frontier":
                 what = ("goal",)
-            cells, cpu = [], []
+            cells, cpu, approx = [], [], False
             for eng in ("harness", "mujoco"):
                 f = res[which][eng]
                 if f:
-                    cells.append(f"{f[0] * 1e3:.1f} ms ({f[1] * 1e3:g} ms)")
+                    cells.append(cpu_cell(*f))
                     cpu.append(f[0])
                 else:
-                    x = extrapolated(res, eng, what)
-                    cells.append(f"≈ {x[0] * 1e3:.0f} ms (≈ {x[1] * 1e3:.2g} ms), extrapolated" if x else "never")
+                    # No power law for the rover: its converged run is itself uncertain by
+                    # about a goal gate (LOOSER_OF), below which no trend can be read.
+                    x = extrapolated(res, eng, what) if key not in LOOSER_OF else None
+                    cells.append(cpu_cell(*x, approx="≈ ") + ", extrapolated" if x else "never")
                     cpu.append(x[0] if x else None)
-            ratio = f"{cpu[1] / cpu[0]:.2g}" if all(cpu) else "–"
+                    approx = approx or bool(x)
+            ratio = ratio_cell(cpu, approx)
             print(f"| {res['system']} | {against} | {cells[0]} | {cells[1]} | {ratio} |")
+        for k in LOOSER_OF.get(key, ()):
+            cells, cpu = [], []
+            for eng in ("harness", "mujoco"):
+                ok = [r for r in res["rows"] if r[eng]["converged_goal"] <= k]
+                best = min(ok, key=lambda r: r[eng]["cpu_s"]) if ok else None
+                cells.append(cpu_cell(best[eng]["cpu_s"], best["dt"]) if best else "never")
+                cpu.append(best[eng]["cpu_s"] if best else None)
+            ratio = ratio_cell(cpu, False)
+            print(f"| {res['system']} | own converged run ({k:g} × goal gates) | {cells[0]} | {cells[1]} | {ratio} |")
 
 
 def main():
