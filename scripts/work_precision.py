@@ -88,9 +88,10 @@ FACTORS = [0.25, 0.5, 1, 1.5, 2, 3, 4, 6, 8]
 FACTORS_OF = {"rover": [0.125] + FACTORS}
 # The converged reference run of each engine: this multiple of the shipped dt.
 REF_FACTOR = 1 / 16
-# The rover's end state after 88 s of open-loop slip is only reproducible to about a goal
-# gate (0.1 m): the harness's own runs at 1/32 and 1/16 of its dt end 0.96 gates apart,
-# those at 1/16 and 1/8 2.3 gates apart. The frontier table adds these looser accuracies.
+# The rover's end state after 88 s of open-loop slip does not settle to a goal gate (0.1 m)
+# as dt shrinks: the harness's own runs at 1/32 and 1/16 of its dt end 0.96 gates apart,
+# those at 1/16 and 1/8 2.3 gates apart (not chaos: 1e-6 more friction moves the end by
+# ~1 mm). The frontier table adds these looser accuracies.
 LOOSER_OF = {"rover": (3, 10, 30)}
 # Servo gains of the MuJoCo drives: damping (implicit in implicitfast) large
 # against the links' inertia, stiffness so that an angle error halves per step
@@ -668,7 +669,7 @@ def table(out_dir):
                     cells.append(cpu_cell(*f))
                     cpu.append(f[0])
                 else:
-                    # No power law for the rover: its converged run is itself uncertain by
+                    # No power law for the rover: its converged run is itself unsettled by
                     # about a goal gate (LOOSER_OF), below which no trend can be read.
                     x = extrapolated(res, eng, what) if key not in LOOSER_OF else None
                     cells.append(cpu_cell(*x, approx="≈ ") + ", extrapolated" if x else "never")
