@@ -100,7 +100,7 @@ KV = 1.0e4
 # The rover's servos are far softer: MuJoCo's contact solver sees the servo's force
 # before its implicit damping, so a step in the commanded steering rate (the rover's
 # telegraph commands) throws the rover off the ground. Measured at dt 0.5-16 ms:
-# kv 1e4 and 1e3 diverge at the first rate step (t = 0.5 s), 100 and 30 lift the
+# kv 1e4 and 1e3 diverge where the rate first drops to zero (t = 0.5 s), 100 and 30 lift the
 # chassis by 0.1-0.8 m, 10 and 3 by 0.03-1.4 m at 8-16 ms; kv 1 keeps it within
 # 7 mm of wheel height at every dt, its wheel angle within 0.04 rad of the target at 2 ms.
 KV_OF = {"rover": 1.0}
