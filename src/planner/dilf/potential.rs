@@ -38,7 +38,7 @@
 //! [`Scene::field`] computes the same gradient in reverse, by hand
 //! ([`super::adjoint`]), several times faster.
 
-use super::adjoint::Scratch;
+use super::scratch::Scratch;
 use super::contact::{self, Contact, ContactError};
 use super::object::Carried;
 use super::point_world::switches_log;
