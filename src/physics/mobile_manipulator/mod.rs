@@ -79,63 +79,6 @@ pub(crate) const WHEEL_MASS: f64 = 2.0;
 /// Gripper mass, kg.
 pub(crate) const TOOL_MASS: f64 = 0.5;
 
-/// The compliant wrist's flange-side plate, bolted to link 6: mass (kg),
-/// radius and thickness (m) of a disc, and its centre on link 6's z axis
-/// (m; link 6's own body spans 0 … 0.06 m, the gripper starts at 0.08 m).
-/// About the size of a small commercial remote-centre-compliance unit's
-/// flange half. Without it link 6 (0.09 kg, 4e-5 kg m² about its axis, the
-/// published values) is the lightest body of the arm, between a joint servo
-/// whose stiffness Rapier scales by the bodies' inertia and the wrist's
-/// springs; joint 6 then yields to the wrist's roll moment and rings with
-/// the rod's bending (±5° at the goal in `dilf_table_i_rigid_goal`).
-pub(crate) const WRIST_PLATE: (f64, f64, f64, f64) = (0.5, 0.04, 0.02, 0.07);
-
-/// `robot` with the compliant wrist's plate ([`WRIST_PLATE`]) added to
-/// link 6's inertial (parallel-axis sum in link 6's frame).
-fn with_wrist_plate(robot: &urdf_rs::Robot) -> urdf_rs::Robot {
-    let mut out = robot.clone();
-    let Some(link) = out.links.iter_mut().find(|l| l.name == "link6") else {
-        return out;
-    };
-    let (mp, r, h, zp) = WRIST_PLATE;
-    let i = &link.inertial;
-    let (m1, c1) = (i.mass.value, i.origin.xyz.0);
-    // Link 6's inertia about its centre, in link 6's axes.
-    let [roll, pitch, yaw] = i.origin.rpy.0;
-    let rot = *nalgebra::Rotation3::from_euler_angles(roll, pitch, yaw).matrix();
-    let t = &i.inertia;
-    let i1 = rot
-        * nalgebra::Matrix3::new(
-            t.ixx, t.ixy, t.ixz, t.ixy, t.iyy, t.iyz, t.ixz, t.iyz, t.izz,
-        )
-        * rot.transpose();
-    let side = mp * (3.0 * r * r + h * h) / 12.0;
-    let i2 = nalgebra::Matrix3::from_diagonal(&nalgebra::Vector3::new(side, side, 0.5 * mp * r * r));
-    let c2 = [0.0, 0.0, zp];
-    let m = m1 + mp;
-    let c: [f64; 3] = std::array::from_fn(|k| (m1 * c1[k] + mp * c2[k]) / m);
-    // Parallel axis: I + m (|d|² 1 − d dᵀ).
-    let shift = |mass: f64, p: [f64; 3]| {
-        let d = nalgebra::Vector3::new(p[0] - c[0], p[1] - c[1], p[2] - c[2]);
-        (nalgebra::Matrix3::identity() * d.norm_squared() - d * d.transpose()) * mass
-    };
-    let total = i1 + shift(m1, c1) + i2 + shift(mp, c2);
-    link.inertial.origin = urdf_rs::Pose {
-        xyz: urdf_rs::Vec3(c),
-        rpy: urdf_rs::Vec3([0.0; 3]),
-    };
-    link.inertial.mass.value = m;
-    link.inertial.inertia = urdf_rs::Inertia {
-        ixx: total[(0, 0)],
-        ixy: total[(0, 1)],
-        ixz: total[(0, 2)],
-        iyy: total[(1, 1)],
-        iyz: total[(1, 2)],
-        izz: total[(2, 2)],
-    };
-    out
-}
-
 /// URDF joint names of the arm, in order.
 pub const ARM_JOINTS: [&str; 6] = ["joint1", "joint2", "joint3", "joint4", "joint5", "joint6"];
 
@@ -337,8 +280,6 @@ impl MobileManipulatorPhysics {
             super::perturb::shrink_round_collisions(robot, &tyres, 1.0, Some(wear))
         });
         let robot = worn.as_ref().unwrap_or(robot);
-        let plated = matches!(setup.wrist, Wrist::Compliant(_)).then(|| with_wrist_plate(robot));
-        let robot = plated.as_ref().unwrap_or(robot);
         let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root(0));
         let mut handles = vec![sw.robot.clone()];
         if k == 2 {

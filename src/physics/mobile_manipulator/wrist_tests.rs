@@ -120,27 +120,3 @@ fn the_wrist_turns_by_the_moment_over_its_stiffness_and_stops_at_its_travel() {
     let f = w.wrench([x, 0.0, 0.0, 0.0, 0.0, 0.0], [0.0; 6]);
     assert_eq!(f[0], -w.stiffness[0] * x);
 }
-
-/// The wrist's plate adds its mass to link 6 and moves link 6's centre of
-/// mass and inertia by the parallel-axis rule; the other links keep theirs.
-#[test]
-fn the_wrist_plate_adds_to_link_six_by_the_parallel_axis_rule() {
-    let robot = urdf_rs::read_from_string(&super::urdf::urdf()).unwrap();
-    let plated = with_wrist_plate(&robot);
-    let find = |r: &urdf_rs::Robot, n: &str| r.links.iter().find(|l| l.name == n).unwrap().inertial.clone();
-    let (before, after) = (find(&robot, "link6"), find(&plated, "link6"));
-    let (mp, rad, h, zp) = WRIST_PLATE;
-    let (m1, z1) = (before.mass.value, before.origin.xyz.0[2]);
-    let m = m1 + mp;
-    let z = (m1 * z1 + mp * zp) / m;
-    assert!((after.mass.value - m).abs() < 1e-12);
-    assert!((after.origin.xyz.0[2] - z).abs() < 1e-12);
-    let izz = before.inertia.izz + 0.5 * mp * rad * rad;
-    assert!((after.inertia.izz - izz).abs() < 1e-12, "{}", after.inertia.izz);
-    let side = mp * (3.0 * rad * rad + h * h) / 12.0;
-    let ixx = before.inertia.ixx + m1 * (z1 - z).powi(2) + side + mp * (zp - z).powi(2);
-    assert!((after.inertia.ixx - ixx).abs() < 1e-12, "{}", after.inertia.ixx);
-    for n in ["link5", "tool", "base_link"] {
-        assert_eq!(find(&robot, n).mass.value, find(&plated, n).mass.value);
-    }
-}
