@@ -28,10 +28,10 @@
 use super::contact::{Contact, ContactError};
 use super::object::{BeamState, Carried};
 use super::point_world::{switch_exponent, switch_log};
-use super::scratch::{PartStage, Pair, Side};
 use super::potential::{
     placed_generic, DipoleProduct, Evaluation, GoalFrame, GraspCorrection, Scene, Warm,
 };
+use super::scratch::{Pair, PartStage, Side};
 use crate::model::ellipsoid::PlacedEllipsoid;
 use crate::model::mobile_manipulator::{self as mm, Link, Part, DOF};
 use crate::model::spatial::{self, Pose, M3, V3};
@@ -43,7 +43,6 @@ type D12 = DualSVec64<12>;
 type D6 = DualSVec64<6>;
 /// Derivatives with respect to the beam's q_f and gravity in its end-0 frame.
 type D15 = DualSVec64<15>;
-
 
 /// How many joints move a link (0: the platform only).
 fn depth(link: Link) -> usize {
