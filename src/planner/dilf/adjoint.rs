@@ -31,8 +31,9 @@ use super::point_world::{switch_exponent, switch_log};
 use super::potential::{
     placed_generic, DipoleProduct, Evaluation, GoalFrame, GraspCorrection, Scene, Warm,
 };
+use super::scratch::{Pair, PartStage, Side};
 use crate::model::ellipsoid::PlacedEllipsoid;
-use crate::model::mobile_manipulator::{self as mm, Link, Part, RobotFrames, DOF};
+use crate::model::mobile_manipulator::{self as mm, Link, Part, DOF};
 use crate::model::spatial::{self, Pose, M3, V3};
 use num_dual::DualSVec64;
 
@@ -42,95 +43,6 @@ type D12 = DualSVec64<12>;
 type D6 = DualSVec64<6>;
 /// Derivatives with respect to the beam's q_f and gravity in its end-0 frame.
 type D15 = DualSVec64<15>;
-
-/// One shape of a contact pair.
-#[derive(Debug, Clone, Copy)]
-enum Side {
-    /// A static obstacle (constant).
-    Static,
-    /// Robot part `r * parts + i`.
-    Part(usize),
-    /// Beam segment.
-    Segment(usize),
-}
-
-/// One (part, obstacle) pair of one part's stage.
-#[derive(Debug, Clone, Copy)]
-struct Pair {
-    beta: f64,
-    /// ln b̃ = ln(β/(β+1)).
-    lb: f64,
-    /// Minimiser x* and the multiplier of the minimised shape's surface.
-    x: V3<f64>,
-    mu: f64,
-    /// The shape minimised over (weight μ in β) and the other (weight 1).
-    minimised: Side,
-    other: Side,
-    /// The obstacle (the shape that is not the part) and h_p − h_O.
-    obstacle: Side,
-    delta: V3<f64>,
-    sigma: f64,
-    sqrt_b: f64,
-    moved: V3<f64>,
-}
-
-impl Pair {
-    fn new(beta: f64, sol: &Contact, sides: [Side; 3], delta: V3<f64>) -> Pair {
-        Pair {
-            beta,
-            lb: (beta / (beta + 1.0)).ln(),
-            x: sol.x,
-            mu: sol.mu,
-            minimised: sides[0],
-            other: sides[1],
-            obstacle: sides[2],
-            delta,
-            sigma: 0.0,
-            sqrt_b: 0.0,
-            moved: [0.0; 3],
-        }
-    }
-}
-
-/// What the reverse pass needs of one part's stage.
-#[derive(Debug, Clone, Copy)]
-struct PartStage {
-    pairs: (usize, usize),
-    c: V3<f64>,
-    h: V3<f64>,
-    hh: f64,
-    /// Whether the switches act (‖h‖ > 1e-12 and some obstacle), with their
-    /// ln‖h‖ and Σ ln b̃.
-    switched: bool,
-    ln_h: f64,
-    total: f64,
-    shift: V3<f64>,
-    h2: V3<f64>,
-    /// World → goal coordinates (h = rotᵀ(…)); `platform`: rot = Rz(θ_r).
-    rot: M3<f64>,
-    platform: bool,
-}
-
-/// Buffers of [`Scene::field`], kept in [`Warm`] so a call does not allocate.
-#[derive(Debug, Clone, Default)]
-pub struct Scratch {
-    frames: Vec<RobotFrames<f64>>,
-    placed: Vec<PlacedEllipsoid<f64>>,
-    segs: Vec<PlacedEllipsoid<f64>>,
-    pairs: Vec<Pair>,
-    ln_b: Vec<f64>,
-    parts: Vec<PartStage>,
-    gammas: Vec<f64>,
-    singular: Vec<[f64; 6]>,
-    /// Per pair of the current part: adjoints of h_p − h_O and of ln b̃.
-    bar: Vec<(V3<f64>, f64)>,
-    /// Per robot and joint depth (0 platform … 6 tool): force, moment about the origin.
-    wrench: Vec<[(V3<f64>, V3<f64>); 7]>,
-    /// Beam segment against a static obstacle: (segment, β, x*, μ).
-    seg_static: Vec<(usize, f64, V3<f64>, f64)>,
-    /// Per beam segment: adjoints of its centre and rotation.
-    seg_bar: Vec<(V3<f64>, M3<f64>)>,
-}
 
 /// How many joints move a link (0: the platform only).
 fn depth(link: Link) -> usize {

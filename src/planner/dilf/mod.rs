@@ -6,7 +6,8 @@
 //!   minimisation, with envelope-theorem derivatives);
 //! * [`point_world`]: H0, T, the switches, H1 and H2 as printed (Eqs. 6–9);
 //! * [`potential`]: V (Eq. 15) and f (Eq. 17), exact gradients by dual numbers;
-//! * [`adjoint`]: the same gradient by hand-written adjoints (the fast path);
+//! * [`adjoint`]: the same gradient by hand-written adjoints (the fast path;
+//!   its buffers in `scratch`, so that `potential` does not import it);
 //! * [`control`]: Eq. 18;
 //! * [`stall`]: the law's progress: the `stalled` stop and the hand-over to
 //!   the final alignment (ours).
@@ -22,6 +23,7 @@ pub mod guard;
 pub mod object;
 pub mod point_world;
 pub mod potential;
+mod scratch;
 pub mod stall;
 
 use crate::model::mobile_manipulator::{self as mm, DOF, INPUTS};

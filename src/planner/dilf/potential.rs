@@ -38,10 +38,10 @@
 //! [`Scene::field`] computes the same gradient in reverse, by hand
 //! ([`super::adjoint`]), several times faster.
 
-use super::adjoint::Scratch;
 use super::contact::{self, Contact, ContactError};
 use super::object::Carried;
 use super::point_world::switches_log;
+use super::scratch::Scratch;
 use crate::model::ellipsoid::{PlacedEllipsoid, Superellipsoid};
 use crate::model::mobile_manipulator::{self as mm, Link, Part, DOF};
 use crate::model::puma560;
