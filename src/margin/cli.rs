@@ -4,7 +4,7 @@ use super::{output, Nominal, Settings, DEFAULT_BATCH};
 use crate::error::Error;
 use crate::physics::perturb::Dimension;
 use crate::runner::{RunOptions, DEFAULT_POSE_RATE};
-use crate::validate::{not_applicable, prepare_all, why_not_applicable, Call, Prepared};
+use crate::validate::{not_applicable, prepare_all, Call, Prepared};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use std::path::PathBuf;
@@ -144,6 +144,17 @@ fn check_options(a: &MarginArgs) -> Result<(), Vec<Error>> {
     Ok(())
 }
 
+/// Why `d` does not apply to the scenario, in a few words (the table's
+/// note; the error for a dimension asked of no scenario says it at length).
+fn why_not(d: Dimension, sc: &crate::scenario::Scenario) -> String {
+    match d {
+        d if d.observes() => format!("open-loop plan (`{}` reads no state)", sc.planner.kind()),
+        Dimension::WheelRadiusScale => "no wheels".into(),
+        Dimension::FrictionScale => "no contacts (nothing touches anything)".into(),
+        _ => format!("model `{}` does not take it", sc.model.kind()),
+    }
+}
+
 /// What `margin` does with one scenario.
 enum Todo {
     /// Nothing: no margin, with why (a sweep, a scenario expected to fail).
@@ -191,7 +202,7 @@ fn plan_dimensions(preps: &[Prepared], asked: &[Dimension]) -> Result<Vec<Todo>,
             wanted.iter().partition(|d| applies.contains(d));
         let na = na
             .into_iter()
-            .map(|d| (d, why_not_applicable(d, sc)))
+            .map(|d| (d, why_not(d, sc)))
             .collect();
         out.push(Todo::Search { search, na });
     }

@@ -269,27 +269,22 @@ fn check_perturbable(sc: &Scenario, system: &dyn System, plan: &Plan) -> Result<
     Ok(())
 }
 
-/// Why dimension `d` does not reach this scenario's system (when it does not).
-pub fn why_not_applicable(d: crate::physics::perturb::Dimension, sc: &Scenario) -> String {
-    use crate::physics::perturb::Dimension as D;
-    let (model, planner) = (sc.model.kind(), sc.planner.kind());
-    match d {
-        d if d.observes() => format!(
-            "it perturbs the state a feedback law sees, and the plan of `{planner}` here reads no state (open loop)"
-        ),
-        D::WheelRadiusScale => format!("model `{model}` has no wheels"),
-        D::FrictionScale => format!("nothing in the world of model `{model}` touches anything"),
-        _ => format!("model `{model}` does not take it"),
-    }
-}
-
 /// Why dimension `d` does not reach this scenario's system, and which do.
 pub fn not_applicable(
     d: crate::physics::perturb::Dimension,
     sc: &Scenario,
     applies: &[crate::physics::perturb::Dimension],
 ) -> String {
-    let why = why_not_applicable(d, sc);
+    use crate::physics::perturb::Dimension as D;
+    let (model, planner) = (sc.model.kind(), sc.planner.kind());
+    let why = match d {
+        d if d.observes() => format!(
+            "it perturbs the state a feedback law sees, and the plan of `{planner}` here reads no state (open loop)"
+        ),
+        D::WheelRadiusScale => format!("model `{model}` has no wheels"),
+        D::FrictionScale => format!("nothing in the world of model `{model}` touches anything"),
+        _ => format!("model `{model}` does not take it"),
+    };
     let names: Vec<&str> = applies.iter().map(|d| d.name()).collect();
     format!(
         "`{d}` does not apply: {why} (applies here: {})",
