@@ -318,7 +318,10 @@ fn inapplicable_dimensions_and_expected_failures_have_rows_not_runs() {
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
     let rows: Vec<&str> = out.lines().skip(2).collect();
     assert_eq!(rows.len(), 3, "{out}");
-    assert!(rows[0].starts_with("| d | wheel_radius_scale | 0.00"), "{out}");
+    assert!(
+        rows[0].starts_with("| d | wheel_radius_scale | 0.00"),
+        "{out}"
+    );
     assert!(
         rows[1].starts_with("| s | wheel_radius_scale | n/a |") && rows[1].contains("no wheels"),
         "{out}"

@@ -200,10 +200,7 @@ fn plan_dimensions(preps: &[Prepared], asked: &[Dimension]) -> Result<Vec<Todo>,
         let applies = p.system.perturbable(&p.planned);
         let (search, na): (Vec<Dimension>, Vec<Dimension>) =
             wanted.iter().partition(|d| applies.contains(d));
-        let na = na
-            .into_iter()
-            .map(|d| (d, why_not(d, sc)))
-            .collect();
+        let na = na.into_iter().map(|d| (d, why_not(d, sc))).collect();
         out.push(Todo::Search { search, na });
     }
     let mut errors = Vec::new();
@@ -257,7 +254,10 @@ fn one(
         Todo::Search { na, .. } => {
             // Nothing applies: nothing to run.
             return Ok(Scenario {
-                rows: na.iter().map(|(d, why)| output::na(name, *d, why)).collect(),
+                rows: na
+                    .iter()
+                    .map(|(d, why)| output::na(name, *d, why))
+                    .collect(),
                 json: None,
                 logged: None,
             });

@@ -92,7 +92,10 @@ pub fn section(m: &Value) -> Result<String, String> {
             "ceiling" => note.push("never broke up to the search's ceiling".into()),
             "below_floor" => note.push("broke at every level searched".into()),
             "nominal_fails" => note.push("the nominal run already fails".into()),
-            "budget" => note.push("the run budget ended the search: the edge is known only to the levels shown".into()),
+            "budget" => note.push(
+                "the run budget ended the search: the edge is known only to the levels shown"
+                    .into(),
+            ),
             _ => {}
         }
         let _ = write!(
