@@ -523,8 +523,8 @@ fn early_stop_families_hold_on_prefixes_of_real_runs() {
                 let minimum = k.split('_').any(|t| t == "min" || t == "clearance");
                 let fam = family(k, minimum);
                 let ok = match fam {
-                    Family::RunningMax => !(p > f),
-                    Family::RunningMin => !(p < f),
+                    Family::RunningMax => p <= f || p.is_nan() || f.is_nan(),
+                    Family::RunningMin => p >= f || p.is_nan() || f.is_nan(),
                     Family::FirstPassage => (p.is_nan() && (f.is_nan() || f >= t)) || p == f,
                     Family::EndOnly => continue,
                 };

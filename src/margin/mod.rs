@@ -509,7 +509,7 @@ pub fn gate(prep: &Prepared, o: &mut RunOutcome) -> Result<(), crate::error::Err
     for ((d, least), r) in gates.iter().zip(&report.dimensions) {
         let name = MarginsConfig::metric(*d);
         o.metrics.push((name.clone(), r.margin));
-        if !(r.margin >= *least) {
+        if r.margin.is_nan() || r.margin < *least {
             let (v, b) = crate::numfmt::breach(r.margin, *least);
             let why = r
                 .first_broken

@@ -202,9 +202,9 @@ pub fn markdown(rows: &[Row]) -> String {
 }
 
 /// Where the guide keeps the output of `anholonomy margin scenarios/ --markdown`.
-pub const GUIDE_BEGIN: &str = "<!-- begin: anholonomy margin scenarios/ --markdown --no-logs -->";
+pub const GUIDE_BEGIN: &str = "<!-- begin: output of anholonomy margin --markdown -->";
 /// End of it.
-pub const GUIDE_END: &str = "<!-- end: anholonomy margin -->";
+pub const GUIDE_END: &str = "<!-- end: output of anholonomy margin --markdown -->";
 
 #[cfg(test)]
 mod tests {

@@ -90,9 +90,12 @@ pub struct Outcome<T> {
     pub rounds: usize,
 }
 
+/// Runs a batch of levels: one (pass, data) per level, in order.
+pub type Eval<'a, T> = dyn FnMut(&[f64]) -> Vec<(bool, T)> + 'a;
+
 /// Search the edge (module docs). `eval` gets a batch of levels and returns
 /// one (pass, data) per level, in order.
-pub fn search<T>(spec: &Spec, eval: &mut dyn FnMut(&[f64]) -> Vec<(bool, T)>) -> Outcome<T> {
+pub fn search<T>(spec: &Spec, eval: &mut Eval<'_, T>) -> Outcome<T> {
     let b = spec.batch.max(1);
     let mut st = State {
         probes: Vec::new(),
@@ -174,7 +177,7 @@ impl<T> State<T> {
     /// Evaluate the levels not probed yet, as one round, as many as the
     /// budget leaves (in order: the search's first choices first). False
     /// when the budget is spent and nothing was run.
-    fn run(&mut self, levels: Vec<f64>, eval: &mut dyn FnMut(&[f64]) -> Vec<(bool, T)>) -> bool {
+    fn run(&mut self, levels: Vec<f64>, eval: &mut Eval<'_, T>) -> bool {
         let mut levels: Vec<f64> = levels
             .into_iter()
             .filter(|l| !self.probes.iter().any(|p| p.level == *l))
