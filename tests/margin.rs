@@ -290,6 +290,52 @@ fn bad_margin_requests_are_refused_with_one_line() {
     );
 }
 
+/// Every dimension asked for has a row: one that does not apply reads n/a
+/// with why and is not run; a scenario expected to fail has one row saying
+/// so and is not run (no logs, no margins.json).
+#[test]
+fn inapplicable_dimensions_and_expected_failures_have_rows_not_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    write(dir.path(), "d.toml", &shipped("disk_paper.toml"));
+    write(dir.path(), "s.toml", &shipped("space_robot_paper.toml"));
+    write(dir.path(), "x.toml", &shipped("rover_open_loop.toml"));
+    let o = cli(
+        dir.path(),
+        &[
+            "margin",
+            "d.toml",
+            "s.toml",
+            "x.toml",
+            "--dimension",
+            "wheel_radius_scale",
+            "--markdown",
+            "--logs",
+            "L",
+            "--quiet",
+        ],
+    );
+    let out = String::from_utf8_lossy(&o.stdout);
+    assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let rows: Vec<&str> = out.lines().skip(2).collect();
+    assert_eq!(rows.len(), 3, "{out}");
+    assert!(
+        rows[0].starts_with("| d | wheel_radius_scale | 0.00"),
+        "{out}"
+    );
+    assert!(
+        rows[1].starts_with("| s | wheel_radius_scale | n/a |") && rows[1].contains("no wheels"),
+        "{out}"
+    );
+    assert!(
+        rows[2].starts_with("| x | – |") && rows[2].contains("expected to fail"),
+        "{out}"
+    );
+    let m = margins_json(&dir.path().join("L/d/margins.json"));
+    assert_eq!(m["dimensions"].as_array().unwrap().len(), 1);
+    // Nothing ran for the other two.
+    assert!(!dir.path().join("L/s").exists() && !dir.path().join("L/x").exists());
+}
+
 fn margins_json(path: &Path) -> serde_json::Value {
     let mut v: serde_json::Value = serde_json::from_slice(&std::fs::read(path).unwrap()).unwrap();
     v.as_object_mut().unwrap().remove("wall_time_s");
@@ -477,8 +523,8 @@ fn early_stop_families_hold_on_prefixes_of_real_runs() {
                 let minimum = k.split('_').any(|t| t == "min" || t == "clearance");
                 let fam = family(k, minimum);
                 let ok = match fam {
-                    Family::RunningMax => !(p > f),
-                    Family::RunningMin => !(p < f),
+                    Family::RunningMax => p <= f || p.is_nan() || f.is_nan(),
+                    Family::RunningMin => p >= f || p.is_nan() || f.is_nan(),
                     Family::FirstPassage => (p.is_nan() && (f.is_nan() || f >= t)) || p == f,
                     Family::EndOnly => continue,
                 };

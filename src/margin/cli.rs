@@ -5,6 +5,7 @@ use crate::error::Error;
 use crate::physics::perturb::Dimension;
 use crate::runner::{RunOptions, DEFAULT_POSE_RATE};
 use crate::validate::{not_applicable, prepare_all, Call, Prepared};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use std::path::PathBuf;
 use std::time::Instant;
@@ -53,6 +54,11 @@ pub struct MarginArgs {
     /// the number of threads.
     #[arg(long, value_name = "B", default_value_t = DEFAULT_BATCH)]
     pub batch: usize,
+    /// At most N runs per dimension: the search stops before a round that
+    /// would exceed it and reports the bracket reached (a coarser edge,
+    /// noted as such) [default: no limit].
+    #[arg(long, value_name = "N")]
+    pub max_runs: Option<usize>,
     /// Print nothing on stderr while searching.
     #[arg(long)]
     pub quiet: bool,
@@ -100,6 +106,7 @@ fn settings(a: &MarginArgs, prep: &Prepared) -> Settings {
         seeds: a.seeds.unwrap_or(cfg.seeds()),
         success_rate: a.success_rate.unwrap_or(cfg.success_rate()),
         batch: a.batch,
+        max_runs: a.max_runs,
     }
 }
 
@@ -120,6 +127,11 @@ fn check_options(a: &MarginArgs) -> Result<(), Vec<Error>> {
             return bad("--success-rate", format!("{f}: must be in (0, 1]"));
         }
     }
+    if let Some(n) = a.max_runs {
+        if !(1..=100_000).contains(&n) {
+            return bad("--max-runs", format!("{n}: must be in 1..=100000"));
+        }
+    }
     if !(1..=64).contains(&a.batch) {
         return bad("--batch", format!("{}: must be in 1..=64", a.batch));
     }
@@ -132,43 +144,73 @@ fn check_options(a: &MarginArgs) -> Result<(), Vec<Error>> {
     Ok(())
 }
 
-/// Which dimensions to search for each scenario (None: skipped, with why).
-/// A dimension asked for that applies to no scenario of the call is bad input.
-fn plan_dimensions(
-    preps: &[Prepared],
-    asked: &[Dimension],
-) -> Result<Vec<Result<Vec<Dimension>, String>>, Vec<Error>> {
+/// Why `d` does not apply to the scenario, in a few words (the table's
+/// note; the error for a dimension asked of no scenario says it at length).
+fn why_not(d: Dimension, sc: &crate::scenario::Scenario) -> String {
+    match d {
+        d if d.observes() => format!("open-loop plan (`{}` reads no state)", sc.planner.kind()),
+        Dimension::WheelRadiusScale => "no wheels".into(),
+        Dimension::FrictionScale => "no contacts (nothing touches anything)".into(),
+        _ => format!("model `{}` does not take it", sc.model.kind()),
+    }
+}
+
+/// What `margin` does with one scenario.
+enum Todo {
+    /// Nothing: no margin, with why (a sweep, a scenario expected to fail).
+    Skip(String),
+    /// Search `search`; the dimensions of `na` do not apply (with why).
+    Search {
+        search: Vec<Dimension>,
+        na: Vec<(Dimension, String)>,
+    },
+}
+
+impl Todo {
+    fn searches(&self, d: Dimension) -> bool {
+        matches!(self, Todo::Search { search, .. } if search.contains(&d))
+    }
+}
+
+/// What to do with each scenario: the dimensions asked (every one when
+/// none is named) that apply are searched, the others shown as n/a. A
+/// dimension asked for that applies to no scenario of the call is bad input.
+fn plan_dimensions(preps: &[Prepared], asked: &[Dimension]) -> Result<Vec<Todo>, Vec<Error>> {
+    let wanted: &[Dimension] = if asked.is_empty() {
+        &Dimension::ALL
+    } else {
+        asked
+    };
     let mut out = Vec::new();
     for p in preps {
-        if p.scenario.sweep.is_some() {
-            out.push(Err(
+        let sc = &p.scenario;
+        if sc.sweep.is_some() {
+            out.push(Todo::Skip(
                 "sweep: its verdict is a success rate over variants; margins are searched on single runs".into(),
             ));
             continue;
         }
+        if sc.expect_fails.is_some() {
+            // Its nominal run is meant to break a gate: no level passes.
+            out.push(Todo::Skip(
+                "expected to fail (`expect = \"fails\"`): no margin".into(),
+            ));
+            continue;
+        }
         let applies = p.system.perturbable(&p.planned);
-        let dims: Vec<Dimension> = if asked.is_empty() {
-            Dimension::ALL
-                .into_iter()
-                .filter(|d| applies.contains(d))
-                .collect()
-        } else {
-            asked
-                .iter()
-                .copied()
-                .filter(|d| applies.contains(d))
-                .collect()
-        };
-        out.push(Ok(dims));
+        let (search, na): (Vec<Dimension>, Vec<Dimension>) =
+            wanted.iter().partition(|d| applies.contains(d));
+        let na = na.into_iter().map(|d| (d, why_not(d, sc))).collect();
+        out.push(Todo::Search { search, na });
     }
     let mut errors = Vec::new();
     for d in asked {
-        let used = out
-            .iter()
-            .any(|r| r.as_ref().is_ok_and(|dims| dims.contains(d)));
-        if !used {
+        if !out.iter().any(|t| t.searches(*d)) {
             // Name the first scenario it could have applied to.
-            match preps.iter().find(|p| p.scenario.sweep.is_none()) {
+            let single = preps
+                .iter()
+                .find(|p| p.scenario.sweep.is_none() && p.scenario.expect_fails.is_none());
+            match single {
                 Some(p) => errors.push(Error::input(
                     &p.scenario.path,
                     format!(
@@ -178,7 +220,7 @@ fn plan_dimensions(
                 )),
                 None => errors.push(Error::input(
                     "--dimension",
-                    "every scenario of the call is a sweep: margins are searched on single runs",
+                    "every scenario of the call is a sweep or expected to fail: no margin to search",
                 )),
             }
         }
@@ -202,13 +244,25 @@ struct Scenario {
 fn one(
     a: &MarginArgs,
     prep: &Prepared,
-    dims: &Result<Vec<Dimension>, String>,
+    todo: &Todo,
     opts: &RunOptions,
+    bar: &ProgressBar,
 ) -> Result<Scenario, Error> {
     let name = &prep.scenario.name;
-    let dims = match dims {
-        Ok(d) => d,
-        Err(why) => {
+    let (dims, na) = match todo {
+        Todo::Search { search, na } if !search.is_empty() => (search, na),
+        Todo::Search { na, .. } => {
+            // Nothing applies: nothing to run.
+            return Ok(Scenario {
+                rows: na
+                    .iter()
+                    .map(|(d, why)| output::na(name, *d, why))
+                    .collect(),
+                json: None,
+                logged: None,
+            });
+        }
+        Todo::Skip(why) => {
             return Ok(Scenario {
                 rows: vec![output::skipped(name, why)],
                 json: None,
@@ -221,12 +275,18 @@ fn one(
     let o = crate::runner::run(prep, opts)?;
     let s = settings(a, prep);
     let progress = |r: &super::DimensionResult| {
+        bar.inc(1);
         if !a.quiet {
             let row = output::row(name, r);
-            eprintln!(
+            let line = format!(
                 "{name}: {} margin {} ({} runs, {:.1} s CPU)",
                 row.dimension, row.margin, row.runs, r.cpu_s
             );
+            if bar.is_hidden() {
+                eprintln!("{line}");
+            } else {
+                bar.println(line);
+            }
         }
     };
     let rep = super::margins(prep, Nominal::of(prep, &o), dims, &s, &progress);
@@ -241,11 +301,35 @@ fn one(
         }
         None => None,
     };
+    // Every dimension asked for, in `Dimension::ALL` order, n/a ones included.
+    let mut rows: Vec<(Dimension, output::Row)> = rep
+        .dimensions
+        .iter()
+        .map(|r| (r.dimension, output::row(name, r)))
+        .chain(na.iter().map(|(d, why)| (*d, output::na(name, *d, why))))
+        .collect();
+    rows.sort_by_key(|(d, _)| Dimension::ALL.iter().position(|x| x == d));
     Ok(Scenario {
-        rows: output::rows(&rep),
+        rows: rows.into_iter().map(|(_, r)| r).collect(),
         json: Some(rep.to_json(wall)),
         logged,
     })
+}
+
+/// Dimensions searched so far, on stderr when it is a terminal.
+fn progress_bar(total: u64, quiet: bool) -> ProgressBar {
+    let target = if quiet {
+        ProgressDrawTarget::hidden()
+    } else {
+        ProgressDrawTarget::stderr()
+    };
+    let bar = ProgressBar::with_draw_target(Some(total), target);
+    if let Ok(style) =
+        ProgressStyle::with_template("margins [{bar:40}] {pos}/{len} dimensions {elapsed}")
+    {
+        bar.set_style(style.progress_chars("=> "));
+    }
+    bar
 }
 
 /// `anholonomy margin`: exit 0, 2 (bad input, nothing run) or 3 (a run or
@@ -268,14 +352,23 @@ pub fn margin_cmd(a: &MarginArgs) -> Result<u8, Vec<Error>> {
         keep: crate::log::Keep::default(),
         cancel: Default::default(),
     };
+    let total: usize = plan
+        .iter()
+        .map(|t| match t {
+            Todo::Search { search, .. } => search.len(),
+            Todo::Skip(_) => 0,
+        })
+        .sum();
+    let bar = progress_bar(total as u64, a.quiet);
     // Scenarios in parallel (each with its dimensions and levels in
     // parallel): results in input order, whatever the thread count.
     let done: Vec<Result<Scenario, Error>> = preps
         .par_iter()
         .zip(plan.par_iter())
         .with_max_len(1)
-        .map(|(prep, dims)| one(a, prep, dims, &opts))
+        .map(|(prep, todo)| one(a, prep, todo, &opts, &bar))
         .collect();
+    bar.finish_and_clear();
     let mut rows = Vec::new();
     let mut reports = Vec::new();
     let mut names = Vec::new();

@@ -50,6 +50,8 @@ pub struct Settings {
     pub success_rate: f64,
     /// Levels per round.
     pub batch: usize,
+    /// At most this many runs per dimension (None: until the resolution).
+    pub max_runs: Option<usize>,
 }
 
 impl Settings {
@@ -60,6 +62,7 @@ impl Settings {
             seeds: cfg.seeds(),
             success_rate: cfg.success_rate(),
             batch: DEFAULT_BATCH,
+            max_runs: None,
         }
     }
 }
@@ -87,12 +90,15 @@ pub fn spec(d: Dimension, s: &Settings, gate: Option<f64>) -> Spec {
         Some(g) if g > 0.0 => g.clamp(floor, ceiling),
         _ => start,
     };
+    // A random level costs `seeds` runs.
+    let per_level = if d.random() { s.seeds.max(1) } else { 1 };
     Spec {
         start,
         floor,
         ceiling,
         resolution: s.resolution,
         batch: s.batch,
+        max_levels: s.max_runs.map(|r| (r / per_level).max(1)),
     }
 }
 
@@ -195,6 +201,7 @@ impl DimensionResult {
                 crate::numfmt::readable(range(self.dimension).1)
             )),
             Status::NominalFails => notes.push("the nominal run already fails".into()),
+            Status::Budget => notes.push(format!("run budget ({} runs) spent", self.runs)),
             Status::Found => {}
         }
         if self.non_monotone {
@@ -502,7 +509,7 @@ pub fn gate(prep: &Prepared, o: &mut RunOutcome) -> Result<(), crate::error::Err
     for ((d, least), r) in gates.iter().zip(&report.dimensions) {
         let name = MarginsConfig::metric(*d);
         o.metrics.push((name.clone(), r.margin));
-        if !(r.margin >= *least) {
+        if r.margin.is_nan() || r.margin < *least {
             let (v, b) = crate::numfmt::breach(r.margin, *least);
             let why = r
                 .first_broken

@@ -1,7 +1,7 @@
 //! The margins as a table: plain text for the terminal, Markdown for the guide.
 
 use super::search::Status;
-use super::{range, DimensionResult, Report};
+use super::{range, DimensionResult};
 use crate::numfmt::with_digits;
 use crate::physics::perturb::{Dimension, Kind};
 
@@ -61,9 +61,14 @@ pub fn row(scenario: &str, r: &DimensionResult) -> Row {
         Status::Ceiling => format!("≥ {}", magnitude(d, ceiling)),
         Status::BelowFloor => format!("< {}", magnitude(d, floor)),
         Status::NominalFails => "none".into(),
+        Status::Budget => match r.first_failing {
+            None => format!("≥ {}", magnitude(d, r.margin)),
+            Some(hi) if r.margin == 0.0 => format!("< {}", magnitude(d, hi)),
+            Some(_) => magnitude(d, r.margin),
+        },
     };
     let edge = match (r.status, r.first_failing) {
-        (Status::Found, Some(hi)) => format!(
+        (Status::Found | Status::Budget, Some(hi)) if r.margin > 0.0 => format!(
             "[{}, {}){}",
             with_digits(r.margin, 3),
             with_digits(hi, 3),
@@ -95,12 +100,15 @@ pub fn row(scenario: &str, r: &DimensionResult) -> Row {
     }
 }
 
-/// Rows of a report.
-pub fn rows(rep: &Report) -> Vec<Row> {
-    rep.dimensions
-        .iter()
-        .map(|r| row(&rep.scenario, r))
-        .collect()
+/// A row for a dimension that does not apply to the scenario (not run).
+pub fn na(scenario: &str, d: Dimension, why: &str) -> Row {
+    Row {
+        scenario: scenario.into(),
+        dimension: d.name().into(),
+        margin: "n/a".into(),
+        note: format!("does not apply: {why}"),
+        ..skipped(scenario, "")
+    }
 }
 
 /// A row for a scenario without margins (why, in the note).
@@ -172,14 +180,106 @@ pub fn text(rows: &[Row]) -> String {
     out
 }
 
-/// Markdown table (pipes in cells escaped).
+/// Markdown table (pipes in cells escaped), for documents: without the
+/// wall time, which says more about the machine's load than the search.
 pub fn markdown(rows: &[Row]) -> String {
+    const WALL: usize = 7;
     let esc = |s: &str| s.replace('|', "\\|");
-    let mut out = format!("| {} |\n", HEAD.join(" | "));
-    out.push_str(&format!("|{}\n", "---|".repeat(HEAD.len())));
+    let keep = |c: [&str; 9]| -> Vec<String> {
+        c.iter()
+            .enumerate()
+            .filter(|(i, _)| *i != WALL)
+            .map(|(_, x)| esc(x))
+            .collect()
+    };
+    let head = keep(HEAD);
+    let mut out = format!("| {} |\n", head.join(" | "));
+    out.push_str(&format!("|{}\n", "---|".repeat(head.len())));
     for r in rows {
-        let c: Vec<String> = cells(r).iter().map(|x| esc(x)).collect();
-        out.push_str(&format!("| {} |\n", c.join(" | ")));
+        out.push_str(&format!("| {} |\n", keep(cells(r)).join(" | ")));
     }
     out
+}
+
+/// Where the guide keeps the output of `anholonomy margin scenarios/ --markdown`.
+pub const GUIDE_BEGIN: &str = "<!-- begin: output of anholonomy margin --markdown -->";
+/// End of it.
+pub const GUIDE_END: &str = "<!-- end: output of anholonomy margin --markdown -->";
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The cells of a Markdown row (escaped pipes kept inside their cell).
+    fn md_cells(line: &str) -> Vec<String> {
+        let inner = line.trim().trim_start_matches('|').trim_end_matches('|');
+        let mut cells = vec![String::new()];
+        let mut prev = ' ';
+        for ch in inner.chars() {
+            if ch == '|' && prev != '\\' {
+                cells.push(String::new());
+            } else {
+                cells.last_mut().unwrap().push(ch);
+            }
+            prev = ch;
+        }
+        cells.into_iter().map(|c| c.trim().to_string()).collect()
+    }
+
+    /// The guide's table of every shipped scenario is this command's
+    /// output: the same header, every row with its columns, every scenario of
+    /// `scenarios/` in it with every dimension (n/a included) or one row
+    /// saying why it has no margin. The numbers come from the run.
+    #[test]
+    #[ignore = "the guide holds the command's stderr lines until the full run (about 40 min of CPU) is pasted between its markers"]
+    fn the_guides_table_has_the_commands_format_and_every_scenario() {
+        let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
+        let doc = std::fs::read_to_string(root.join("docs/src/margins.md")).unwrap();
+        let table = doc
+            .split_once(GUIDE_BEGIN)
+            .and_then(|(_, rest)| rest.split_once(GUIDE_END))
+            .map(|(t, _)| t.trim())
+            .expect("the guide's generated table and its markers");
+        let lines: Vec<&str> = table.lines().filter(|l| l.starts_with('|')).collect();
+        let head = markdown(&[]);
+        assert_eq!(format!("{}\n{}\n", lines[0], lines[1]), head);
+        let width = md_cells(lines[0]).len();
+        let rows: Vec<Vec<String>> = lines[2..].iter().map(|l| md_cells(l)).collect();
+        for r in &rows {
+            assert_eq!(r.len(), width, "{r:?}");
+        }
+        let all: Vec<&str> = Dimension::ALL.iter().map(|d| d.name()).collect();
+        let mut names: Vec<String> = std::fs::read_dir(root.join("scenarios"))
+            .unwrap()
+            .filter_map(|e| {
+                let p = e.ok()?.path();
+                (p.extension()? == "toml").then(|| p.file_stem()?.to_str().map(String::from))?
+            })
+            .collect();
+        names.sort();
+        let mut seen: Vec<&str> = rows.iter().map(|r| r[0].as_str()).collect();
+        seen.dedup();
+        assert_eq!(seen, names, "the table's scenarios, in the command's order");
+        for n in &names {
+            let dims: Vec<&str> = rows
+                .iter()
+                .filter(|r| &r[0] == n)
+                .map(|r| r[1].as_str())
+                .collect();
+            assert!(dims == ["–"] || dims == all, "{n}: {dims:?}");
+        }
+    }
+
+    #[test]
+    fn markdown_leaves_out_the_wall_time_and_escapes_pipes() {
+        let r = Row {
+            margin: "1 m|rad".into(),
+            wall: "12.5".into(),
+            ..skipped("s", "why")
+        };
+        let md = markdown(&[r]);
+        assert!(!md.contains("wall") && !md.contains("12.5"), "{md}");
+        assert!(md.contains("1 m\\|rad"), "{md}");
+        assert_eq!(md_cells(md.lines().nth(2).unwrap()).len(), 8);
+    }
 }

@@ -19,6 +19,10 @@
 //! inversion. The margin stays conservative: the largest pass below the
 //! smallest failure. Results depend on `batch` (which levels are probed),
 //! never on how many threads evaluate them.
+//!
+//! A **run budget** (`max_levels`) ends the search before the next round
+//! that would exceed it: the bracket reached so far is the result
+//! ([`Status::Budget`]), coarser than the resolution and stated as such.
 
 use serde::Serialize;
 
@@ -35,6 +39,8 @@ pub struct Spec {
     pub resolution: f64,
     /// Levels per round.
     pub batch: usize,
+    /// At most this many levels in all (None: until the resolution).
+    pub max_levels: Option<usize>,
 }
 
 /// How a search ended.
@@ -49,6 +55,9 @@ pub enum Status {
     BelowFloor,
     /// The nominal run already breaks a gate: no margin.
     NominalFails,
+    /// The run budget ended the search: the edge lies in [margin, hi) (hi
+    /// ∞: not bracketed yet; margin 0: no level passed yet).
+    Budget,
 }
 
 /// One evaluated level.
@@ -81,13 +90,17 @@ pub struct Outcome<T> {
     pub rounds: usize,
 }
 
+/// Runs a batch of levels: one (pass, data) per level, in order.
+pub type Eval<'a, T> = dyn FnMut(&[f64]) -> Vec<(bool, T)> + 'a;
+
 /// Search the edge (module docs). `eval` gets a batch of levels and returns
 /// one (pass, data) per level, in order.
-pub fn search<T>(spec: &Spec, eval: &mut dyn FnMut(&[f64]) -> Vec<(bool, T)>) -> Outcome<T> {
+pub fn search<T>(spec: &Spec, eval: &mut Eval<'_, T>) -> Outcome<T> {
     let b = spec.batch.max(1);
     let mut st = State {
         probes: Vec::new(),
         rounds: 0,
+        budget: spec.max_levels,
     };
     // 1. Up the ladder.
     let mut x = spec.start.min(spec.ceiling);
@@ -100,12 +113,13 @@ pub fn search<T>(spec: &Spec, eval: &mut dyn FnMut(&[f64]) -> Vec<(bool, T)>) ->
             }
             x = (2.0 * x).min(spec.ceiling);
         }
-        let top = *levels.last().unwrap_or(&x);
-        st.run(levels, eval);
+        if !st.run(levels, eval) {
+            return st.finish(Status::Budget);
+        }
         if st.probes.iter().any(|p| !p.pass) {
             break;
         }
-        if top >= spec.ceiling {
+        if st.probes.iter().any(|p| p.level >= spec.ceiling) {
             return st.finish(Status::Ceiling);
         }
     }
@@ -124,7 +138,9 @@ pub fn search<T>(spec: &Spec, eval: &mut dyn FnMut(&[f64]) -> Vec<(bool, T)>) ->
         if levels.is_empty() {
             return st.finish(Status::BelowFloor);
         }
-        st.run(levels, eval);
+        if !st.run(levels, eval) {
+            return st.finish(Status::Budget);
+        }
     }
     // 3. Bisect, checking once above the bracket.
     let mut checked_above = false;
@@ -142,7 +158,9 @@ pub fn search<T>(spec: &Spec, eval: &mut dyn FnMut(&[f64]) -> Vec<(bool, T)>) ->
                 levels.push((2.0 * hi).min(spec.ceiling));
             }
         }
-        st.run(levels, eval);
+        if !st.run(levels, eval) {
+            return st.finish(Status::Budget);
+        }
     }
     st.finish(Status::Found)
 }
@@ -151,17 +169,28 @@ pub fn search<T>(spec: &Spec, eval: &mut dyn FnMut(&[f64]) -> Vec<(bool, T)>) ->
 struct State<T> {
     probes: Vec<Probe<T>>,
     rounds: usize,
+    /// Levels that may still be run (None: no limit).
+    budget: Option<usize>,
 }
 
 impl<T> State<T> {
-    /// Evaluate the levels not probed yet, as one round.
-    fn run(&mut self, levels: Vec<f64>, eval: &mut dyn FnMut(&[f64]) -> Vec<(bool, T)>) {
-        let levels: Vec<f64> = levels
+    /// Evaluate the levels not probed yet, as one round, as many as the
+    /// budget leaves (in order: the search's first choices first). False
+    /// when the budget is spent and nothing was run.
+    fn run(&mut self, levels: Vec<f64>, eval: &mut Eval<'_, T>) -> bool {
+        let mut levels: Vec<f64> = levels
             .into_iter()
             .filter(|l| !self.probes.iter().any(|p| p.level == *l))
             .collect();
+        if let Some(left) = &mut self.budget {
+            if *left == 0 {
+                return false;
+            }
+            levels.truncate(*left);
+            *left -= levels.len();
+        }
         if levels.is_empty() {
-            return;
+            return true;
         }
         self.rounds += 1;
         for (level, (pass, data)) in levels.iter().zip(eval(&levels)) {
@@ -172,6 +201,7 @@ impl<T> State<T> {
                 data,
             });
         }
+        true
     }
 
     /// The smallest failure (∞ without one) and the largest pass below it (0 without one).
@@ -202,7 +232,7 @@ impl<T> State<T> {
         }
         let margin = match status {
             Status::BelowFloor | Status::NominalFails => 0.0,
-            _ => lo,
+            Status::Found | Status::Ceiling | Status::Budget => lo,
         };
         Outcome {
             status,
@@ -227,6 +257,7 @@ mod tests {
             ceiling: 5.0,
             resolution: 0.05,
             batch: 2,
+            max_levels: None,
         }
     }
 
@@ -262,6 +293,37 @@ mod tests {
                 prop_assert_eq!(p.pass, p.level <= edge);
             }
         }
+    }
+
+    proptest! {
+        #![proptest_config(crate::prop_config::config(128))]
+        /// A run budget ends the search within it, with a bracket that holds
+        /// the edge; a budget the search does not need changes nothing.
+        #[test]
+        fn a_budget_ends_the_search_with_a_true_bracket(
+            log_edge in -5.5f64..0.6, batch in 1usize..5, max in 1usize..12,
+        ) {
+            let edge = 10f64.powf(log_edge);
+            let s = Spec { batch, max_levels: Some(max), ..spec() };
+            let (o, n) = run(&s, |l| l <= edge);
+            prop_assert!(n <= max);
+            prop_assert!(o.margin <= edge && edge < o.hi);
+            let (full, m) = run(&spec_b(batch), |l| l <= edge);
+            if m <= max {
+                prop_assert_eq!(o.status, full.status);
+                prop_assert_eq!((o.margin, o.hi), (full.margin, full.hi));
+            } else if o.status == Status::Found {
+                // A truncated round (the check above the bracket dropped)
+                // can still reach the resolution.
+                prop_assert!(o.hi <= o.margin * 1.05 * (1.0 + 1e-12));
+            } else {
+                prop_assert_eq!(o.status, Status::Budget);
+            }
+        }
+    }
+
+    fn spec_b(batch: usize) -> Spec {
+        Spec { batch, ..spec() }
     }
 
     #[test]

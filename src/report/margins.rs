@@ -43,6 +43,8 @@ pub fn section(m: &Value) -> Result<String, String> {
             "ceiling" => format!("≥ {}", magnitude(dim, margin)),
             "below_floor" => "below the floor".into(),
             "nominal_fails" => "none".into(),
+            "budget" if d["first_failing"].is_null() => format!("≥ {}", magnitude(dim, margin)),
+            "budget" if margin == 0.0 => "below the first failing level".into(),
             _ => magnitude(dim, margin),
         };
         let gate = gates[name].as_f64();
@@ -90,6 +92,10 @@ pub fn section(m: &Value) -> Result<String, String> {
             "ceiling" => note.push("never broke up to the search's ceiling".into()),
             "below_floor" => note.push("broke at every level searched".into()),
             "nominal_fails" => note.push("the nominal run already fails".into()),
+            "budget" => note.push(
+                "the run budget ended the search: the edge is known only to the levels shown"
+                    .into(),
+            ),
             _ => {}
         }
         let _ = write!(
