@@ -231,7 +231,6 @@ mod tests {
     /// `scenarios/` in it with every dimension (n/a included) or one row
     /// saying why it has no margin. The numbers come from the run.
     #[test]
-    #[ignore = "the guide holds the command's stderr lines until the full run (about 40 min of CPU) is pasted between its markers"]
     fn the_guides_table_has_the_commands_format_and_every_scenario() {
         let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR"));
         let doc = std::fs::read_to_string(root.join("docs/src/margins.md")).unwrap();
