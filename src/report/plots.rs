@@ -1,6 +1,6 @@
 //! Figures of the HTML report, drawn with `plotters` into inline SVG strings.
 
-use plotters::coord::types::RangedCoordf64;
+use plotters::coord::ranged1d::{AsRangedCoord, ValueFormatter};
 use plotters::coord::Shift;
 use plotters::prelude::*;
 
@@ -411,38 +411,16 @@ pub fn scatter(
     hline: Option<(f64, &str)>,
 ) -> Res<String> {
     let (x0, x1) = range(pts.iter().map(|p| p.0));
-    let (y0, y1) = range(pts.iter().map(|p| p.1).chain(hline.map(|h| h.0)));
-    // Headroom for the legend, so it never hides points.
-    let y1 = y1 + 0.3 * (y1 - y0);
-    svg(560, 260, |root| {
-        let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 15))
-            .margin(6)
-            .x_label_area_size(30)
-            .y_label_area_size(56)
-            .build_cartesian_2d(x0..x1, y0..y1)
-            .map_err(err)?;
-        chart
-            .configure_mesh()
-            .x_desc(x_desc)
-            .y_desc(y_desc)
-            .label_style(("sans-serif", 11))
-            .axis_desc_style(("sans-serif", 12))
-            // Only the labelled grid lines: the light ones were a third of the
-            // report's bytes and add little to a 560-pixel chart.
-            .max_light_lines(0)
-            .x_label_formatter(&|v| tick(*v))
-            .y_label_formatter(&|v| tick(*v))
-            .draw()
-            .map_err(err)?;
-        points_and_hline(
-            &mut chart,
-            pts.iter().filter(|p| p.0.is_finite()),
-            ["success", "failure"],
-            hline,
-            (x0, x1),
-        )
-    })
+    let axes = Axes {
+        title,
+        x_desc,
+        y_desc,
+        names: ["success", "failure"],
+        // Only the labelled grid lines: the light ones were a third of the
+        // report's bytes and add little to a 560-pixel chart.
+        light_grid: false,
+    };
+    scatter_on(&axes, x0..x1, (x0, x1), |x| x.is_finite(), pts, hline)
 }
 
 /// [`scatter`] on a logarithmic x axis (x > 0 only: a margin search's
@@ -454,88 +432,102 @@ pub fn scatter_log_x(
     pts: &[(f64, f64, bool)],
     hline: Option<(f64, &str)>,
 ) -> Res<String> {
-    let xs = pts
-        .iter()
-        .map(|p| p.0)
-        .filter(|x| *x > 0.0 && x.is_finite());
+    let on_axis = |x: f64| x > 0.0 && x.is_finite();
+    let xs = pts.iter().map(|p| p.0).filter(|x| on_axis(*x));
     let (lo, hi) = xs.fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)));
     let (x0, x1) = if lo.is_finite() && hi > 0.0 {
         (lo / 1.5, hi * 1.5)
     } else {
         (1e-3, 1.0)
     };
+    let axes = Axes {
+        title,
+        x_desc,
+        y_desc,
+        names: ["pass", "fail"],
+        light_grid: true,
+    };
+    scatter_on(&axes, (x0..x1).log_scale(), (x0, x1), on_axis, pts, hline)
+}
+
+/// Titles, legend names (pass, fail) and grid of a scatter chart.
+struct Axes<'s> {
+    title: &'s str,
+    x_desc: &'s str,
+    y_desc: &'s str,
+    names: [&'s str; 2],
+    light_grid: bool,
+}
+
+/// A scatter chart on the x axis `x` (spanning `xs`): the points whose x
+/// `on_axis` accepts, green when they pass and red when they fail, a dashed
+/// red line at `hline`, and the legend; shared by the linear and the
+/// logarithmic x axis.
+fn scatter_on<XR>(
+    axes: &Axes<'_>,
+    x: XR,
+    (x0, x1): (f64, f64),
+    on_axis: impl Fn(f64) -> bool,
+    pts: &[(f64, f64, bool)],
+    hline: Option<(f64, &str)>,
+) -> Res<String>
+where
+    XR: AsRangedCoord<Value = f64>,
+    XR::CoordDescType: ValueFormatter<f64>,
+{
     let (y0, y1) = range(pts.iter().map(|p| p.1).chain(hline.map(|h| h.0)));
+    // Headroom for the legend, so it never hides points.
     let y1 = y1 + 0.3 * (y1 - y0);
     svg(560, 260, |root| {
         let mut chart = ChartBuilder::on(&root)
-            .caption(title, ("sans-serif", 15))
+            .caption(axes.title, ("sans-serif", 15))
             .margin(6)
             .x_label_area_size(30)
             .y_label_area_size(56)
-            .build_cartesian_2d((x0..x1).log_scale(), y0..y1)
+            .build_cartesian_2d(x, y0..y1)
             .map_err(err)?;
-        chart
-            .configure_mesh()
-            .x_desc(x_desc)
-            .y_desc(y_desc)
+        let mut mesh = chart.configure_mesh();
+        mesh.x_desc(axes.x_desc)
+            .y_desc(axes.y_desc)
             .label_style(("sans-serif", 11))
             .axis_desc_style(("sans-serif", 12))
-            .light_line_style(RGBColor(238, 238, 238))
             .x_label_formatter(&|v| tick(*v))
-            .y_label_formatter(&|v| tick(*v))
-            .draw()
-            .map_err(err)?;
-        points_and_hline(
-            &mut chart,
-            pts.iter().filter(|p| p.0 > 0.0 && p.0.is_finite()),
-            ["pass", "fail"],
-            hline,
-            (x0, x1),
-        )
-    })
-}
-
-/// The points of a scatter chart, green when they pass and red when they
-/// fail (legend `names`), a dashed red line at `hline` across `xs`, and the
-/// legend: shared by the linear and the logarithmic x axis.
-fn points_and_hline<'a, 'p, X>(
-    chart: &mut ChartContext<'a, SVGBackend<'a>, Cartesian2d<X, RangedCoordf64>>,
-    pts: impl Iterator<Item = &'p (f64, f64, bool)> + Clone,
-    names: [&str; 2],
-    hline: Option<(f64, &str)>,
-    (x0, x1): (f64, f64),
-) -> Res<()>
-where
-    X: Ranged<ValueType = f64>,
-{
-    for (ok, color, name) in [(true, IDEAL, names[0]), (false, RED, names[1])] {
-        let sel: Vec<(f64, f64)> = pts
-            .clone()
-            .filter(|p| p.2 == ok && p.1.is_finite())
-            .map(|p| (p.0, p.1))
-            .collect();
-        if sel.is_empty() {
-            continue;
+            .y_label_formatter(&|v| tick(*v));
+        if axes.light_grid {
+            mesh.light_line_style(RGBColor(238, 238, 238));
+        } else {
+            mesh.max_light_lines(0);
         }
-        chart
-            .draw_series(sel.into_iter().map(|p| Circle::new(p, 3, color.filled())))
-            .map_err(err)?
-            .label(name)
-            .legend(move |(x, y)| Circle::new((x + 7, y), 3, color.filled()));
-    }
-    if let Some((y, name)) = hline {
-        chart
-            .draw_series(DashedLineSeries::new(
-                [(x0, y), (x1, y)],
-                6,
-                4,
-                RED.stroke_width(1),
-            ))
-            .map_err(err)?
-            .label(name)
-            .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], RED));
-    }
-    legend(chart)
+        mesh.draw().map_err(err)?;
+        for (ok, color, name) in [(true, IDEAL, axes.names[0]), (false, RED, axes.names[1])] {
+            let sel: Vec<(f64, f64)> = pts
+                .iter()
+                .filter(|p| p.2 == ok && on_axis(p.0) && p.1.is_finite())
+                .map(|p| (p.0, p.1))
+                .collect();
+            if sel.is_empty() {
+                continue;
+            }
+            chart
+                .draw_series(sel.into_iter().map(|p| Circle::new(p, 3, color.filled())))
+                .map_err(err)?
+                .label(name)
+                .legend(move |(x, y)| Circle::new((x + 7, y), 3, color.filled()));
+        }
+        if let Some((y, name)) = hline {
+            chart
+                .draw_series(DashedLineSeries::new(
+                    [(x0, y), (x1, y)],
+                    6,
+                    4,
+                    RED.stroke_width(1),
+                ))
+                .map_err(err)?
+                .label(name)
+                .legend(|(x, y)| PathElement::new(vec![(x, y), (x + 14, y)], RED));
+        }
+        legend(&mut chart)
+    })
 }
 
 #[cfg(test)]
