@@ -572,7 +572,7 @@ impl Scene {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::planner::dilf::object::table_i_start;
+    use crate::planner::dilf::object::table_i_start_and_goal_ahead;
     use crate::planner::dilf::object::tests::{perturbed, scene as beam_scene};
     use crate::planner::dilf::potential::tests::{random_q, scene};
     use crate::planner::dilf::potential::PotentialParams;
@@ -659,10 +659,7 @@ mod tests {
 
     #[test]
     fn two_robots_with_the_beam_match_dual_numbers() {
-        let q0 = table_i_start();
-        let mut goal = q0.clone();
-        goal[1] -= 2.0;
-        goal[DOF + 1] -= 2.0;
+        let (q0, goal) = table_i_start_and_goal_ahead();
         for frame in [GoalFrame::Platform, GoalFrame::World] {
             // The goal points depend on the frame: build the scene anew.
             let base = beam_scene(&q0, goal.clone(), 0.5);
@@ -696,10 +693,7 @@ mod tests {
         use crate::model::ellipsoid::Superellipsoid;
         use crate::planner::dilf::potential::tests::assert_field_is_scaled_gradient;
         use crate::planner::dilf::potential::Obstacle;
-        let q0 = table_i_start();
-        let mut goal = q0.clone();
-        goal[1] -= 2.0;
-        goal[DOF + 1] -= 2.0;
+        let (q0, goal) = table_i_start_and_goal_ahead();
         let (a, b) = (mm::grasp_point(&q0[..DOF]), mm::grasp_point(&q0[DOF..]));
         let mid = spatial::scale(spatial::add(a, b), 0.5);
         let boxed = |name: &str, dz: f64| Obstacle {
@@ -746,10 +740,7 @@ mod tests {
     /// controller calls it), the two paths stay together.
     #[test]
     fn warm_sequence_matches_dual_numbers() {
-        let q0 = table_i_start();
-        let mut goal = q0.clone();
-        goal[1] -= 2.0;
-        goal[DOF + 1] -= 2.0;
+        let (q0, goal) = table_i_start_and_goal_ahead();
         let s = beam_scene(&q0, goal, 4.0);
         let (mut w1, mut w2) = (s.warm(), s.warm());
         for i in 0..30 {

@@ -369,6 +369,17 @@ pub fn table_i_start() -> Vec<f64> {
     q
 }
 
+/// Table I's start, and a goal 2 m ahead of both robots (their heading is
+/// −y, so the dipole terms do not vanish): the tests' transport task.
+#[cfg(test)]
+pub(crate) fn table_i_start_and_goal_ahead() -> (Vec<f64>, Vec<f64>) {
+    let q0 = table_i_start();
+    let mut goal = q0.clone();
+    goal[1] -= 2.0;
+    goal[DOF + 1] -= 2.0;
+    (q0, goal)
+}
+
 /// Table I's desired configuration of both robots (rad).
 pub fn table_i_goal() -> Vec<f64> {
     use std::f64::consts::PI;
@@ -555,10 +566,7 @@ pub(crate) mod tests {
     #[test]
     fn the_wrench_bound_has_exact_gradients() {
         use num_dual::Dual64 as Dual;
-        let q0 = table_i_start();
-        let mut goal = q0.clone();
-        goal[1] -= 2.0;
-        goal[DOF + 1] -= 2.0;
+        let (q0, goal) = table_i_start_and_goal_ahead();
         let bound = Bound::Wrench {
             force: 60.0,
             moment: 8.0,
@@ -627,10 +635,7 @@ pub(crate) mod tests {
     #[test]
     fn the_field_on_measured_grasps_is_the_gradient_of_v() {
         use crate::model::spatial::{rot_x, rot_y};
-        let q0 = table_i_start();
-        let mut goal = q0.clone();
-        goal[1] -= 2.0;
-        goal[DOF + 1] -= 2.0;
+        let (q0, goal) = table_i_start_and_goal_ahead();
         let bound = Bound::Wrench {
             force: 60.0,
             moment: 8.0,
@@ -686,12 +691,7 @@ pub(crate) mod tests {
     /// start/goal check refuses such a configuration.
     #[test]
     fn overstraining_the_beam_zeroes_v() {
-        let q0 = table_i_start();
-        // The goal 2 m ahead of both robots (their heading is −y), so the
-        // dipole terms do not vanish.
-        let mut goal = q0.clone();
-        goal[1] -= 2.0;
-        goal[DOF + 1] -= 2.0;
+        let (q0, goal) = table_i_start_and_goal_ahead();
         let s = scene(&q0, goal, 0.5);
         let mut q = q0.clone();
         let mut last_v = f64::INFINITY;
@@ -732,10 +732,7 @@ pub(crate) mod tests {
         use crate::model::mobile_manipulator::MobileManipulator;
         use crate::model::State;
         use crate::planner::dilf::{self, DilfParams};
-        let q0 = table_i_start();
-        let mut goal = q0.clone();
-        goal[1] -= 2.0;
-        goal[DOF + 1] -= 2.0;
+        let (q0, goal) = table_i_start_and_goal_ahead();
         let q_max = 0.3;
         let s = std::sync::Arc::new(scene(&q0, goal.clone(), q_max));
         let params: DilfParams = toml::from_str(
