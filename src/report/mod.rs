@@ -12,8 +12,10 @@
 //! no scripts, no network), so they work as CI artifacts and offline.
 
 pub mod data;
+mod figures;
 mod html;
 mod margins;
+mod markup;
 mod plots;
 
 use crate::error::Error;

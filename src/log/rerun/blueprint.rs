@@ -1,0 +1,461 @@
+//! The Rerun blueprint of a run: a 3D overview whose camera frames the whole
+//! run, a follow view for runs much larger than the robot, time-series views
+//! over the whole run with fitted value ranges, and overlays hidden by default.
+
+use ::rerun as rr;
+use rr::blueprint::components::{Eye3DKind, LinkAxis, PanelState};
+use rr::blueprint::{
+    Blueprint, BlueprintActivation, BlueprintPanel, ContainerLike, Grid, Horizontal,
+    SelectionPanel, Spatial3DView, Tabs, TextLogView, TimePanel, TimeSeriesView, Vertical,
+};
+use rr::external::re_log_types::BlueprintActivationCommand;
+use rr::external::re_sdk_types::blueprint::archetypes::{
+    EntityBehavior, EyeControls3D, ScalarAxis, TimeAxis, VisibleTimeRanges,
+};
+use rr::external::re_sdk_types::datatypes::{
+    Range1D, TimeInt, TimeRange, TimeRangeBoundary, VisibleTimeRange,
+};
+use rr::log::LogMsg;
+use rr::AsComponents;
+
+use crate::log::scene::{coord_name, planar_path};
+use crate::record::{RunRecord, Shape};
+
+use super::{ep, RrError, TIMELINE};
+
+/// Axis-aligned box over points, empty until a finite point is added.
+#[derive(Clone, Copy)]
+struct Bounds {
+    lo: [f64; 3],
+    hi: [f64; 3],
+}
+
+impl Bounds {
+    fn new() -> Self {
+        Bounds {
+            lo: [f64::INFINITY; 3],
+            hi: [f64::NEG_INFINITY; 3],
+        }
+    }
+    fn add(&mut self, p: [f64; 3]) {
+        if p.iter().all(|x| x.is_finite()) {
+            for ((lo, hi), x) in self.lo.iter_mut().zip(&mut self.hi).zip(p) {
+                *lo = lo.min(x);
+                *hi = hi.max(x);
+            }
+        }
+    }
+    fn is_empty(&self) -> bool {
+        self.lo[0] > self.hi[0]
+    }
+    fn center(&self) -> [f64; 3] {
+        [0, 1, 2].map(|i| 0.5 * (self.lo[i] + self.hi[i]))
+    }
+    /// Half the diagonal.
+    fn radius(&self) -> f64 {
+        0.5 * (0..3)
+            .map(|i| (self.hi[i] - self.lo[i]).powi(2))
+            .sum::<f64>()
+            .sqrt()
+    }
+}
+
+/// Largest distance of a visual from its link frame origin (a crude robot size per link).
+fn link_reach(link: &crate::record::LinkVisual) -> f64 {
+    link.visuals
+        .iter()
+        .map(|v| {
+            let o = v.origin.translation;
+            let r = match v.shape {
+                Shape::Box { size } => {
+                    0.5 * (size[0].powi(2) + size[1].powi(2) + size[2].powi(2)).sqrt()
+                }
+                Shape::Cylinder { radius, length } | Shape::Capsule { radius, length } => {
+                    radius.hypot(0.5 * length)
+                        + if matches!(v.shape, Shape::Capsule { .. }) {
+                            radius
+                        } else {
+                            0.0
+                        }
+                }
+                Shape::Sphere { radius } => radius,
+            };
+            (o[0] * o[0] + o[1] * o[1] + o[2] * o[2]).sqrt() + r
+        })
+        .fold(0.0, f64::max)
+}
+
+/// The run's extent (every link position over the run, both planar paths) and the robot's
+/// size (link positions at the first sample plus the reach of their visuals). Overlays are
+/// left out: a target line may run far beyond the motion.
+fn scene_extent(rec: &RunRecord<'_>) -> (Bounds, f64) {
+    let mut scene = Bounds::new();
+    let poses = &rec.sim.link_poses;
+    let stride = (poses.len() / 2000).max(1);
+    for row in poses.iter().step_by(stride).chain(poses.last()) {
+        for p in row {
+            scene.add(p.translation);
+        }
+    }
+    for traj in [rec.ideal, &rec.sim.traj] {
+        if let Some(path) = planar_path(rec, traj) {
+            for p in path.iter().step_by((path.len() / 2000).max(1)) {
+                scene.add([p[0], p[1], 0.0]);
+            }
+        }
+    }
+    let mut robot = Bounds::new();
+    let mut reach: f64 = 0.0;
+    if let Some(first) = poses.first() {
+        for (p, link) in first.iter().zip(rec.links) {
+            robot.add(p.translation);
+            reach = reach.max(link_reach(link));
+        }
+    }
+    let size = if robot.is_empty() {
+        0.5
+    } else {
+        (robot.radius() + reach).max(0.05)
+    };
+    if scene.is_empty() {
+        scene.add([0.0; 3]);
+    }
+    (scene, size)
+}
+
+/// Orbit camera looking at `target` from the south-west and above, far enough that a sphere of
+/// `radius` around the target fills most of the view.
+/// A tracking-error view: title, entity paths, series.
+type ErrorGroup<'a> = (&'a str, Vec<String>, Vec<&'a [f64]>);
+
+fn eye(target: [f64; 3], radius: f64) -> EyeControls3D {
+    let dir: [f64; 3] = [-0.45, -0.8, 0.62];
+    let n = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
+    // Vertical field of view of Rerun's default camera is about 55°; 1.1 leaves a margin.
+    let dist = 1.1 * radius / (27.5f64).to_radians().tan();
+    let pos = [0, 1, 2].map(|i| (target[i] + dist * dir[i] / n) as f32);
+    EyeControls3D::new()
+        .with_kind(Eye3DKind::Orbital)
+        .with_position(pos)
+        .with_look_target(target.map(|x| x as f32))
+        .with_eye_up([0.0f32, 0.0, 1.0])
+}
+
+/// The whole run on the `sim_time` axis (not a trailing window), s → ns.
+fn whole_run(end_s: f64) -> (VisibleTimeRanges, TimeAxis) {
+    let end = (end_s.max(0.0) * 1e9).ceil() as i64;
+    let all = VisibleTimeRange {
+        timeline: TIMELINE.into(),
+        range: TimeRange {
+            start: TimeRangeBoundary::Infinite,
+            end: TimeRangeBoundary::Infinite,
+        },
+    };
+    let axis = TimeAxis::new()
+        .with_link(LinkAxis::Independent)
+        .with_view_range(TimeRange {
+            start: TimeRangeBoundary::Absolute(TimeInt(0)),
+            end: TimeRangeBoundary::Absolute(TimeInt(end)),
+        });
+    (VisibleTimeRanges::new([all]), axis)
+}
+
+/// A view property to log into the blueprint store: `view/<id>/<archetype name>`.
+type Property = (String, Box<dyn AsComponents>);
+
+fn view_path(v: &ContainerLike) -> Option<String> {
+    match v {
+        ContainerLike::View(v) => Some(v.blueprint_path().to_string()),
+        _ => None,
+    }
+}
+
+/// Value range of a plot: the finite extremes, padded; a flat series gets a small band.
+fn value_range(values: impl Iterator<Item = f64>) -> [f64; 2] {
+    let (mut lo, mut hi) = (f64::INFINITY, f64::NEG_INFINITY);
+    for v in values.filter(|v| v.is_finite()) {
+        lo = lo.min(v);
+        hi = hi.max(v);
+    }
+    if lo > hi {
+        return [-1.0, 1.0];
+    }
+    let pad = if hi - lo > 1e-12 * hi.abs().max(lo.abs()) {
+        0.05 * (hi - lo)
+    } else {
+        (0.1 * hi.abs()).max(1e-9)
+    };
+    [lo - pad, hi + pad]
+}
+
+/// Overlays logged but hidden in the 3D views until the user switches them on: the
+/// robot's ellipsoid cover (dilf, `ellipsoid_*` on the links) wraps the arms and hides them.
+fn hidden_overlays(rec: &RunRecord<'_>) -> Vec<String> {
+    rec.overlays
+        .iter()
+        .filter_map(|o| match &o.link {
+            Some(link) if o.name.starts_with("ellipsoid_") => {
+                Some(ep(&["robot", link, &o.name]).to_string())
+            }
+            _ => None,
+        })
+        .collect()
+}
+
+/// Per-entity `visible = false` in a view, where the viewer (and the Python SDK's
+/// `overrides=`) keeps entity behaviour: `<view>/ViewContents/overrides/<entity>/visualizers`.
+fn hide_in_view(props: &mut Vec<Property>, view: &str, entities: &[String]) {
+    for e in entities {
+        let e = e.trim_start_matches('/');
+        props.push((
+            format!("{view}/ViewContents/overrides/{e}/visualizers"),
+            Box::new(EntityBehavior::new().with_visible(false)),
+        ));
+    }
+}
+
+/// The layout, plus the view properties the SDK's builders cannot set.
+fn blueprint(rec: &RunRecord<'_>) -> (Blueprint, Vec<Property>) {
+    let mut props: Vec<Property> = Vec::new();
+    let end = [
+        rec.ideal.t.last(),
+        rec.sim.traj.t.last(),
+        rec.comparison.t.last(),
+    ]
+    .into_iter()
+    .flatten()
+    .fold(0.0f64, |m, t| m.max(*t));
+    // A time-series view over the whole run, its value axis fitted to `values`.
+    let mut series =
+        |view: TimeSeriesView, values: &mut dyn Iterator<Item = f64>| -> ContainerLike {
+            let c: ContainerLike = view.into();
+            if let Some(p) = view_path(&c) {
+                let (ranges, axis) = whole_run(end);
+                props.push((format!("{p}/VisibleTimeRanges"), Box::new(ranges)));
+                props.push((format!("{p}/TimeAxis"), Box::new(axis)));
+                let y = ScalarAxis::new().with_range(Range1D(value_range(values)));
+                props.push((format!("{p}/ScalarAxis"), Box::new(y)));
+            }
+            c
+        };
+    let (ideal, sim, cmp) = (rec.ideal, &rec.sim.traj, rec.comparison);
+
+    let state_views: Vec<ContainerLike> = (0..rec.state_names.len())
+        .map(|i| {
+            let name = coord_name(rec.state_names, i);
+            series(
+                TimeSeriesView::new(format!("{name}: ideal vs sim"))
+                    .with_origin(ep(&["state", &name])),
+                &mut ideal.q.iter().chain(&sim.q).map(|q| q[i]),
+            )
+        })
+        .collect();
+
+    // Tracking errors by unit: one axis never mixes metres and radians.
+    let position_idx = rec.position.map(|p| p.to_vec()).unwrap_or_default();
+    let mut groups: [ErrorGroup<'_>; 3] = [
+        ("tracking error, lengths (m)", Vec::new(), Vec::new()),
+        ("tracking error, angles (rad)", Vec::new(), Vec::new()),
+        ("tracking error, other coordinates", Vec::new(), Vec::new()),
+    ];
+    if let Some(p) = &cmp.position_error {
+        groups[0].1.push("/errors/position".into());
+        groups[0].2.push(p);
+    }
+    for (r, p) in cmp.robot_position_error.iter().enumerate() {
+        groups[0].1.push(format!("/errors/position_{}", r + 1));
+        groups[0].2.push(p);
+    }
+    for i in 0..rec.state_names.len() {
+        let path = ep(&["errors", &coord_name(rec.state_names, i)]).to_string();
+        let g = if rec.angular.contains(&i) {
+            1
+        } else if position_idx.contains(&i) {
+            0
+        } else {
+            2
+        };
+        groups[g].1.push(path);
+        groups[g].2.push(&cmp.coord_error[i]);
+    }
+    let error_views: Vec<ContainerLike> = groups
+        .into_iter()
+        .filter(|(_, c, _)| rec.tracking_meaningful && !c.is_empty())
+        .map(|(name, contents, data)| {
+            series(
+                TimeSeriesView::new(name)
+                    .with_origin("/errors")
+                    .with_contents(contents),
+                &mut data.into_iter().flatten().copied(),
+            )
+        })
+        .collect();
+    // One view per command (inputs may have different units: m/s and rad/s).
+    let command_views: Vec<ContainerLike> = (0..rec.input_names.len())
+        .map(|j| {
+            let name = coord_name(rec.input_names, j);
+            series(
+                TimeSeriesView::new(format!("command {name}")).with_origin(ep(&["command", &name])),
+                &mut ideal.u.iter().map(|u| u[j]),
+            )
+        })
+        .collect();
+    // Sim channels grouped by their leading name token (slip_*, angular_momentum_*, ...).
+    let mut channel_groups: Vec<(String, Vec<usize>)> = Vec::new();
+    for (k, (name, _)) in rec.sim.channels.iter().enumerate() {
+        let key = name.split('_').next().unwrap_or(name).to_string();
+        match channel_groups.iter_mut().find(|(g, _)| *g == key) {
+            Some((_, v)) => v.push(k),
+            None => channel_groups.push((key, vec![k])),
+        }
+    }
+    let channel_views: Vec<ContainerLike> = channel_groups
+        .iter()
+        .map(|(key, idx)| {
+            let contents: Vec<String> = idx
+                .iter()
+                .map(|&k| ep(&["sim", &rec.sim.channels[k].0]).to_string())
+                .collect();
+            let title = if idx.len() == 1 {
+                rec.sim.channels[idx[0]].0.clone()
+            } else {
+                format!("{key}_*")
+            };
+            series(
+                TimeSeriesView::new(title)
+                    .with_origin("/sim")
+                    .with_contents(contents),
+                &mut idx
+                    .iter()
+                    .flat_map(|&k| rec.sim.channels[k].1.iter().copied()),
+            )
+        })
+        .collect();
+    // A feedback policy's sim run reacts to its own state: its distance to the ideal run is
+    // not a tracking error (the report shows those metrics as n/a), so no such plots.
+    let mut lower: Vec<ContainerLike> = Vec::new();
+    if !error_views.is_empty() {
+        lower.push(Grid::new(error_views).with_name("tracking errors").into());
+    }
+    lower.push(Grid::new(command_views).with_name("commands").into());
+    if !channel_views.is_empty() {
+        lower.push(Grid::new(channel_views).with_name("sim channels").into());
+    }
+    if !rec.series.is_empty() {
+        // One plot per group (the first path component: `V`, `grasp_force`,
+        // ...), so a quantity shares its axis with its bound, not with
+        // quantities of other units.
+        let mut groups: Vec<&str> = Vec::new();
+        for s in rec.series.iter() {
+            let g = s.name.split('/').find(|p| !p.is_empty()).unwrap_or("");
+            if !groups.contains(&g) {
+                groups.push(g);
+            }
+        }
+        let views: Vec<ContainerLike> = groups
+            .iter()
+            .map(|g| {
+                TimeSeriesView::new(*g)
+                    .with_origin(ep(&["analysis", g]).to_string())
+                    .into()
+            })
+            .collect();
+        lower.push(Grid::new(views).with_name("analysis").into());
+    }
+    lower.push(TextLogView::new("segments").with_origin("/segment").into());
+
+    // 3D: an overview framing the whole run, and a view following the robot when the run
+    // is much larger than the robot (the rover: a 0.6 m robot on a 10 m path).
+    let (scene, robot) = scene_extent(rec);
+    let hidden = hidden_overlays(rec);
+    let overview: ContainerLike = Spatial3DView::new("run overview")
+        .with_origin("/")
+        .with_contents(["/robot/**", "/paths/**"])
+        .into();
+    if let Some(p) = view_path(&overview) {
+        let radius = scene.radius().max(robot);
+        props.push((
+            format!("{p}/EyeControls3D"),
+            Box::new(eye(scene.center(), radius)),
+        ));
+        hide_in_view(&mut props, &p, &hidden);
+    }
+    let mut left = vec![overview];
+    let follow = rec
+        .links
+        .first()
+        .filter(|_| !rec.sim.link_poses.is_empty() && scene.radius() > 3.0 * robot);
+    if let Some(link) = follow {
+        let c: ContainerLike = Spatial3DView::new(format!("following {}", link.name))
+            .with_origin("/")
+            .with_contents(["/robot/**", "/paths/**"])
+            .into();
+        if let Some(p) = view_path(&c) {
+            // Only the tracked entity: a fixed eye position in the blueprint would pin the
+            // camera and override the tracking.
+            let target =
+                rr::components::EntityPath::from(ep(&["robot", &link.name]).to_string().as_str());
+            let follow = EyeControls3D::new()
+                .with_kind(Eye3DKind::Orbital)
+                .with_eye_up([0.0f32, 0.0, 1.0])
+                .with_tracking_entity(target);
+            props.push((format!("{p}/EyeControls3D"), Box::new(follow)));
+            hide_in_view(&mut props, &p, &hidden);
+        }
+        left.push(c);
+    }
+    let right = Vertical::new([
+        Grid::new(state_views).with_name("state").into(),
+        Tabs::new(lower).into(),
+    ]);
+    let bp = Blueprint::new(Horizontal::new([Vertical::new(left).into(), right.into()]))
+        .with_time_panel(TimePanel::new().with_timeline(TIMELINE))
+        .with_blueprint_panel(BlueprintPanel::new().with_state(PanelState::Collapsed))
+        .with_selection_panel(SelectionPanel::new().with_state(PanelState::Collapsed));
+    (bp, props)
+}
+
+/// The blueprint as messages for [`RecordingStream::send_blueprint`]: the SDK's own layout
+/// messages (captured from a memory stream) followed by the view properties, in the same
+/// blueprint store, activated by the command returned last.
+pub(super) fn blueprint_msgs(
+    rec: &RunRecord<'_>,
+) -> Result<(Vec<LogMsg>, BlueprintActivationCommand), RrError> {
+    let (bp, props) = blueprint(rec);
+    let (mem, storage) = rr::RecordingStreamBuilder::new("anholonomy").memory()?;
+    bp.send(
+        &mem,
+        BlueprintActivation {
+            make_active: true,
+            make_default: true,
+        },
+    )?;
+    mem.flush_blocking()?;
+    let mut cmd = None;
+    let mut msgs = Vec::new();
+    for m in storage.take() {
+        match m {
+            LogMsg::BlueprintActivationCommand(c) => cmd = Some(c),
+            other => msgs.push(other),
+        }
+    }
+    drop(mem);
+    let cmd = cmd.ok_or_else(|| RrError("blueprint without activation command".into()))?;
+    msgs.retain(|m| *m.store_id() == cmd.blueprint_id);
+    let (bp_rec, bp_storage) = rr::RecordingStreamBuilder::new("anholonomy")
+        .recording_id(cmd.blueprint_id.recording_id().clone())
+        .blueprint()
+        .memory()?;
+    bp_rec.set_time_sequence("blueprint", 0);
+    for (path, arch) in &props {
+        bp_rec.log(path.as_str(), arch.as_ref())?;
+    }
+    bp_rec.flush_blocking()?;
+    msgs.extend(
+        bp_storage
+            .take()
+            .into_iter()
+            .filter(|m| !matches!(m, LogMsg::SetStoreInfo(_))),
+    );
+    Ok((msgs, cmd))
+}
