@@ -45,7 +45,7 @@ use std::path::{Path, PathBuf};
 /// Version of the baseline file format.
 pub const FORMAT: u64 = 1;
 
-/// Default relative tolerance (see the README's tolerance measurements).
+/// Default relative tolerance (why 2 %: docs/src/operations/ci-gates.md).
 pub const DEFAULT_REL: f64 = 0.02;
 
 /// Default absolute tolerance, in the metric's own unit; below any meaningful

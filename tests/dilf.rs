@@ -371,7 +371,7 @@ fn the_pair_holds_the_beam_at_rest_as_the_fe_model_says() {
     let b = c.fe.beam();
     let weight = b.mass_per_length() * 9.81 * b.length;
     let sag = weight * b.length.powi(3) / (384.0 * b.bending_stiffness());
-    // The README's numbers (`--nocapture`).
+    // The research note's numbers (docs/src/research/seed-004.md; `--nocapture`).
     eprintln!(
         "mid node: physics {:.1} mm, FE {:.1} mm, closed form {:.1} mm; grasp forces {f1:.1} / {f2:.1} N",
         phys * 1e3,

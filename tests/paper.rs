@@ -1,5 +1,5 @@
-//! The paper tables: which printed numbers agree with the computed ones (README misprint
-//! tables), for each system's worked example; none for other tasks.
+//! The paper tables: which printed numbers agree with the computed ones (the misprint tables of
+//! the guide's research notes), for each system's worked example; none for other tasks.
 
 mod common;
 use common::*;
@@ -11,7 +11,7 @@ fn rows(file: &str) -> Vec<anholonomy::paper::PaperRow> {
     prep.system.paper(&start, &goal, &plan)
 }
 
-/// The quantities (with their printed values) the paper gets wrong, as the README lists them.
+/// The quantities (with their printed values) the paper gets wrong, as the guide's research notes list them.
 fn differing(file: &str) -> Vec<String> {
     rows(file)
         .into_iter()

@@ -379,7 +379,7 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
                 ctx,
                 &format!("/analysis/{}", s.name),
                 "anholonomy.Series",
-                "A series the system computes from the runs (see the README of the system)",
+                "A series the system computes from the runs (see the system's page in the guide)",
                 &value_name,
                 tmp,
             )

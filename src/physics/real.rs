@@ -1,6 +1,6 @@
 //! Conversions between the engine's scalar ([`Real`], f64 in this build) and
 //! the harness's f64, in one place so the physics code compiles unchanged
-//! against f32 Rapier (used to measure f32 against f64, see the README).
+//! against f32 Rapier (used to measure f32 against f64, docs/src/research/space-robot.md).
 #![allow(clippy::unnecessary_cast)] // the casts are no-ops in f64 builds only
 
 use super::rapier::math::{Matrix, Pose as RPose, Real, Rotation, Vector};

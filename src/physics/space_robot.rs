@@ -7,7 +7,7 @@
 //!   attitude and injected momentum in an earlier prototype (not re-measured
 //!   here), so they are not used. What leaks (f32 round-off, Rapier's relax
 //!   pass, several substeps with position-targeting drives) is measured in
-//!   the README's space-robot section; with f64, one substep, 4 sweeps and no
+//!   docs/src/research/space-robot.md; with f64, one substep, 4 sweeps and no
 //!   relax pass (no ground) max |L_z| on `space_robot_paper` is 1.5e-6
 //!   kg m²/s (the vehicle alone carries up to ~0.7 kg m²/s).
 //! * No ground, **gravity must be zero**, bodies never sleep. Nothing holds

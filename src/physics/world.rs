@@ -268,8 +268,7 @@ impl SimWorld {
         p.num_solver_iterations = s.solver_iterations;
         p.num_internal_pgs_iterations = s.pgs_iterations;
         // The relax pass (an unbiased re-solve after the position update) removes the
-        // velocity that contact correction added, but it leaks angular momentum (README,
-        // space-robot section): by default only worlds with a ground get it.
+        // velocity that contact correction added, but it leaks angular momentum (docs/src/reference/physics.md): by default only worlds with a ground get it.
         p.num_internal_stabilization_iterations = usize::from(s.relax_pass.unwrap_or(opts.ground));
         let ground = world.insert_body(RigidBodyBuilder::fixed());
         let ground_collider = opts.ground.then(|| {

@@ -11,7 +11,7 @@
 //! and whatever a system refuses there, e.g. a start inside an obstacle).
 //!
 //! Planning up front costs little: at most tens of milliseconds per shipped
-//! scenario (the endogenous planner), measured in the README. The plan is
+//! scenario (the endogenous planner; `wall_time_s.plan` in summary.json). The plan is
 //! kept in [`Prepared::planned`] and the run replays it, so nothing is
 //! planned twice. The physics probe is dropped (a Rapier world is cheap to
 //! build and not `Sync`); the run builds its own.

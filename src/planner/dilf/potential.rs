@@ -23,7 +23,7 @@
 //! singularity term ([`SingularityEnclosure`], Eq. 13). The field is
 //! f = (Σ_p ‖h2^p‖²)² ∂V/∂q (Eq. 17).
 //!
-//! Choices the paper leaves open, and one change, all in the README:
+//! Choices the paper leaves open, and one change, all in docs/src/research/seed-004.md:
 //! the printed d_p = Π‖h2^p − h_Oi‖ grows with the distance to every
 //! obstacle's *centre*, so far obstacles would repel as strongly as near ones
 //! and the raw superellipsoid functions (∝ distance^{2n}) overflow the
