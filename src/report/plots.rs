@@ -447,7 +447,33 @@ pub fn scatter_log_x(
         names: ["pass", "fail"],
         light_grid: true,
     };
-    scatter_on(&axes, (x0..x1).log_scale(), (x0, x1), on_axis, pts, hline)
+    let (bold, light) = log_ticks(x0, x1);
+    let x = (x0..x1)
+        .log_scale()
+        .with_key_points(bold)
+        .with_light_points(light);
+    scatter_on(&axes, x, (x0, x1), on_axis, pts, hline)
+}
+
+/// Labelled ticks 1, 2, 5 × 10^k within [x0, x1] (every 1..9 × 10^k when
+/// that leaves fewer than two) and light grid lines at 1..9 × 10^k: plotters'
+/// own log axis labels only from the first power of ten on, which leaves a
+/// range like 0.013–0.25 with labels at 0.1 and 0.2 alone.
+fn log_ticks(x0: f64, x1: f64) -> (Vec<f64>, Vec<f64>) {
+    let decades = x0.log10().floor() as i32..=x1.log10().ceil() as i32;
+    let within = |mantissas: &[f64]| -> Vec<f64> {
+        decades
+            .clone()
+            .flat_map(|e| mantissas.iter().map(move |m| m * 10f64.powi(e)))
+            .filter(|v| (x0..=x1).contains(v))
+            .collect()
+    };
+    let every: Vec<f64> = (1..10).map(f64::from).collect();
+    let mut bold = within(&[1.0, 2.0, 5.0]);
+    if bold.len() < 2 {
+        bold = within(&every);
+    }
+    (bold, within(&every))
 }
 
 /// Titles, legend names (pass, fail) and grid of a scatter chart.
@@ -533,6 +559,36 @@ where
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn log_axis_labels_every_decade_it_spans() {
+        let (bold, light) = log_ticks(0.0134, 0.25);
+        assert_eq!(bold.len(), 4, "{bold:?}");
+        for (b, want) in bold.iter().zip([0.02, 0.05, 0.1, 0.2]) {
+            assert!((b / want - 1.0).abs() < 1e-12, "{bold:?}");
+        }
+        assert_eq!(light.len(), 10, "{light:?}"); // 0.02..0.09, 0.1, 0.2
+                                                  // Between 2 and 5 there is no 1-2-5 tick: every integer mantissa.
+        let (bold, _) = log_ticks(2.1, 4.8);
+        assert_eq!(bold, vec![3.0, 4.0]);
+        let svg = scatter_log_x(
+            "t",
+            "x",
+            "y",
+            &[(0.02, 1.0, true), (0.17, 2.0, false)],
+            None,
+        )
+        .unwrap();
+        let texts: Vec<&str> = svg
+            .split("<text")
+            .skip(1)
+            .filter_map(|t| t.split_once('>').and_then(|(_, r)| r.split_once('<')))
+            .map(|(t, _)| t.trim())
+            .collect();
+        for label in ["0.02", "0.05", "0.1", "0.2"] {
+            assert!(texts.contains(&label), "{label} missing: {texts:?}");
+        }
+    }
 
     #[test]
     fn runs_break_at_missing_values() {
