@@ -363,10 +363,12 @@ fn killed_resumed_and_merged_sweeps_equal_the_uninterrupted_one() {
     assert!(!d.join("x").exists());
 }
 
-/// Each `variants.jsonl` record of a sweep run in-process, without its wall time.
+/// Each `variants.jsonl` record of a sweep run in-process on `threads`
+/// worker threads, in index order, without its wall time.
 fn records(
     prep: &anholonomy::runner::Prepared,
     batch: bool,
+    threads: usize,
     logs: &Path,
 ) -> Vec<serde_json::Value> {
     let opts = anholonomy::runner::RunOptions {
@@ -374,7 +376,12 @@ fn records(
         batch,
         ..Default::default()
     };
-    anholonomy::sweep::run_sweep(prep, &opts, None).unwrap();
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| anholonomy::sweep::run_sweep(prep, &opts, None))
+        .unwrap();
     let name = &prep.scenario.name;
     let mut out: Vec<serde_json::Value> = lines(&logs.join(name).join("variants.jsonl"))[1..]
         .iter()
@@ -389,9 +396,13 @@ fn records(
 }
 
 /// Batched sweeps (variants stepped together in shared engine worlds) record
-/// exactly what unbatched ones do: every metric of every variant, bit for bit.
-/// The rover's variants differ in friction, masses and σ, and end at different
-/// steps; the disk's also in their plans. Both sweeps do run in groups.
+/// exactly what unbatched ones do: every metric of every variant, bit for
+/// bit, on one worker thread (one group) and on two (two groups). The
+/// rover's variants differ in friction, masses and σ and end at different
+/// steps (feedback primitives with a stop rule); the perturbed rover adds
+/// command latency, an actuator lag and state noise and latency (the
+/// replay's own perturbations, per variant); the disk's variants also differ
+/// in their plans.
 #[test]
 fn batched_sweep_equals_unbatched() {
     let dir = tempfile::tempdir().unwrap();
@@ -402,26 +413,56 @@ fn batched_sweep_equals_unbatched() {
             "../models/rover.urdf",
             &model("rover.urdf").display().to_string(),
         );
+    let perturbed = rover.replacen(
+        "[sim]\n",
+        "[sim.perturb]\ncommand_latency = 0.006\nactuator_tau = 0.02\n\
+         state_noise = 0.002\nstate_latency = 0.01\nseed = 5\n\n[sim]\n",
+        1,
+    );
+    assert_ne!(perturbed, rover);
     std::fs::write(dir.path().join("rover.toml"), rover).unwrap();
+    std::fs::write(dir.path().join("perturbed.toml"), perturbed).unwrap();
     std::fs::write(dir.path().join("disk.toml"), scenario()).unwrap();
-    for (file, count) in [("rover.toml", 7), ("disk.toml", 8)] {
+    for (file, count) in [("rover.toml", 7), ("perturbed.toml", 7), ("disk.toml", 8)] {
         let p = prepared(&dir.path().join(file));
+        // Every variant joins its group's world (else the comparison below
+        // would compare unbatched runs with themselves).
+        let mut host = anholonomy::physics::batch::Host::new();
+        let cfg = p.scenario.sweep.as_ref().unwrap();
+        for i in 0..count {
+            let v = p.variant(&cfg.variant(i)).unwrap();
+            let built = host.build(|| v.physics()).unwrap();
+            assert!(
+                matches!(built, anholonomy::physics::batch::Built::Hosted(_)),
+                "{file}: variant {i} not hosted"
+            );
+        }
+        assert_eq!(host.len(), count, "{file}");
         let todo: Vec<usize> = (0..count).collect();
         let groups = anholonomy::sweep::batch::groups(&p, &todo);
         assert!(groups.iter().any(|g| g.len() > 1), "{file}: {groups:?}");
-        let batched = records(&p, true, &dir.path().join("batched"));
-        let alone = records(&p, false, &dir.path().join("alone"));
-        assert_eq!(batched.len(), count);
+        let out = |batch: bool, threads: usize| {
+            let logs = dir.path().join(format!("{file}-{batch}-{threads}"));
+            records(&p, batch, threads, &logs)
+        };
+        let alone = out(false, 2);
+        assert_eq!(alone.len(), count);
         let steps: std::collections::BTreeSet<u64> =
             alone.iter().map(|r| r["steps"].as_u64().unwrap()).collect();
         assert!(
             steps.len() > 1,
             "{file}: variants of equal length {steps:?}"
         );
-        for (b, a) in batched.iter().zip(&alone) {
+        for a in &alone {
             assert!(a["error"].is_null(), "{file}: {a}");
-            // serde_json prints f64 shortest round-trip: equal text is equal bits.
-            assert_eq!(b.to_string(), a.to_string(), "{file}");
+        }
+        for threads in [1, 2] {
+            let batched = out(true, threads);
+            assert_eq!(batched.len(), count);
+            for (b, a) in batched.iter().zip(&alone) {
+                // serde_json prints f64 shortest round-trip: equal text is equal bits.
+                assert_eq!(b.to_string(), a.to_string(), "{file}, {threads} threads");
+            }
         }
     }
 }
