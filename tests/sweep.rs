@@ -164,10 +164,12 @@ fn killed_resumed_and_merged_sweeps_equal_the_uninterrupted_one() {
     }
     assert!(r["metrics"]["sim_goal_position"].is_number());
 
-    // Killed (SIGKILL) after two variants, a torn last line added, then resumed.
+    // Killed (SIGKILL) after two variants, a torn last line added, then resumed
+    // (batched). Unbatched, so that lines arrive one variant at a time: a
+    // batched sweep on one thread writes its one group's lines together.
     let jsonl = d.join("killed/s/variants.jsonl");
     let mut child = Command::new(env!("CARGO_BIN_EXE_anholonomy"))
-        .args(["run", "s.toml", "--quiet", "--logs", "killed"])
+        .args(["run", "s.toml", "--quiet", "--logs", "killed", "--no-batch"])
         .env("RAYON_NUM_THREADS", "1")
         .current_dir(d)
         .stdout(Stdio::null())
