@@ -397,6 +397,25 @@ fn records(
     out
 }
 
+/// A shipped scenario as a sweep of `count` variants over friction and
+/// masses (its own `[sweep]` table, if it has one, with `count` variants),
+/// its relative paths made absolute.
+fn shipped_sweep(name: &str, count: usize) -> String {
+    let text = std::fs::read_to_string(root().join("scenarios").join(format!("{name}.toml")))
+        .unwrap()
+        .replace("\"../", &format!("\"{}/", root().display()));
+    match text.find("count = ") {
+        Some(_) => {
+            let re = text.lines().find(|l| l.starts_with("count = ")).unwrap();
+            text.replace(re, &format!("count = {count}"))
+        }
+        None => format!(
+            "{text}\n[sweep]\ncount = {count}\nseed = 3\nfriction = [0.6, 1.0]\n\
+             mass_scale = [0.8, 1.2]\nsuccess_max = 0.05\n"
+        ),
+    }
+}
+
 /// Batched sweeps (variants stepped together in shared engine worlds) record
 /// exactly what unbatched ones do: every metric of every variant, bit for
 /// bit, on one worker thread (one group) and on two (two groups). The
@@ -404,17 +423,13 @@ fn records(
 /// steps (feedback primitives with a stop rule); the perturbed rover adds
 /// command latency, an actuator lag and state noise and latency (the
 /// replay's own perturbations, per variant); the disk's variants also differ
-/// in their plans.
+/// in their plans; the car replays a plan file, the sphere its geometric
+/// plan, the differential drive an
+/// external feedback law (one process per variant, all alive at once).
 #[test]
 fn batched_sweep_equals_unbatched() {
     let dir = tempfile::tempdir().unwrap();
-    let rover = std::fs::read_to_string(root().join("scenarios/rover_sweep.toml"))
-        .unwrap()
-        .replace("count = 100", "count = 7")
-        .replace(
-            "../models/rover.urdf",
-            &model("rover.urdf").display().to_string(),
-        );
+    let rover = shipped_sweep("rover_sweep", 7);
     let perturbed = rover.replacen(
         "[sim]\n",
         "[sim.perturb]\ncommand_latency = 0.006\nactuator_tau = 0.02\n\
@@ -425,7 +440,27 @@ fn batched_sweep_equals_unbatched() {
     std::fs::write(dir.path().join("rover.toml"), rover).unwrap();
     std::fs::write(dir.path().join("perturbed.toml"), perturbed).unwrap();
     std::fs::write(dir.path().join("disk.toml"), scenario()).unwrap();
-    for (file, count) in [("rover.toml", 7), ("perturbed.toml", 7), ("disk.toml", 8)] {
+    std::fs::write(dir.path().join("car.toml"), shipped_sweep("car_parking", 4)).unwrap();
+    std::fs::write(
+        dir.path().join("sphere.toml"),
+        shipped_sweep("sphere_geometric_paper", 4),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("diff_drive.toml"),
+        shipped_sweep("diff_drive_go_to_pose", 4),
+    )
+    .unwrap();
+    // (file, variants, whether its variants must end at different steps)
+    let cases = [
+        ("rover.toml", 7, true),
+        ("perturbed.toml", 7, true),
+        ("disk.toml", 8, true),
+        ("car.toml", 4, false),
+        ("sphere.toml", 4, false),
+        ("diff_drive.toml", 4, false),
+    ];
+    for (file, count, ends_differ) in cases {
         let p = prepared(&dir.path().join(file));
         // Every variant joins its group's world (else the comparison below
         // would compare unbatched runs with themselves).
@@ -452,7 +487,7 @@ fn batched_sweep_equals_unbatched() {
         let steps: std::collections::BTreeSet<u64> =
             alone.iter().map(|r| r["steps"].as_u64().unwrap()).collect();
         assert!(
-            steps.len() > 1,
+            steps.len() > 1 || !ends_differ,
             "{file}: variants of equal length {steps:?}"
         );
         for a in &alone {

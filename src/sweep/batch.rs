@@ -13,8 +13,9 @@ use crate::validate::Prepared;
 use std::time::Instant;
 
 /// Variant groups to run together, in index order: as few groups as the
-/// system's batch capacity allows, but at least one per worker thread so
-/// both cores stay busy. Singletons when the system cannot share a world.
+/// system's batch capacity allows (at most `ANHOLONOMY_BATCH_MAX` variants
+/// per group when that is set lower), but at least one per worker thread so
+/// every core stays busy. Singletons when the system cannot share a world.
 /// The grouping changes only the speed, never a result.
 pub fn groups(prep: &Prepared, todo: &[usize]) -> Vec<Vec<usize>> {
     let cap = prep
@@ -22,10 +23,10 @@ pub fn groups(prep: &Prepared, todo: &[usize]) -> Vec<Vec<usize>> {
         .ok()
         .and_then(|mut sys| batch::capacity(sys.as_mut()))
         .unwrap_or(1);
-    let cap = std::env::var("ANHOLONOMY_BATCH_CAP_EXPERIMENT")
+    let cap = std::env::var("ANHOLONOMY_BATCH_MAX")
         .ok()
-        .and_then(|v| v.parse().ok())
-        .unwrap_or(cap);
+        .and_then(|v| v.parse::<usize>().ok())
+        .map_or(cap, |max| cap.min(max));
     if cap < 2 || todo.len() < 2 {
         return todo.iter().map(|&i| vec![i]).collect();
     }
