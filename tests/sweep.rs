@@ -503,3 +503,55 @@ fn batched_sweep_equals_unbatched() {
         }
     }
 }
+
+/// A batched replay stops when its token is cancelled (checked before
+/// every lockstep step): every lane ends `Cancelled`; the same lanes replay
+/// to the end without the token.
+#[test]
+fn cancelled_batched_replay_stops() {
+    use anholonomy::physics::batch::{Built, Host, Lane};
+    use anholonomy::physics::ReplayError;
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("rover.toml");
+    std::fs::write(&f, shipped_sweep("rover_sweep", 3)).unwrap();
+    let p = prepared(&f);
+    let cfg = p.scenario.sweep.as_ref().unwrap();
+    let variants: Vec<_> = (0..3).map(|i| p.variant(&cfg.variant(i)).unwrap()).collect();
+    for cancelled in [true, false] {
+        let mut host = Host::new();
+        let mut systems: Vec<_> = variants
+            .iter()
+            .map(|v| match host.build(|| v.physics()).unwrap() {
+                Built::Hosted(sys) => sys,
+                Built::Alone(_) => panic!("not hosted"),
+            })
+            .collect();
+        let mut lanes: Vec<Lane> = systems
+            .iter_mut()
+            .zip(&variants)
+            .map(|(sys, v)| Lane {
+                sys: sys.as_mut(),
+                plan: &v.planned,
+                opts: anholonomy::physics::ReplayOptions {
+                    dt: v.scenario.sim.dt,
+                    settle: v.scenario.sim.settle,
+                    link_pose_every: None,
+                },
+                perturb: &v.scenario.sim.perturb,
+            })
+            .collect();
+        let cancel = anholonomy::cancel::Cancel::new();
+        if cancelled {
+            cancel.cancel();
+        }
+        let out = host.replay(&mut lanes, &cancel);
+        assert_eq!(out.len(), 3);
+        for r in out {
+            match (cancelled, r) {
+                (true, Err(ReplayError::Cancelled)) => {}
+                (false, Ok(sim)) => assert!(sim.steps > 1000, "{}", sim.steps),
+                (c, r) => panic!("cancelled {c}: {:?}", r.map(|s| s.steps)),
+            }
+        }
+    }
+}
