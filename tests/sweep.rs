@@ -516,7 +516,9 @@ fn cancelled_batched_replay_stops() {
     std::fs::write(&f, shipped_sweep("rover_sweep", 3)).unwrap();
     let p = prepared(&f);
     let cfg = p.scenario.sweep.as_ref().unwrap();
-    let variants: Vec<_> = (0..3).map(|i| p.variant(&cfg.variant(i)).unwrap()).collect();
+    let variants: Vec<_> = (0..3)
+        .map(|i| p.variant(&cfg.variant(i)).unwrap())
+        .collect();
     for cancelled in [true, false] {
         let mut host = Host::new();
         let mut systems: Vec<_> = variants

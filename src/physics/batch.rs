@@ -26,10 +26,10 @@
 //! system at a time (its [`SimWorld::world`](super::world::SimWorld::world) box is swapped in and out), so
 //! the systems' own code runs unchanged.
 
+use super::perturb::Perturbation;
 use super::rapier::math::Vector;
 use super::rapier::prelude::*;
 use super::world::WorldOptions;
-use super::perturb::Perturbation;
 use super::{PhysicsSettings, PhysicsSystem, Replay, ReplayError, ReplayOptions};
 use crate::cancel::Cancel;
 use crate::plan::Plan;
