@@ -145,6 +145,7 @@ fn full_run(c: &mut Criterion) {
         pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
         cancel: Default::default(),
         keep: anholonomy::log::Keep::All,
+        batch: true,
     };
     let mut g = c.benchmark_group("dilf_single_door_full_run");
     g.sample_size(10);

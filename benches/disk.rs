@@ -43,6 +43,7 @@ fn full_run(c: &mut Criterion) {
         pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
         cancel: Default::default(),
         keep: anholonomy::log::Keep::All,
+        batch: true,
     };
     let mut g = c.benchmark_group("disk_paper_full_run");
     g.sample_size(10);

@@ -230,6 +230,12 @@ struct RunArgs {
     /// whatever the level.
     #[arg(long, value_name = "LEVEL", default_value_t = anholonomy::log::Keep::All)]
     keep: anholonomy::log::Keep,
+    /// Sweeps: run every variant in an engine world of its own instead of
+    /// stepping groups of variants together in one shared world (the
+    /// default; the same results, bit for bit, and more variants per
+    /// CPU-second).
+    #[arg(long)]
+    no_batch: bool,
 }
 
 /// What `run_cmd` does with the baselines.
@@ -499,6 +505,7 @@ fn run_cmd(args: &RunArgs, mode: Mode) -> Result<u8, Vec<Error>> {
         pose_rate: args.pose_rate,
         cancel: Default::default(),
         keep: args.keep,
+        batch: !args.no_batch,
     };
     let mut rows = Vec::new();
     let mut results: Vec<(usize, Outcome)> = Vec::new();

@@ -37,6 +37,24 @@ pub struct RunOptions {
     pub cancel: Cancel,
     /// Which files the log directory keeps.
     pub keep: Keep,
+    /// Sweeps: step groups of variants together in shared engine worlds
+    /// ([`crate::physics::batch`]; the same results); false runs each
+    /// variant in a world of its own.
+    pub batch: bool,
+}
+
+impl Default for RunOptions {
+    /// No logs, no progress, the default pose rate, batched sweeps.
+    fn default() -> Self {
+        RunOptions {
+            log_root: None,
+            progress: false,
+            pose_rate: DEFAULT_POSE_RATE,
+            cancel: Cancel::default(),
+            keep: Keep::All,
+            batch: true,
+        }
+    }
 }
 
 /// Default of [`RunOptions::pose_rate`], Hz: more than a viewer plays back,
@@ -262,67 +280,128 @@ fn run_plan(
     opts: &RunOptions,
     summarize: bool,
 ) -> Result<Finished, Error> {
-    let t_all = Instant::now();
+    let started = Instant::now();
     let sc = &prep.scenario;
-    let model = prep.model();
-    let (start, goal) = prep.start_goal();
     let mut timings = Timings {
         plan: plan_wall_s,
         ..Default::default()
     };
-    let law_error = |run: &'static str, message: String| Error::Law {
-        path: sc.path.clone(),
-        run,
-        message,
-    };
-
-    let cancelled = || Error::Physics {
-        path: sc.path.clone(),
-        message: crate::cancel::CANCELLED.into(),
-    };
     let t0 = Instant::now();
-    let ideal =
-        simulate_until(model, plan, &start, sc.sim.dt, &opts.cancel).map_err(|e| match e {
-            IdealStop::Fault(m) => law_error("ideal", m),
-            IdealStop::Cancelled => cancelled(),
-        })?;
+    let ideal = ideal_run(prep, plan, &opts.cancel)?;
     timings.ideal = t0.elapsed().as_secs_f64();
 
     let t0 = Instant::now();
     let cpu0 = thread_cpu_s();
     let mut sys = prep.physics()?;
     let bar = crate::progress::Delayed::new(&sc.name, opts.progress);
-    let replay_opts = ReplayOptions {
-        dt: sc.sim.dt,
-        settle: sc.sim.settle,
-        // Only the 3D logs read link poses, at their own rate.
-        link_pose_every: (opts.log_root.is_some() && opts.keep == Keep::All)
-            .then(|| pose_stride(opts.pose_rate, sc.sim.dt)),
-    };
-    let perturb = &sc.sim.perturb;
     let sim = replay_perturbed(
         sys.as_mut(),
         plan,
-        &replay_opts,
-        perturb,
+        &replay_options(prep, opts),
+        &sc.sim.perturb,
         &mut |_| false,
         &mut |f| bar.set(f),
         &opts.cancel,
     );
     bar.finish();
-    let mut sim = sim.map_err(|e| match e {
-        ReplayError::Law(m) => law_error("physics", m),
+    let sim = sim.map_err(|e| replay_error(prep, e))?;
+    timings.physics = t0.elapsed().as_secs_f64();
+    timings.physics_cpu = thread_cpu_s().zip(cpu0).map(|(b, a)| b - a);
+    let runs = Runs {
+        ideal,
+        sim,
+        timings,
+        started,
+    };
+    finish(prep, plan, opts, summarize, runs)
+}
+
+/// The ideal kinematic run of `plan` (stopped by `cancel`).
+pub fn ideal_run(prep: &Prepared, plan: &Plan, cancel: &Cancel) -> Result<Trajectory, Error> {
+    let sc = &prep.scenario;
+    let (start, _) = prep.start_goal();
+    simulate_until(prep.model(), plan, &start, sc.sim.dt, cancel).map_err(|e| match e {
+        IdealStop::Fault(message) => Error::Law {
+            path: sc.path.clone(),
+            run: "ideal",
+            message,
+        },
+        IdealStop::Cancelled => cancelled(prep),
+    })
+}
+
+/// How [`run`] replays the plan on the physics.
+pub fn replay_options(prep: &Prepared, opts: &RunOptions) -> ReplayOptions {
+    let sc = &prep.scenario;
+    ReplayOptions {
+        dt: sc.sim.dt,
+        settle: sc.sim.settle,
+        // Only the 3D logs read link poses, at their own rate.
+        link_pose_every: (opts.log_root.is_some() && opts.keep == Keep::All)
+            .then(|| pose_stride(opts.pose_rate, sc.sim.dt)),
+    }
+}
+
+/// A physics replay's failure as the run's error.
+pub fn replay_error(prep: &Prepared, e: ReplayError) -> Error {
+    let sc = &prep.scenario;
+    match e {
+        ReplayError::Law(message) => Error::Law {
+            path: sc.path.clone(),
+            run: "physics",
+            message,
+        },
         ReplayError::Diverged(message) => Error::Physics {
             path: sc.path.clone(),
             message,
         },
-        ReplayError::Cancelled => cancelled(),
-    })?;
+        ReplayError::Cancelled => cancelled(prep),
+    }
+}
+
+fn cancelled(prep: &Prepared) -> Error {
+    Error::Physics {
+        path: prep.scenario.path.clone(),
+        message: crate::cancel::CANCELLED.into(),
+    }
+}
+
+/// Both runs of one scenario, before comparison: what [`finish`] needs.
+pub struct Runs {
+    /// The ideal kinematic run.
+    pub ideal: Trajectory,
+    /// The physics replay.
+    pub sim: SimTrajectory,
+    /// The plan, ideal and physics stages' timings.
+    pub timings: Timings,
+    /// When the run started (for [`Timings::total`]).
+    pub started: Instant,
+}
+
+/// The rest of the pipeline once both runs exist (a batched sweep replays
+/// its variants together, then finishes each): comparison, metrics,
+/// thresholds and logs; the summary is built when logs are written or
+/// `summarize`.
+pub fn finish(
+    prep: &Prepared,
+    plan: &Plan,
+    opts: &RunOptions,
+    summarize: bool,
+    runs: Runs,
+) -> Result<Finished, Error> {
+    let sc = &prep.scenario;
+    let model = prep.model();
+    let (_, goal) = prep.start_goal();
+    let Runs {
+        ideal,
+        mut sim,
+        mut timings,
+        started: t_all,
+    } = runs;
+    let plan_wall_s = timings.plan;
     crate::physics::perturb::add_drive_channels(&mut sim, model.input_names());
     // Labels an external law named while running, for the logs.
     let plan = &*plan.with_run_labels();
-    timings.physics = t0.elapsed().as_secs_f64();
-    timings.physics_cpu = thread_cpu_s().zip(cpu0).map(|(b, a)| b - a);
 
     let t0 = Instant::now();
     let spec = metric_spec(model);

@@ -20,6 +20,7 @@ fn opts(logs: Option<&Path>) -> RunOptions {
         pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
         cancel: Default::default(),
         keep: anholonomy::log::Keep::All,
+        batch: true,
     }
 }
 

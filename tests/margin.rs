@@ -39,6 +39,7 @@ fn run_logged(path: &Path, logs: &Path) -> RunOutcome {
         pose_rate: 0.0,
         keep: Default::default(),
         cancel: Default::default(),
+        batch: true,
     };
     run(&prepared(path), &opts).unwrap()
 }

@@ -134,6 +134,7 @@ fn small_sweep_reports_rate_and_distribution_and_shards_agree() {
         pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
         cancel: Default::default(),
         keep: anholonomy::log::Keep::All,
+        batch: true,
     };
     let o = run_sweep(&p, &opts, None).unwrap();
     assert!(o.passed, "{:?}", o.failures);

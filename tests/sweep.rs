@@ -164,10 +164,12 @@ fn killed_resumed_and_merged_sweeps_equal_the_uninterrupted_one() {
     }
     assert!(r["metrics"]["sim_goal_position"].is_number());
 
-    // Killed (SIGKILL) after two variants, a torn last line added, then resumed.
+    // Killed (SIGKILL) after two variants, a torn last line added, then resumed
+    // (batched). Unbatched, so that lines arrive one variant at a time: a
+    // batched sweep on one thread writes its one group's lines together.
     let jsonl = d.join("killed/s/variants.jsonl");
     let mut child = Command::new(env!("CARGO_BIN_EXE_anholonomy"))
-        .args(["run", "s.toml", "--quiet", "--logs", "killed"])
+        .args(["run", "s.toml", "--quiet", "--logs", "killed", "--no-batch"])
         .env("RAYON_NUM_THREADS", "1")
         .current_dir(d)
         .stdout(Stdio::null())
@@ -361,4 +363,197 @@ fn killed_resumed_and_merged_sweeps_equal_the_uninterrupted_one() {
         "--shards N",
     );
     assert!(!d.join("x").exists());
+}
+
+/// Each `variants.jsonl` record of a sweep run in-process on `threads`
+/// worker threads, in index order, without its wall time.
+fn records(
+    prep: &anholonomy::runner::Prepared,
+    batch: bool,
+    threads: usize,
+    logs: &Path,
+) -> Vec<serde_json::Value> {
+    let opts = anholonomy::runner::RunOptions {
+        log_root: Some(logs.to_path_buf()),
+        batch,
+        ..Default::default()
+    };
+    let pool = rayon::ThreadPoolBuilder::new()
+        .num_threads(threads)
+        .build()
+        .unwrap();
+    pool.install(|| anholonomy::sweep::run_sweep(prep, &opts, None))
+        .unwrap();
+    let name = &prep.scenario.name;
+    let mut out: Vec<serde_json::Value> = lines(&logs.join(name).join("variants.jsonl"))[1..]
+        .iter()
+        .map(|l| {
+            let mut v: serde_json::Value = serde_json::from_str(l).unwrap();
+            v.as_object_mut().unwrap().remove("wall_s");
+            v
+        })
+        .collect();
+    out.sort_by_key(|v| v["index"].as_u64());
+    out
+}
+
+/// A shipped scenario as a sweep of `count` variants over friction and
+/// masses (its own `[sweep]` table, if it has one, with `count` variants),
+/// its relative paths made absolute.
+fn shipped_sweep(name: &str, count: usize) -> String {
+    let text = std::fs::read_to_string(root().join("scenarios").join(format!("{name}.toml")))
+        .unwrap()
+        .replace("\"../", &format!("\"{}/", root().display()));
+    match text.find("count = ") {
+        Some(_) => {
+            let re = text.lines().find(|l| l.starts_with("count = ")).unwrap();
+            text.replace(re, &format!("count = {count}"))
+        }
+        None => format!(
+            "{text}\n[sweep]\ncount = {count}\nseed = 3\nfriction = [0.6, 1.0]\n\
+             mass_scale = [0.8, 1.2]\nsuccess_max = 0.05\n"
+        ),
+    }
+}
+
+/// Batched sweeps (variants stepped together in shared engine worlds) record
+/// exactly what unbatched ones do: every metric of every variant, bit for
+/// bit, on one worker thread (one group) and on two (two groups). The
+/// rover's variants differ in friction, masses and σ and end at different
+/// steps (feedback primitives with a stop rule); the perturbed rover adds
+/// command latency, an actuator lag and state noise and latency (the
+/// replay's own perturbations, per variant); the disk's variants also differ
+/// in their plans; the car replays a plan file, the sphere its geometric
+/// plan, the differential drive an
+/// external feedback law (one process per variant, all alive at once).
+#[test]
+fn batched_sweep_equals_unbatched() {
+    let dir = tempfile::tempdir().unwrap();
+    let rover = shipped_sweep("rover_sweep", 7);
+    let perturbed = rover.replacen(
+        "[sim]\n",
+        "[sim.perturb]\ncommand_latency = 0.006\nactuator_tau = 0.02\n\
+         state_noise = 0.002\nstate_latency = 0.01\nseed = 5\n\n[sim]\n",
+        1,
+    );
+    assert_ne!(perturbed, rover);
+    std::fs::write(dir.path().join("rover.toml"), rover).unwrap();
+    std::fs::write(dir.path().join("perturbed.toml"), perturbed).unwrap();
+    std::fs::write(dir.path().join("disk.toml"), scenario()).unwrap();
+    std::fs::write(dir.path().join("car.toml"), shipped_sweep("car_parking", 4)).unwrap();
+    std::fs::write(
+        dir.path().join("sphere.toml"),
+        shipped_sweep("sphere_geometric_paper", 4),
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("diff_drive.toml"),
+        shipped_sweep("diff_drive_go_to_pose", 4),
+    )
+    .unwrap();
+    // (file, variants, whether its variants must end at different steps)
+    let cases = [
+        ("rover.toml", 7, true),
+        ("perturbed.toml", 7, true),
+        ("disk.toml", 8, true),
+        ("car.toml", 4, false),
+        ("sphere.toml", 4, false),
+        ("diff_drive.toml", 4, false),
+    ];
+    for (file, count, ends_differ) in cases {
+        let p = prepared(&dir.path().join(file));
+        // Every variant joins its group's world (else the comparison below
+        // would compare unbatched runs with themselves).
+        let mut host = anholonomy::physics::batch::Host::new();
+        let cfg = p.scenario.sweep.as_ref().unwrap();
+        for i in 0..count {
+            let v = p.variant(&cfg.variant(i)).unwrap();
+            let built = host.build(|| v.physics()).unwrap();
+            assert!(
+                matches!(built, anholonomy::physics::batch::Built::Hosted(_)),
+                "{file}: variant {i} not hosted"
+            );
+        }
+        assert_eq!(host.len(), count, "{file}");
+        let todo: Vec<usize> = (0..count).collect();
+        let groups = anholonomy::sweep::batch::groups(&p, &todo);
+        assert!(groups.iter().any(|g| g.len() > 1), "{file}: {groups:?}");
+        let out = |batch: bool, threads: usize| {
+            let logs = dir.path().join(format!("{file}-{batch}-{threads}"));
+            records(&p, batch, threads, &logs)
+        };
+        let alone = out(false, 2);
+        assert_eq!(alone.len(), count);
+        let steps: std::collections::BTreeSet<u64> =
+            alone.iter().map(|r| r["steps"].as_u64().unwrap()).collect();
+        assert!(
+            steps.len() > 1 || !ends_differ,
+            "{file}: variants of equal length {steps:?}"
+        );
+        for a in &alone {
+            assert!(a["error"].is_null(), "{file}: {a}");
+        }
+        for threads in [1, 2] {
+            let batched = out(true, threads);
+            assert_eq!(batched.len(), count);
+            for (b, a) in batched.iter().zip(&alone) {
+                // serde_json prints f64 shortest round-trip: equal text is equal bits.
+                assert_eq!(b.to_string(), a.to_string(), "{file}, {threads} threads");
+            }
+        }
+    }
+}
+
+/// A batched replay stops when its token is cancelled (checked before
+/// every lockstep step): every lane ends `Cancelled`; the same lanes replay
+/// to the end without the token.
+#[test]
+fn cancelled_batched_replay_stops() {
+    use anholonomy::physics::batch::{Built, Host, Lane};
+    use anholonomy::physics::ReplayError;
+    let dir = tempfile::tempdir().unwrap();
+    let f = dir.path().join("rover.toml");
+    std::fs::write(&f, shipped_sweep("rover_sweep", 3)).unwrap();
+    let p = prepared(&f);
+    let cfg = p.scenario.sweep.as_ref().unwrap();
+    let variants: Vec<_> = (0..3)
+        .map(|i| p.variant(&cfg.variant(i)).unwrap())
+        .collect();
+    for cancelled in [true, false] {
+        let mut host = Host::new();
+        let mut systems: Vec<_> = variants
+            .iter()
+            .map(|v| match host.build(|| v.physics()).unwrap() {
+                Built::Hosted(sys) => sys,
+                Built::Alone(_) => panic!("not hosted"),
+            })
+            .collect();
+        let mut lanes: Vec<Lane> = systems
+            .iter_mut()
+            .zip(&variants)
+            .map(|(sys, v)| Lane {
+                sys: sys.as_mut(),
+                plan: &v.planned,
+                opts: anholonomy::physics::ReplayOptions {
+                    dt: v.scenario.sim.dt,
+                    settle: v.scenario.sim.settle,
+                    link_pose_every: None,
+                },
+                perturb: &v.scenario.sim.perturb,
+            })
+            .collect();
+        let cancel = anholonomy::cancel::Cancel::new();
+        if cancelled {
+            cancel.cancel();
+        }
+        let out = host.replay(&mut lanes, &cancel);
+        assert_eq!(out.len(), 3);
+        for r in out {
+            match (cancelled, r) {
+                (true, Err(ReplayError::Cancelled)) => {}
+                (false, Ok(sim)) => assert!(sim.steps > 1000, "{}", sim.steps),
+                (c, r) => panic!("cancelled {c}: {:?}", r.map(|s| s.steps)),
+            }
+        }
+    }
 }

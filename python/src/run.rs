@@ -132,6 +132,7 @@ fn options(logs: Option<PathBuf>, pose_rate: f64, cancel: &Cancel) -> RunOptions
         pose_rate,
         cancel: cancel.clone(),
         keep: anholonomy::log::Keep::All,
+        batch: true,
     }
 }
 

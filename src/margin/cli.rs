@@ -351,6 +351,7 @@ pub fn margin_cmd(a: &MarginArgs) -> Result<u8, Vec<Error>> {
         pose_rate: DEFAULT_POSE_RATE,
         keep: crate::log::Keep::default(),
         cancel: Default::default(),
+        batch: true,
     };
     let total: usize = plan
         .iter()

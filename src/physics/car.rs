@@ -436,7 +436,7 @@ impl PhysicsSystem for CarPhysics {
     }
 
     fn step(&mut self) {
-        self.sim.world.step();
+        self.sim.step();
         let yaw = angles::yaw(self.sim.world.bodies[self.base].rotation());
         self.theta = angles::unwrap(self.theta, yaw);
         self.read_back();
@@ -444,6 +444,10 @@ impl PhysicsSystem for CarPhysics {
 
     fn link_poses(&self) -> Vec<Pose> {
         self.sim.link_poses()
+    }
+
+    fn sim_world(&mut self) -> Option<&mut SimWorld> {
+        Some(&mut self.sim)
     }
 
     fn channel_names(&self) -> Vec<String> {

@@ -277,7 +277,7 @@ impl PhysicsSystem for DiffDrivePhysics {
     }
 
     fn step(&mut self) {
-        self.sim.world.step();
+        self.sim.step();
         let yaw = angles::yaw(self.sim.world.bodies[self.base].rotation());
         self.theta = angles::unwrap(self.theta, yaw);
         self.read_back();
@@ -285,6 +285,10 @@ impl PhysicsSystem for DiffDrivePhysics {
 
     fn link_poses(&self) -> Vec<Pose> {
         self.sim.link_poses()
+    }
+
+    fn sim_world(&mut self) -> Option<&mut SimWorld> {
+        Some(&mut self.sim)
     }
 
     fn channel_names(&self) -> Vec<String> {

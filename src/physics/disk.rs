@@ -137,7 +137,7 @@ impl PhysicsSystem for DiskPhysics {
     }
 
     fn step(&mut self) {
-        self.sim.world.step();
+        self.sim.step();
         let bodies = &self.sim.world.bodies;
         let (yq, wq) = (bodies[self.yoke].rotation(), bodies[self.wheel].rotation());
         self.yaw = angles::unwrap(self.yaw, angles::yaw(yq));
@@ -146,6 +146,10 @@ impl PhysicsSystem for DiskPhysics {
 
     fn link_poses(&self) -> Vec<Pose> {
         self.sim.link_poses()
+    }
+
+    fn sim_world(&mut self) -> Option<&mut SimWorld> {
+        Some(&mut self.sim)
     }
 
     fn channel_names(&self) -> Vec<String> {

@@ -8,6 +8,7 @@
 //! [`world`].
 
 pub mod angles;
+pub mod batch;
 pub mod beam;
 pub mod car;
 pub mod diff_drive;
@@ -58,6 +59,14 @@ pub trait PhysicsSystem {
     /// (handed to [`crate::plan::Controller::command_measured`] at every
     /// policy sample), or `None`.
     fn measurement(&self) -> Option<Vec<f64>> {
+        None
+    }
+    /// The engine world of a system that can share one with other systems
+    /// (batched sweeps, [`batch`]): its engine state is one URDF robot in
+    /// this [`world::SimWorld`], it steps it with [`world::SimWorld::step`]
+    /// and reads only its own bodies. `None` (the default): always stepped
+    /// alone.
+    fn sim_world(&mut self) -> Option<&mut world::SimWorld> {
         None
     }
 }
@@ -159,140 +168,246 @@ pub fn replay_perturbed(
     progress: &mut dyn FnMut(f64),
     cancel: &Cancel,
 ) -> Result<SimTrajectory, ReplayError> {
-    let dt = opts.dt;
-    let mut ctl = plan.controller();
-    let n_plan = step_count(plan.duration, dt);
-    // Delayed commands keep arriving after the last one is sent.
-    let n_settle = step_count(opts.settle, dt) + perturb::extra_steps(p, dt);
-    let n = n_plan + n_settle;
-    // A feedback policy that reports `done` ends the run `settle` seconds later.
-    let mut stop_at = n;
-    let names = sys.channel_names();
-    let mut out = SimTrajectory {
-        channels: names
-            .into_iter()
-            .map(|name| (name, Vec::with_capacity(n + 1)))
-            .collect(),
-        ..Default::default()
-    };
-    out.traj.t.reserve(n + 1);
-    out.traj.q.reserve(n + 1);
-    out.traj.u.reserve(n + 1);
-    out.traj.label.reserve(n + 1);
-    let pose_every = opts.link_pose_every.map(|e| e.max(1));
-    if let Some(e) = pose_every {
-        out.link_poses.reserve(n / e + 2);
-        out.link_pose_index.reserve(n / e + 2);
+    let mut run = Replay::start(sys, plan, opts, p)?;
+    while !run.at_end() {
+        if cancel.is_cancelled() {
+            return Err(ReplayError::Cancelled);
+        }
+        let k = run.k;
+        if !run.command(sys)? {
+            break;
+        }
+        sys.step();
+        run.record_step(sys)?;
+        if k % 256 == 0 {
+            progress(k as f64 / run.n as f64);
+        }
+        if stop(&run.out) {
+            break;
+        }
     }
-    let hold = plan.hold_period();
-    let mut clock = hold.map(|p| crate::integrate::SampleClock::new(p, dt));
-    let q0 = sys.state();
-    let sample = |ctl: &mut Box<dyn crate::plan::Controller>,
-                  sys: &dyn PhysicsSystem,
-                  t: f64,
-                  q: &State| match sys.measurement() {
-        Some(m) => ctl.command_measured(t, q, &m),
-        None => ctl.command(t, q),
-    };
-    let mut held = sample(&mut ctl, sys, 0.0, &q0);
-    if let Some(fault) = ctl.fault() {
-        return Err(ReplayError::Law(fault));
+    let out = run.finish(sys);
+    progress(1.0);
+    Ok(out)
+}
+
+/// One replay in progress, advanced a step at a time by its caller:
+/// [`Replay::command`] applies the next step's input, the caller steps the
+/// engine, [`Replay::record_step`] reads the result back. [`replay_perturbed`]
+/// drives one system this way; a batched sweep ([`batch`]) drives several
+/// systems that share one engine world in lockstep with the same code, so
+/// both paths apply the same commands.
+pub struct Replay {
+    ctl: Box<dyn crate::plan::Controller>,
+    dt: f64,
+    n_plan: usize,
+    n_settle: usize,
+    /// Steps of the plan plus settling.
+    n: usize,
+    /// A feedback policy that reports `done` ends the run `settle` seconds later.
+    stop_at: usize,
+    /// Steps taken so far.
+    k: usize,
+    clock: Option<crate::integrate::SampleClock>,
+    held: crate::plan::Command,
+    zero: Input,
+    reality: perturb::Reality,
+    finished: bool,
+    pose_every: Option<usize>,
+    out: SimTrajectory,
+}
+
+impl Replay {
+    /// Start replaying `plan` on `sys` under the perturbations `p`: asks the
+    /// controller for its first command and records the start sample.
+    pub fn start(
+        sys: &dyn PhysicsSystem,
+        plan: &Plan,
+        opts: &ReplayOptions,
+        p: &perturb::Perturbation,
+    ) -> Result<Replay, ReplayError> {
+        let dt = opts.dt;
+        let mut ctl = plan.controller();
+        let n_plan = step_count(plan.duration, dt);
+        // Delayed commands keep arriving after the last one is sent.
+        let n_settle = step_count(opts.settle, dt) + perturb::extra_steps(p, dt);
+        let n = n_plan + n_settle;
+        let names = sys.channel_names();
+        let mut out = SimTrajectory {
+            channels: names
+                .into_iter()
+                .map(|name| (name, Vec::with_capacity(n + 1)))
+                .collect(),
+            ..Default::default()
+        };
+        out.traj.t.reserve(n + 1);
+        out.traj.q.reserve(n + 1);
+        out.traj.u.reserve(n + 1);
+        out.traj.label.reserve(n + 1);
+        let pose_every = opts.link_pose_every.map(|e| e.max(1));
+        if let Some(e) = pose_every {
+            out.link_poses.reserve(n / e + 2);
+            out.link_pose_index.reserve(n / e + 2);
+        }
+        let clock = plan
+            .hold_period()
+            .map(|p| crate::integrate::SampleClock::new(p, dt));
+        let q0 = sys.state();
+        let held = sample(&mut ctl, sys, 0.0, &q0);
+        if let Some(fault) = ctl.fault() {
+            return Err(ReplayError::Law(fault));
+        }
+        let zero = Input::zeros(held.u.len());
+        let reality = perturb::Reality::new(p, dt, held.u.len());
+        let mut run = Replay {
+            ctl,
+            dt,
+            n_plan,
+            n_settle,
+            n,
+            stop_at: n,
+            k: 0,
+            clock,
+            held,
+            zero,
+            reality,
+            finished: false,
+            pose_every,
+            out,
+        };
+        run.record(sys, 0.0, q0);
+        Ok(run)
     }
-    let zero = Input::zeros(held.u.len());
-    let mut reality = perturb::Reality::new(p, dt, held.u.len());
-    let mut finished = false;
-    // Time, state and channels of one sample (the state is the last one read back).
-    let record = |out: &mut SimTrajectory, sys: &dyn PhysicsSystem, t: f64, q: State| {
+
+    /// Whether every step of the plan and its settling has been taken.
+    pub fn at_end(&self) -> bool {
+        self.k >= self.n
+    }
+
+    /// Time, state and channels of one sample (the state is the last one read back).
+    fn record(&mut self, sys: &dyn PhysicsSystem, t: f64, q: State) {
+        let out = &mut self.out;
         let k = out.traj.t.len();
         out.traj.t.push(t);
         out.traj.q.push(q);
-        if pose_every.is_some_and(|e| k.is_multiple_of(e)) {
+        if self.pose_every.is_some_and(|e| k.is_multiple_of(e)) {
             out.link_poses.push(sys.link_poses());
             out.link_pose_index.push(k);
         }
         for (series, v) in out.channels.iter_mut().zip(sys.channels()) {
             series.1.push(v);
         }
-    };
-    record(&mut out, sys, 0.0, q0);
-    for k in 0..n {
-        if cancel.is_cancelled() {
-            return Err(ReplayError::Cancelled);
+    }
+
+    /// The command for the next step, applied to `sys` (open-loop commands at
+    /// the step midpoint, feedback laws on the simulated state every hold
+    /// period); `Ok(false)` when the run is over (nothing applied).
+    pub fn command(&mut self, sys: &mut dyn PhysicsSystem) -> Result<bool, ReplayError> {
+        let (k, dt) = (self.k, self.dt);
+        if k >= self.n {
+            return Ok(false);
         }
         let t = k as f64 * dt;
-        let q = out.traj.q.last().expect("the start state is recorded");
-        let idle = k >= n_plan || finished;
+        let q = self.out.traj.q.last().expect("the start state is recorded");
+        let idle = k >= self.n_plan || self.finished;
         if !idle {
-            match &mut clock {
+            match &mut self.clock {
                 Some(clock) => {
                     if clock.due(t) {
-                        held = if reality.observes() {
-                            ctl.command(t, &reality.observe(&out.traj.q, k))
+                        self.held = if self.reality.observes() {
+                            self.ctl
+                                .command(t, &self.reality.observe(&self.out.traj.q, k))
                         } else {
-                            sample(&mut ctl, sys, t, q)
+                            sample(&mut self.ctl, sys, t, q)
                         };
-                        if let Some(fault) = ctl.fault() {
+                        if let Some(fault) = self.ctl.fault() {
                             return Err(ReplayError::Law(fault));
                         }
                     }
                 }
-                None => held = ctl.command(t + 0.5 * dt, q),
+                None => self.held = self.ctl.command(t + 0.5 * dt, q),
             }
         }
-        if held.done && !finished {
-            stop_at = stop_at.min(k + n_settle);
+        if self.held.done && !self.finished {
+            self.stop_at = self.stop_at.min(k + self.n_settle);
         }
-        if k >= stop_at {
-            break;
+        if k >= self.stop_at {
+            return Ok(false);
         }
-        finished |= held.done;
+        self.finished |= self.held.done;
         // A command that says `done` is not applied: the run settles from
         // its sample on, as the ideal run ends there (every built-in
         // policy's `done` command is zero anyway).
-        let idle = idle || finished;
+        let idle = idle || self.finished;
+        let out = &mut self.out;
         if !idle {
             // The plan was in force for this step (settling applies zero).
             out.plan_steps = k + 1;
         }
-        let u = if idle { &zero } else { &held.u };
+        let u = if idle { &self.zero } else { &self.held.u };
         out.traj.u.push(u.clone());
-        out.traj.label.push(held.label);
-        if reality.acts() {
-            let received = reality.actuate(u);
+        out.traj.label.push(self.held.label);
+        if self.reality.acts() {
+            let received = self.reality.actuate(u);
             sys.apply(&received);
             out.received.push(received);
         } else {
             sys.apply(u);
         }
-        sys.step();
-        out.steps += 1;
+        Ok(true)
+    }
+
+    /// After the engine stepped: read the state back and record the sample.
+    pub fn record_step(&mut self, sys: &dyn PhysicsSystem) -> Result<(), ReplayError> {
+        let t = self.k as f64 * self.dt;
+        self.k += 1;
+        self.out.steps += 1;
         let q = sys.state();
         if q.iter().any(|v| !v.is_finite()) {
             return Err(ReplayError::Diverged(format!(
                 "simulation diverged (non-finite state) at t = {:.3} s",
-                t + dt
+                t + self.dt
             )));
         }
-        record(&mut out, sys, (k + 1) as f64 * dt, q);
-        if k % 256 == 0 {
-            progress(k as f64 / n as f64);
+        self.record(sys, self.k as f64 * self.dt, q);
+        Ok(())
+    }
+
+    /// The recorded run (once [`Replay::command`] returned false, or when
+    /// the caller stops early).
+    pub fn finish(mut self, sys: &dyn PhysicsSystem) -> SimTrajectory {
+        let out = &mut self.out;
+        // The final pose too, so the 3D logs end where the run ends.
+        let last_k = out.traj.t.len() - 1;
+        if self.pose_every.is_some() && out.link_pose_index.last() != Some(&last_k) {
+            out.link_poses.push(sys.link_poses());
+            out.link_pose_index.push(last_k);
         }
-        if stop(&out) {
-            break;
+        let last = out
+            .traj
+            .u
+            .last()
+            .cloned()
+            .unwrap_or_else(|| self.held.u.clone());
+        out.traj.u.push(last);
+        if let Some(r) = out.received.last().cloned() {
+            out.received.push(r);
         }
+        out.traj.label.push(self.held.label);
+        self.out
     }
-    // The final pose too, so the 3D logs end where the run ends.
-    let last_k = out.traj.t.len() - 1;
-    if pose_every.is_some() && out.link_pose_index.last() != Some(&last_k) {
-        out.link_poses.push(sys.link_poses());
-        out.link_pose_index.push(last_k);
+}
+
+/// A feedback law's command at `t` on the state `q` (with the system's
+/// measurement, when it has one).
+fn sample(
+    ctl: &mut Box<dyn crate::plan::Controller>,
+    sys: &dyn PhysicsSystem,
+    t: f64,
+    q: &State,
+) -> crate::plan::Command {
+    match sys.measurement() {
+        Some(m) => ctl.command_measured(t, q, &m),
+        None => ctl.command(t, q),
     }
-    let last = out.traj.u.last().cloned().unwrap_or_else(|| held.u.clone());
-    out.traj.u.push(last);
-    if let Some(r) = out.received.last().cloned() {
-        out.received.push(r);
-    }
-    out.traj.label.push(held.label);
-    progress(1.0);
-    Ok(out)
 }

@@ -239,7 +239,7 @@ impl PhysicsSystem for RoverPhysics {
     }
 
     fn step(&mut self) {
-        self.sim.world.step();
+        self.sim.step();
         let yaw = angles::yaw(self.sim.world.bodies[self.chassis].rotation());
         self.theta = angles::unwrap(self.theta, yaw);
         self.read_back();
@@ -247,6 +247,10 @@ impl PhysicsSystem for RoverPhysics {
 
     fn link_poses(&self) -> Vec<Pose> {
         self.sim.link_poses()
+    }
+
+    fn sim_world(&mut self) -> Option<&mut SimWorld> {
+        Some(&mut self.sim)
     }
 
     fn channel_names(&self) -> Vec<String> {

@@ -141,7 +141,7 @@ impl PhysicsSystem for SpherePhysics {
     }
 
     fn step(&mut self) {
-        self.sim.world.step();
+        self.sim.step();
         let [x, y, z, w] = quat(self.sim.world.bodies[self.ball].rotation());
         let mut q = [w, x, y, z];
         let dot: f64 = q.iter().zip(&self.q).map(|(a, b)| a * b).sum();
@@ -156,6 +156,10 @@ impl PhysicsSystem for SpherePhysics {
 
     fn link_poses(&self) -> Vec<Pose> {
         self.sim.link_poses()
+    }
+
+    fn sim_world(&mut self) -> Option<&mut SimWorld> {
+        Some(&mut self.sim)
     }
 
     fn channel_names(&self) -> Vec<String> {

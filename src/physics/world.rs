@@ -233,8 +233,9 @@ pub fn insert_robot(world: &mut PhysicsWorld, robot: &Robot, root: RPose, mu: f6
 /// A Rapier world holding one URDF robot (more with [`SimWorld::add_robot`])
 /// and optionally a ground plane.
 pub struct SimWorld {
-    /// The physics world.
-    pub world: PhysicsWorld,
+    /// The physics world (boxed: a batched sweep swaps one shared world in
+    /// and out of its systems, see [`super::batch`]).
+    pub world: Box<PhysicsWorld>,
     /// Handles of the first robot (links, joints, colliders).
     pub robot: RobotHandles,
     /// The fixed ground body (present even without a ground collider, as a joint anchor).
@@ -244,6 +245,9 @@ pub struct SimWorld {
     /// The settings the world was built with (friction for robots added
     /// later, motor gains and limits for [`SimWorld::drive`]).
     pub settings: PhysicsSettings,
+    /// The robot was built into a batch's shared world, which the batch
+    /// steps ([`SimWorld::step`] then does nothing).
+    hosted: bool,
 }
 
 /// Settings for [`SimWorld::new`].
@@ -260,6 +264,42 @@ impl SimWorld {
     /// Build the world; `robot` must come from [`super::urdf::read`]. The
     /// directory is where meshes would be resolved (none are loaded today).
     pub fn new(robot: &Robot, _urdf_dir: &Path, opts: &WorldOptions) -> SimWorld {
+        let s = opts.settings;
+        // Inside `batch::Host::build`: join the batch's world when there is one.
+        let joined = super::batch::join(opts);
+        let hosted = joined.is_some();
+        let (mut world, ground, ground_collider) = match joined {
+            Some(Some(shared)) => shared,
+            _ => {
+                let (world, ground, ground_collider) = Self::fresh_world(opts);
+                (Box::new(world), ground, ground_collider)
+            }
+        };
+        // Heavier links than the model believes (`mass_scale`): the URDF's own
+        // numbers scaled, so a sweep variant and a margin level agree exactly.
+        let scaled = super::perturb::scaled_masses(robot, s.mass_scale);
+        let robot = insert_robot(
+            &mut world,
+            scaled.as_ref().unwrap_or(robot),
+            opts.root_pose,
+            s.friction,
+        );
+        if hosted {
+            super::batch::keep_apart(&mut world, &robot, ground_collider, s.friction);
+        }
+        SimWorld {
+            world,
+            robot,
+            ground,
+            ground_collider,
+            settings: s.clone(),
+            hosted,
+        }
+    }
+
+    /// An empty world with the settings' integration parameters and gravity,
+    /// its ground body and (with `opts.ground`) the ground half-space.
+    fn fresh_world(opts: &WorldOptions) -> (PhysicsWorld, RigidBodyHandle, Option<ColliderHandle>) {
         let s = opts.settings;
         let mut world = PhysicsWorld::new();
         world.gravity = vector(s.gravity[0], s.gravity[1], s.gravity[2]);
@@ -279,22 +319,20 @@ impl SimWorld {
                 .colliders
                 .insert_with_parent(plane, ground, &mut world.bodies)
         });
-        // Heavier links than the model believes (`mass_scale`): the URDF's own
-        // numbers scaled, so a sweep variant and a margin level agree exactly.
-        let scaled = super::perturb::scaled_masses(robot, s.mass_scale);
-        let robot = insert_robot(
-            &mut world,
-            scaled.as_ref().unwrap_or(robot),
-            opts.root_pose,
-            s.friction,
-        );
-        SimWorld {
-            world,
-            robot,
-            ground,
-            ground_collider,
-            settings: s.clone(),
+        (world, ground, ground_collider)
+    }
+
+    /// Advance the world one step, unless a batch owns it (then the batch
+    /// has stepped it, once for all its robots, before this call).
+    pub fn step(&mut self) {
+        if !self.hosted {
+            self.world.step();
         }
+    }
+
+    /// Whether the robot lives in a batch's shared world.
+    pub fn is_hosted(&self) -> bool {
+        self.hosted
     }
 
     /// A world with a ground plane, the robot's root at `root_pose`.

@@ -10,6 +10,7 @@
 //! into `variants-shard-I-of-N.jsonl`, and [`merge`] combines shards into the `sweep.json`
 //! an unsharded run writes ([`summary`]).
 
+pub mod batch;
 pub mod merge;
 pub mod records;
 pub mod summary;
@@ -152,23 +153,36 @@ struct Record<'a> {
     metrics: Metrics<'a>,
 }
 
-/// Run one variant; its `variants.jsonl` line (with the newline).
+/// Run one variant alone; its `variants.jsonl` line (with the newline).
 fn run_variant(prep: &Prepared, cfg: &SweepConfig, v: &Variant, cancel: &Cancel) -> String {
     let t0 = Instant::now();
-    let opts = RunOptions {
-        log_root: None,
-        progress: false,
-        pose_rate: 0.0,
-        cancel: cancel.clone(),
-        keep: crate::log::Keep::All,
-    };
     let res = prep
         .variant(v)
-        .and_then(|p| run(&p, &opts))
+        .and_then(|p| run(&p, &variant_options(cancel)))
         .map_err(|e| e.to_string());
+    record_line(cfg, v, &res, t0.elapsed().as_secs_f64())
+}
+
+/// How variants run: no logs, no progress.
+fn variant_options(cancel: &Cancel) -> RunOptions {
+    RunOptions {
+        pose_rate: 0.0,
+        cancel: cancel.clone(),
+        ..Default::default()
+    }
+}
+
+/// A variant's `variants.jsonl` line (with the newline) from its outcome
+/// and wall time, s.
+fn record_line(
+    cfg: &SweepConfig,
+    v: &Variant,
+    res: &Result<RunOutcome, String>,
+    wall_s: f64,
+) -> String {
     let finite = |x: Option<f64>| x.filter(|v| v.is_finite());
     let empty = Vec::new();
-    let rec = match &res {
+    let rec = match res {
         Ok(o) => {
             let final_error = finite(o.metric(&cfg.success_metric));
             Record {
@@ -195,7 +209,7 @@ fn run_variant(prep: &Prepared, cfg: &SweepConfig, v: &Variant, cancel: &Cancel)
     let mut line = serde_json::to_string(&rec)
         .unwrap_or_else(|e| format!("{{\"error\":{:?}}}", e.to_string()));
     line.pop();
-    let wall = serde_json::to_string(&t0.elapsed().as_secs_f64()).unwrap_or("null".into());
+    let wall = serde_json::to_string(&wall_s).unwrap_or("null".into());
     line.push_str(&format!(",\"wall_s\":{wall}}}\n"));
     line
 }
@@ -377,34 +391,45 @@ pub fn run_sweep_report(
     }
     bar.set_prefix(sc.name.clone());
     let resumed = done.iter().filter(|d| **d).count();
-    todo.into_par_iter().for_each(|i| {
+    let groups = if opts.batch {
+        batch::groups(prep, &todo)
+    } else {
+        todo.iter().map(|&i| vec![i]).collect()
+    };
+    // One group per task (with_max_len): groups are already sized to the cores.
+    groups.into_par_iter().with_max_len(1).for_each(|group| {
         if opts.cancel.is_cancelled() {
             return;
         }
-        let line = run_variant(prep, cfg, &cfg.variant(i), &opts.cancel);
+        let lines = match group.as_slice() {
+            [i] => vec![run_variant(prep, cfg, &cfg.variant(*i), &opts.cancel)],
+            _ => batch::run_group(prep, cfg, &group, &opts.cancel),
+        };
         // A variant stopped by the token is not a result: not recorded.
         if opts.cancel.is_cancelled() {
             return;
         }
-        match &sink {
-            // One write per line, straight to the file: a killed sweep loses at most the
-            // variants still running.
-            Some(f) => {
-                let res = f.lock().map(|mut f| f.write_all(line.as_bytes()));
-                if let Ok(Err(e)) = res {
-                    if let Ok(mut w) = write_error.lock() {
-                        w.get_or_insert(e.to_string());
+        for line in lines {
+            match &sink {
+                // One write per line, straight to the file: a killed sweep loses at most the
+                // variants (or groups of variants) still running.
+                Some(f) => {
+                    let res = f.lock().map(|mut f| f.write_all(line.as_bytes()));
+                    if let Ok(Err(e)) = res {
+                        if let Ok(mut w) = write_error.lock() {
+                            w.get_or_insert(e.to_string());
+                        }
+                    }
+                }
+                None => {
+                    let e = records::parse_line(&line);
+                    if let (Ok(e), Ok(mut m)) = (e, memory.lock()) {
+                        m.push(e);
                     }
                 }
             }
-            None => {
-                let e = records::parse_line(&line);
-                if let (Ok(e), Ok(mut m)) = (e, memory.lock()) {
-                    m.push(e);
-                }
-            }
+            bar.inc(1);
         }
-        bar.inc(1);
     });
     bar.finish_and_clear();
     if let Some(e) = write_error.into_inner().ok().flatten() {

@@ -32,6 +32,7 @@ pub fn run_prepared(prep: &Prepared, logs: Option<&Path>) -> RunOutcome {
         pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
         cancel: Default::default(),
         keep: anholonomy::log::Keep::All,
+        batch: true,
     };
     run(prep, &opts).unwrap()
 }

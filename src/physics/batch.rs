@@ -1,0 +1,375 @@
+//! Batched stepping: several systems of one kind (the variants of a sweep)
+//! in one Rapier world, stepped together, each with its own replay.
+//!
+//! A world step has a fixed cost besides the per-body and per-constraint
+//! work (stage bookkeeping of the island solver, buffer resets, the broad
+//! phase); one world holding K robots pays it once instead of K times, and
+//! the solver fills its 4-lane SIMD contact chunks across robots.
+//!
+//! **Same results as alone.** Each robot's colliders get their own collision
+//! group (the ground collides with all of them), so robots never touch and
+//! the broad phase never pairs them. Rapier's solver orders constraints by
+//! colour (constraints of one colour share no body) and solves small colours
+//! serially after the large ones; as long as every colour stays below
+//! Rapier's "parallel" sizes (64 joints, or 32 SIMD chunks of contacts; the
+//! `LAYOUT_REF_WORKERS` layout of rapier 0.36), each robot's constraints are
+//! solved in the same order with the same arithmetic as in a world of its
+//! own, so every variant's trajectory is bit-identical to its unbatched run
+//! ([`capacity`] keeps batches below those sizes; the sweep test
+//! `batched_sweep_equals_unbatched` checks it). Robots that finish early are
+//! disabled, which removes their bodies from the solver.
+//!
+//! **Building.** A system builds its own [`SimWorld`](super::world::SimWorld) in its constructor;
+//! [`Host::build`] runs that constructor with the batch's world parked in a
+//! thread-local slot, and [`SimWorld::new`](super::world::SimWorld::new) inserts the robot there instead
+//! of into a fresh world. Between calls the shared world is lent to one
+//! system at a time (its [`SimWorld::world`](super::world::SimWorld::world) box is swapped in and out), so
+//! the systems' own code runs unchanged.
+
+use super::perturb::Perturbation;
+use super::rapier::math::Vector;
+use super::rapier::prelude::*;
+use super::world::WorldOptions;
+use super::{PhysicsSettings, PhysicsSystem, Replay, ReplayError, ReplayOptions};
+use crate::cancel::Cancel;
+use crate::plan::Plan;
+use crate::record::SimTrajectory;
+use std::cell::RefCell;
+
+/// Most robots in one batch world: collision groups are 32 bits, one is the
+/// ground's.
+pub const MAX_ROBOTS: usize = 31;
+
+/// Contacts per colour below Rapier's parallel threshold (32 chunks of 4).
+const CONTACTS_PER_COLOR: usize = 124;
+/// Joints per colour below Rapier's parallel threshold (64).
+const JOINTS_PER_COLOR: usize = 63;
+
+/// What must agree for two robots to share a world.
+#[derive(Debug, Clone, PartialEq)]
+struct WorldKey {
+    dt: f64,
+    solver_iterations: usize,
+    pgs_iterations: usize,
+    relax_pass: bool,
+    gravity: [f64; 3],
+    ground: bool,
+}
+
+impl WorldKey {
+    fn of(opts: &WorldOptions) -> WorldKey {
+        let s: &PhysicsSettings = opts.settings;
+        WorldKey {
+            dt: s.dt,
+            solver_iterations: s.solver_iterations,
+            pgs_iterations: s.pgs_iterations,
+            relax_pass: s.relax_pass.unwrap_or(opts.ground),
+            gravity: s.gravity,
+            ground: opts.ground,
+        }
+    }
+}
+
+/// The shared world between builds, with its ground.
+type Shared = (Box<PhysicsWorld>, RigidBodyHandle, Option<ColliderHandle>);
+
+/// The thread-local slot [`SimWorld::new`](super::world::SimWorld::new) looks in while [`Host::build`] runs.
+struct Slot {
+    key: Option<WorldKey>,
+    world: Option<Shared>,
+    /// Collision group index of the next robot.
+    group: usize,
+    /// Set by [`join`]: the robot joined (a fresh world when `world` was None).
+    joined: bool,
+}
+
+thread_local! {
+    static SLOT: RefCell<Option<Slot>> = const { RefCell::new(None) };
+}
+
+/// For [`SimWorld::new`](super::world::SimWorld::new): `None` outside a batch build (or when the robot
+/// cannot join this batch: other world settings, or no collision group
+/// left), then it builds a world of its own; `Some(None)` for the batch's
+/// first robot (a fresh world that becomes the shared one); `Some(Some(w))`
+/// to insert the robot into the shared world.
+pub(super) fn join(opts: &WorldOptions) -> Option<Option<Shared>> {
+    SLOT.with(|slot| {
+        let mut slot = slot.borrow_mut();
+        let slot = slot.as_mut()?;
+        let key = WorldKey::of(opts);
+        if slot.joined || slot.group >= MAX_ROBOTS || slot.key.as_ref().is_some_and(|k| *k != key) {
+            return None;
+        }
+        slot.key = Some(key);
+        slot.joined = true;
+        Some(slot.world.take())
+    })
+}
+
+/// For [`SimWorld::new`](super::world::SimWorld::new) after inserting a joining robot: its own collision
+/// group (the ground stays in group 1 and meets everyone), and ground
+/// friction at least the robot's (contacts take the smaller coefficient, so
+/// each robot keeps its own).
+pub(super) fn keep_apart(
+    world: &mut PhysicsWorld,
+    robot: &super::world::RobotHandles,
+    ground: Option<ColliderHandle>,
+    friction: f64,
+) {
+    let group = SLOT.with(|slot| slot.borrow().as_ref().map_or(0, |s| s.group));
+    let bit = Group::from_bits_truncate(1 << (group + 1));
+    let mine = InteractionGroups::new(bit, bit | Group::GROUP_1, InteractionTestMode::And);
+    for c in &robot.colliders {
+        if let Some(c) = world.colliders.get_mut(*c) {
+            c.set_collision_groups(mine);
+        }
+    }
+    if let Some(g) = ground.and_then(|g| world.colliders.get_mut(g)) {
+        g.set_collision_groups(InteractionGroups::new(
+            Group::GROUP_1,
+            Group::ALL,
+            InteractionTestMode::And,
+        ));
+        if g.friction() < friction {
+            g.set_friction(friction);
+        }
+    }
+}
+
+/// How many robots like `sys` can share a world with unchanged results
+/// (see the module docs); `None` when the system cannot share one.
+pub fn capacity(sys: &mut dyn PhysicsSystem) -> Option<usize> {
+    let sw = sys.sim_world()?;
+    let w = &sw.world;
+    // Within one colour constraints share no body, so a robot puts at most
+    // one contact per collider and one joint per dynamic body in a colour.
+    let colliders = w.colliders.len() - usize::from(sw.ground_collider.is_some());
+    let bodies = w.bodies.iter().filter(|(_, b)| b.is_dynamic()).count();
+    let joints_ok = JOINTS_PER_COLOR / bodies.max(1);
+    let contacts_ok = CONTACTS_PER_COLOR / colliders.max(1);
+    Some(MAX_ROBOTS.min(joints_ok).min(contacts_ok).max(1))
+}
+
+/// A batch being built: the shared world and what its robots agreed on.
+#[derive(Default)]
+pub struct Host {
+    world: Option<Shared>,
+    key: Option<WorldKey>,
+    /// Integration parameters and gravity after the first robot's build.
+    params: Option<(IntegrationParameters, Vector)>,
+    robots: usize,
+    /// A constructor failed after its robot joined: the shared world went
+    /// with it, and the robots built before have none.
+    lost: bool,
+}
+
+/// One system of a batch replay: the system (built by [`Host::build`]),
+/// its plan and replay options.
+pub struct Lane<'a> {
+    /// The hosted system.
+    pub sys: &'a mut dyn PhysicsSystem,
+    /// Its plan.
+    pub plan: &'a Plan,
+    /// Its replay options (the step must be the world's).
+    pub opts: ReplayOptions,
+    /// Its command and observation perturbations (the world ones are in
+    /// the system already).
+    pub perturb: &'a Perturbation,
+}
+
+/// A built system: in the batch's world, or alone (it could not join).
+pub enum Built {
+    /// Shares the batch's world.
+    Hosted(Box<dyn PhysicsSystem>),
+    /// Has a world of its own; replay it alone.
+    Alone(Box<dyn PhysicsSystem>),
+}
+
+impl Host {
+    /// A host with no world yet (the first robot built creates it).
+    pub fn new() -> Host {
+        Host::default()
+    }
+
+    /// Robots in the shared world.
+    pub fn len(&self) -> usize {
+        self.robots
+    }
+
+    /// Whether no robot joined yet.
+    pub fn is_empty(&self) -> bool {
+        self.robots == 0
+    }
+
+    /// Whether a failed constructor took the shared world with it: the
+    /// hosted systems cannot run and must be rebuilt alone.
+    pub fn is_lost(&self) -> bool {
+        self.lost
+    }
+
+    /// Run `build` (a system constructor) so that the robot it builds joins
+    /// the shared world. A system that cannot share a world, or whose
+    /// constructor changed the world's integration parameters differently
+    /// from the first robot's, comes back [`Built::Alone`] (rebuilt alone in
+    /// the latter case).
+    pub fn build<E>(
+        &mut self,
+        mut build: impl FnMut() -> Result<Box<dyn PhysicsSystem>, E>,
+    ) -> Result<Built, E> {
+        SLOT.with(|s| {
+            *s.borrow_mut() = Some(Slot {
+                key: self.key.clone(),
+                world: self.world.take(),
+                group: self.robots,
+                joined: false,
+            })
+        });
+        let res = build();
+        let slot = SLOT
+            .with(|s| s.borrow_mut().take())
+            .expect("slot set above");
+        // The world stays parked when the robot did not join.
+        self.world = slot.world;
+        if res.is_err() && slot.joined && self.robots > 0 {
+            self.lost = true;
+        }
+        let mut sys = res?;
+        let hosted = sys.sim_world().is_some_and(|sw| sw.is_hosted());
+        if !hosted {
+            return Ok(Built::Alone(sys));
+        }
+        let sw = sys.sim_world().expect("hosted above");
+        let mut world = std::mem::replace(&mut sw.world, Box::new(PhysicsWorld::new()));
+        let params = (world.integration_parameters, world.gravity);
+        match &self.params {
+            Some(p) if *p != params => {
+                // Undo: the robot leaves, the world gets its settings back.
+                world.integration_parameters = p.0;
+                world.gravity = p.1;
+                for h in sw.robot.links.clone() {
+                    world.remove_body(h);
+                }
+                self.world = Some((world, sw.ground, sw.ground_collider));
+                drop(sys);
+                return build().map(Built::Alone);
+            }
+            Some(_) => {}
+            None => self.params = Some(params),
+        }
+        self.key = slot.key;
+        self.world = Some((world, sw.ground, sw.ground_collider));
+        self.robots += 1;
+        Ok(Built::Hosted(sys))
+    }
+
+    /// Replay every hosted system on its plan in lockstep: one world step per
+    /// step of all running systems, each system's own replay
+    /// ([`Replay`]) around it. Results in the order of `lanes`; all
+    /// [`ReplayError::Cancelled`] once `cancel` is set (checked before every
+    /// step).
+    pub fn replay(
+        self,
+        lanes: &mut [Lane<'_>],
+        cancel: &Cancel,
+    ) -> Vec<Result<SimTrajectory, ReplayError>> {
+        let Some((mut world, _, _)) = self.world else {
+            return lanes
+                .iter()
+                .map(|_| Err(ReplayError::Diverged("batch has no world".into())))
+                .collect();
+        };
+        let mut results: Vec<Option<Result<SimTrajectory, ReplayError>>> =
+            lanes.iter().map(|_| None).collect();
+        let mut runs: Vec<Option<Replay>> = Vec::with_capacity(lanes.len());
+        for (i, l) in lanes.iter_mut().enumerate() {
+            let start = lend(&mut world, &mut *l.sys, |s| {
+                Replay::start(s, l.plan, &l.opts, l.perturb)
+            });
+            match start {
+                Ok(run) => runs.push(Some(run)),
+                Err(e) => {
+                    runs.push(None);
+                    results[i] = Some(Err(e));
+                    retire(&mut world, &mut *l.sys);
+                }
+            }
+        }
+        let mut stepping = vec![false; lanes.len()];
+        loop {
+            if cancel.is_cancelled() {
+                return lanes.iter().map(|_| Err(ReplayError::Cancelled)).collect();
+            }
+            for (i, l) in lanes.iter_mut().enumerate() {
+                let sys = &mut *l.sys;
+                stepping[i] = false;
+                let Some(run) = runs[i].as_mut() else {
+                    continue;
+                };
+                match lend(&mut world, sys, |s| run.command(s)) {
+                    Ok(true) => stepping[i] = true,
+                    Ok(false) => {
+                        if let Some(run) = runs[i].take() {
+                            results[i] = Some(Ok(lend(&mut world, sys, |s| run.finish(s))));
+                        }
+                        retire(&mut world, sys);
+                    }
+                    Err(e) => {
+                        runs[i] = None;
+                        results[i] = Some(Err(e));
+                        retire(&mut world, sys);
+                    }
+                }
+            }
+            if !stepping.contains(&true) {
+                break;
+            }
+            world.step();
+            for (i, l) in lanes.iter_mut().enumerate() {
+                let sys = &mut *l.sys;
+                let (true, Some(run)) = (stepping[i], runs[i].as_mut()) else {
+                    continue;
+                };
+                let rec = lend(&mut world, sys, |s| {
+                    s.step();
+                    run.record_step(s)
+                });
+                if let Err(e) = rec {
+                    runs[i] = None;
+                    results[i] = Some(Err(e));
+                    retire(&mut world, sys);
+                }
+            }
+        }
+        results
+            .into_iter()
+            .map(|r| r.unwrap_or_else(|| Err(ReplayError::Diverged("not replayed".into()))))
+            .collect()
+    }
+}
+
+/// Run `f` on `sys` with the shared world swapped into its [`SimWorld`](super::world::SimWorld).
+fn lend<T>(
+    world: &mut Box<PhysicsWorld>,
+    sys: &mut dyn PhysicsSystem,
+    f: impl FnOnce(&mut dyn PhysicsSystem) -> T,
+) -> T {
+    if let Some(sw) = sys.sim_world() {
+        std::mem::swap(&mut sw.world, world);
+    }
+    let out = f(&mut *sys);
+    if let Some(sw) = sys.sim_world() {
+        std::mem::swap(&mut sw.world, world);
+    }
+    out
+}
+
+/// Take a finished robot out of the solver (its bodies stay, disabled).
+fn retire(world: &mut PhysicsWorld, sys: &mut dyn PhysicsSystem) {
+    if let Some(sw) = sys.sim_world() {
+        for h in &sw.robot.links {
+            if let Some(b) = world.bodies.get_mut(*h) {
+                b.set_enabled(false);
+            }
+        }
+    }
+}
