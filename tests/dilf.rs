@@ -331,6 +331,7 @@ fn the_pair_holds_the_beam_at_rest_as_the_fe_model_says() {
         beam: Some(&spec),
         arm: Default::default(),
         arm_max_torque: None,
+        arm_armature: [0.0; 6],
         wrist: Default::default(),
     };
     let mut sys = MobileManipulatorPhysics::new(&robot, &path, &settings, &setup).unwrap();
@@ -786,6 +787,7 @@ fn impedance_servos_hold_the_arm_against_gravity() {
             beam: None,
             arm,
             arm_max_torque: None,
+            arm_armature: [0.0; 6],
             wrist: Default::default(),
         };
         let mut sys = MobileManipulatorPhysics::new(&robot, &path, &settings, &setup).unwrap();

@@ -134,6 +134,20 @@ pub const INERTIA: [LinkInertia; 6] = [
 /// 1.0, 1.2) N m. The wrist joints (4–6) hold about a tenth of the shoulder.
 pub const MAX_TORQUE: [f64; 6] = [97.6, 186.4, 89.4, 24.2, 20.1, 21.3];
 
+/// Each joint's armature, kg m²: the motor rotor's inertia reflected through
+/// the gears, Jm·G², with Corke's `mdl_puma560` rotor inertias Jm = (200,
+/// 200, 200, 33, 33, 33)·10⁻⁶ kg m² and gear ratios G = (−62.6111,
+/// 107.815, −53.7063, 76.0364, 71.923, 76.686). For the wrist it is some
+/// 5000 times link 6's own inertia about its axis.
+pub const ARMATURE: [f64; 6] = [
+    200e-6 * 62.6111 * 62.6111,
+    200e-6 * 107.815 * 107.815,
+    200e-6 * 53.7063 * 53.7063,
+    33e-6 * 76.0364 * 76.0364,
+    33e-6 * 71.923 * 71.923,
+    33e-6 * 76.686 * 76.686,
+];
+
 /// The constant part Tz(d) Tx(a) Rx(α) of row `i`.
 pub fn row_offset<T: Scalar>(i: usize) -> Pose<T> {
     let r = DH[i];

@@ -97,6 +97,26 @@ pub fn cases(c: &mut Corpus) {
         Some("model.arm_servo.max_torque[2]"),
     );
     c.sc(
+        "arm armature negative",
+        edit(
+            &po,
+            "max_torque = [97.6, 186.4, 89.4, 24.2, 20.1, 21.3]",
+            "max_torque = [97.6, 186.4, 89.4, 24.2, 20.1, 21.3]\narmature = [0.0, 0.0, 0.0, -0.19, 0.17, 0.19]",
+        ),
+        Some("armature = [0.0, 0.0, 0.0, -0.19"),
+        Some("model.arm_servo.armature[3]"),
+    );
+    c.sc(
+        "approach cap zero",
+        edit(
+            &po,
+            "grasps = \"measured\"",
+            "grasps = \"measured\"\n\n[planner.approach]\nradius = 0.5\nheading_deg = 0.0",
+        ),
+        Some("heading_deg = 0.0"),
+        Some("planner.approach.heading_deg"),
+    );
+    c.sc(
         "unknown grasps source",
         edit(&po, "grasps = \"measured\"", "grasps = \"sensed\""),
         Some("grasps = \"sensed\""),

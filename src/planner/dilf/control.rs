@@ -81,6 +81,12 @@ pub struct Gains {
     /// Within this distance (the task's position tolerance) θ_d is the goal
     /// heading itself, m.
     pub goal_lock_radius: f64,
+    /// Within this distance of its goal a platform's heading stays within
+    /// `approach_heading` of the goal heading (ours, see the module docs), m;
+    /// 0: no cap (the paper's law).
+    pub approach_radius: f64,
+    /// The cap on |θ − θ_goal| within `approach_radius`, rad.
+    pub approach_heading: f64,
 }
 
 /// Which branch of Eq. 18b robot r took.
@@ -196,6 +202,20 @@ pub fn control_aligning(
         } else {
             (v, 0.0, Branch::Hold)
         };
+        // The approach cap: near the goal ω may not turn the platform
+        // further from its goal heading than the cap (ω → 0 keeps the
+        // platform's V̇ term ≥ 0 in every branch: v·proj ≥ 0).
+        let off = wrap_angle(th - th_goal);
+        let omega = if branch != Branch::Align
+            && g.approach_radius > 0.0
+            && dist <= g.approach_radius
+            && off.abs() >= g.approach_heading
+            && omega * off > 0.0
+        {
+            0.0
+        } else {
+            omega
+        };
         u[j] = v;
         u[j + 1] = omega;
         let rates: Vec<f64> = (0..6).map(|a| g.ka[a] * f[i + 3 + a]).collect();
@@ -240,6 +260,8 @@ mod tests {
             max_joint_rate: 0.5,
             heading_deadzone: 0.05,
             goal_lock_radius: 0.02,
+            approach_radius: 0.0,
+            approach_heading: 0.0,
         }
     }
 
@@ -259,7 +281,13 @@ mod tests {
                 let goal: Vec<f64> = (0..DOF * robots)
                     .map(|_| rng.random_range(-3.0..3.0))
                     .collect();
-                let (u, _) = control(&q, &f, &goal, &gains());
+                let mut g = gains();
+                if rng.random_bool(0.5) {
+                    // The approach cap (ours) must keep V̇ ≥ 0 as well.
+                    g.approach_radius = rng.random_range(0.0..6.0);
+                    g.approach_heading = rng.random_range(0.01..3.2);
+                }
+                let (u, _) = control(&q, &f, &goal, &g);
                 let vd = vdot_scaled(&q, &f, &u);
                 let size = f.iter().map(|x| x * x).sum::<f64>() * 10.0;
                 assert!(vd >= -1e-12 * size, "V̇ = {vd}");
@@ -270,6 +298,40 @@ mod tests {
                 }
             }
         }
+    }
+
+    /// Near the goal with the approach cap, a platform at the cap is not
+    /// turned further from its goal heading, may turn back towards it, and
+    /// outside the radius (or without the cap) the law is Eq. 18's.
+    #[test]
+    fn the_approach_cap_stops_turning_away_from_the_goal_heading() {
+        // 0.3 m behind the goal and 0.05 m beside its axis, heading 20°: the
+        // field (45°) pulls it further left.
+        let f = [1.0, 1.0, 0.01, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let goal = [0.0; 9];
+        let q = |th: f64| [-0.3, -0.05, th, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let at_cap = q(20f64.to_radians());
+        let mut g = gains();
+        let (free, _) = control(&at_cap, &f, &goal, &g);
+        assert!(free[1] > 0.1, "Eq. 18 turns left: ω = {}", free[1]);
+        g.approach_radius = 0.5;
+        g.approach_heading = 20f64.to_radians();
+        let (capped, _) = control(&at_cap, &f, &goal, &g);
+        assert_eq!(capped[1], 0.0);
+        assert_eq!(capped[0], free[0], "v is Eq. 18a's");
+        // Below the cap, or beyond the radius, ω is Eq. 18's.
+        let below = q(10f64.to_radians());
+        assert_eq!(
+            control(&below, &f, &goal, &g).0[1],
+            control(&below, &f, &goal, &gains()).0[1]
+        );
+        g.approach_radius = 0.2;
+        assert_eq!(control(&at_cap, &f, &goal, &g).0[1], free[1]);
+        // Beyond the cap on the other side the law may turn back (left).
+        g.approach_radius = 0.5;
+        let right = q(-30f64.to_radians());
+        let (back, _) = control(&right, &f, &goal, &g);
+        assert!(back[1] > 0.0 && back[1] == control(&right, &f, &goal, &gains()).0[1]);
     }
 
     #[test]

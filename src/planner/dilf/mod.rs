@@ -160,6 +160,38 @@ pub struct DilfParams {
     /// ([`Grasps`]).
     #[serde(default)]
     pub grasps: Grasps,
+    /// A cap on the heading Eq. 18 may demand near the goal (ours; off by
+    /// default, the paper's law).
+    #[serde(default)]
+    pub approach: Approach,
+}
+
+/// `[planner.approach]`: near its goal a platform's heading stays within
+/// `heading_deg` of its goal heading (ours). A unicycle removes a lateral
+/// error δ at distance d only with a heading swing of order δ/d, so on its
+/// last centimetres Eq. 18 turns a platform by tens of degrees; two
+/// platforms holding one object cannot turn that far apart. Within
+/// `radius` of its goal the law's ω is set to 0 whenever it would turn the
+/// platform further than the cap from its goal heading; V̇ ≥ 0 still holds
+/// (the platform's term v·proj + ω f_θ keeps v·proj ≥ 0 when ω → 0).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields, default)]
+pub struct Approach {
+    /// Distance from the goal within which the cap holds, m; 0: no cap.
+    #[schemars(range(min = 0))]
+    pub radius: f64,
+    /// Largest |θ − θ_goal| the law may turn to within `radius`, degrees.
+    #[schemars(extend("exclusiveMinimum" = 0), range(max = 180))]
+    pub heading_deg: f64,
+}
+
+impl Default for Approach {
+    fn default() -> Self {
+        Approach {
+            radius: 0.0,
+            heading_deg: 180.0,
+        }
+    }
 }
 
 /// Where the law reads the flanges that hold a beam (its q_f, its
@@ -250,6 +282,16 @@ impl DilfParams {
             pos(self.horizon) && self.horizon <= 1e5,
             "must be in (0, 1e5] s",
         )?;
+        check_param(
+            "approach.radius",
+            self.approach.radius.is_finite() && self.approach.radius >= 0.0,
+            "must be ≥ 0 m (0: no cap)",
+        )?;
+        check_param(
+            "approach.heading_deg",
+            self.approach.heading_deg > 0.0 && self.approach.heading_deg <= 180.0,
+            "must be in (0, 180] degrees",
+        )?;
         let s = &self.singularity;
         check_param(
             "singularity",
@@ -286,6 +328,8 @@ impl DilfParams {
             max_joint_rate: self.max_joint_rate,
             heading_deadzone: self.heading_deadzone,
             goal_lock_radius: 0.5 * self.tolerance.position,
+            approach_radius: self.approach.radius,
+            approach_heading: self.approach.heading_deg.to_radians(),
         }
     }
 }

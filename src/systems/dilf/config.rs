@@ -367,6 +367,12 @@ pub enum ArmServoConfig {
         /// `[97.6, 186.4, 89.4, 24.2, 20.1, 21.3]`.
         #[schemars(extend("exclusiveMinimum" = 0))]
         max_torque: Option<[f64; 6]>,
+        /// Each joint's armature, kg m² (≥ 0; default 0): the motor rotor's
+        /// inertia reflected through the gears, Jm·G², added to the joint's
+        /// child link about the joint axis. The PUMA 560's published values
+        /// are `[0.784, 2.325, 0.577, 0.191, 0.171, 0.194]`.
+        #[schemars(extend("minimum" = 0))]
+        armature: Option<[f64; 6]>,
     },
     /// Joint-space impedance with gravity compensation.
     Impedance {
@@ -379,12 +385,18 @@ pub enum ArmServoConfig {
         /// As for `stiff`.
         #[schemars(extend("exclusiveMinimum" = 0))]
         max_torque: Option<[f64; 6]>,
+        /// As for `stiff`.
+        #[schemars(extend("minimum" = 0))]
+        armature: Option<[f64; 6]>,
     },
 }
 
 impl Default for ArmServoConfig {
     fn default() -> Self {
-        ArmServoConfig::Stiff { max_torque: None }
+        ArmServoConfig::Stiff {
+            max_torque: None,
+            armature: None,
+        }
     }
 }
 
@@ -392,18 +404,34 @@ impl ArmServoConfig {
     /// The arms' per-joint torque limits, if given.
     pub fn max_torque(&self) -> Option<[f64; 6]> {
         match *self {
-            ArmServoConfig::Stiff { max_torque } | ArmServoConfig::Impedance { max_torque, .. } => {
-                max_torque
+            ArmServoConfig::Stiff { max_torque, .. }
+            | ArmServoConfig::Impedance { max_torque, .. } => max_torque,
+        }
+    }
+
+    /// The arms' per-joint armature, kg m² (zero unless given).
+    pub fn armature(&self) -> [f64; 6] {
+        match *self {
+            ArmServoConfig::Stiff { armature, .. } | ArmServoConfig::Impedance { armature, .. } => {
+                armature.unwrap_or([0.0; 6])
             }
         }
     }
 
     /// The physics' servo, or the offending key.
     pub fn servo(&self) -> Result<ArmServo, String> {
+        if let Some(a) = self
+            .armature()
+            .iter()
+            .find(|a| !(a.is_finite() && **a >= 0.0))
+        {
+            return Err(format!(
+                "key `model.arm_servo.armature`: every joint's armature must be ≥ 0 kg m², got {a}"
+            ));
+        }
         let limits = match *self {
-            ArmServoConfig::Stiff { max_torque } | ArmServoConfig::Impedance { max_torque, .. } => {
-                max_torque
-            }
+            ArmServoConfig::Stiff { max_torque, .. }
+            | ArmServoConfig::Impedance { max_torque, .. } => max_torque,
         };
         if let Some(t) = limits
             .iter()

@@ -61,6 +61,7 @@ struct Dilf {
     model: MobileManipulator,
     arm: ArmServo,
     arm_max_torque: Option<[f64; 6]>,
+    arm_armature: [f64; 6],
     wrist: Wrist,
     beam: Option<BeamConfig>,
     params: DilfParams,
@@ -139,6 +140,7 @@ fn dilf(cfg: &MobileManipulatorConfig, params: &DilfParams) -> Result<Dilf, Stri
         model: MobileManipulator { robots: cfg.robots },
         arm,
         arm_max_torque: cfg.arm_servo.max_torque(),
+        arm_armature: cfg.arm_servo.armature(),
         wrist,
         beam: cfg.beam.clone(),
         params,
@@ -393,6 +395,7 @@ impl System for Dilf {
             beam: beam.as_ref(),
             arm: self.arm,
             arm_max_torque: self.arm_max_torque,
+            arm_armature: self.arm_armature,
             wrist: self.wrist,
         };
         Ok(Box::new(MobileManipulatorPhysics::new(
