@@ -37,7 +37,7 @@ mod rr {
     pub use re_sdk::log::TimeColumn;
     pub use re_sdk::*;
     pub use re_sdk_types::archetypes::*;
-    pub use re_sdk_types::components::{Color, Radius};
+    pub use re_sdk_types::components::Color;
     pub use re_sdk_types::datatypes::Quaternion;
     pub use re_sdk_types::{components, AnyValues};
 
