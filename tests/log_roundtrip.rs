@@ -189,14 +189,14 @@ fn rrd_roundtrip() {
     assert_eq!(&bytes[bytes.len() - 12..bytes.len() - 4], b"RRF2FOOT");
 
     // Decode and check the entities and row counts.
-    use rerun::external::re_log_encoding::DecoderApp;
-    use rerun::log::{Chunk, LogMsg};
+    use re_log_encoding::DecoderApp;
+    use re_sdk::log::{Chunk, LogMsg};
     let mut rows: HashMap<String, usize> = HashMap::new();
     let mut blueprint_msgs = 0;
     for msg in DecoderApp::decode_eager(std::io::BufReader::new(&bytes[..])).unwrap() {
         match msg.unwrap() {
             LogMsg::ArrowMsg(store, arrow) => {
-                if store.kind() == rerun::StoreKind::Blueprint {
+                if store.kind() == re_sdk::StoreKind::Blueprint {
                     blueprint_msgs += 1;
                     continue;
                 }

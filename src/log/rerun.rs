@@ -32,7 +32,22 @@ use std::fmt::Display;
 use std::io::{Read, Seek, SeekFrom};
 use std::path::Path;
 
-use ::rerun as rr;
+/// The Rerun SDK as this writer names it: `re_sdk` plus the types the
+/// `rerun` facade crate re-exports (the facade is not a dependency: see
+/// Cargo.toml).
+mod rr {
+    pub use re_sdk::log::TimeColumn;
+    pub use re_sdk::*;
+    pub use re_sdk_types::archetypes::*;
+    pub use re_sdk_types::components::Color;
+    pub use re_sdk_types::datatypes::Quaternion;
+    pub use re_sdk_types::{components, AnyValues};
+
+    pub mod external {
+        pub use re_sdk::external::*;
+        pub use re_sdk_types;
+    }
+}
 use rr::components::{FillMode, Radius, Scalar};
 use rr::{EntityPath, EntityPathPart, RecordingStream, TimeColumn};
 

@@ -2,7 +2,7 @@
 //! run, a follow view for runs much larger than the robot, time-series views
 //! over the whole run with fitted value ranges, and overlays hidden by default.
 
-use ::rerun as rr;
+use super::rr;
 use rr::blueprint::components::{Eye3DKind, LinkAxis, PanelState};
 use rr::blueprint::{
     Blueprint, BlueprintActivation, BlueprintPanel, ContainerLike, Grid, Horizontal,
