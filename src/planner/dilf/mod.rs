@@ -165,10 +165,7 @@ pub struct DilfParams {
     /// default, the paper's law).
     #[serde(default)]
     pub approach: Approach,
-    /// The platform's speed law: `"sign"` (default, Eq. 18a: v = k_v
-    /// sign(f·h) ‖f‖) or `"projection"` (ours: v = k_v (f·h), continuous
-    /// where the field turns perpendicular to the heading). Both saturate at
-    /// `max_speed`.
+    /// The platform's speed law; both saturate at `max_speed`.
     #[serde(default)]
     pub speed: SpeedLaw,
 }
