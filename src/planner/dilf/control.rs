@@ -2,7 +2,8 @@
 //!
 //! With f = (Σ‖h2‖²)² ∂V/∂q and, for robot r, f_r = (f_x, f_y, f_θ, f_a):
 //!
-//! * v_r = k_v sign(f_x cos θ + f_y sin θ) ‖f‖  (18a; ‖f‖ is the whole field)
+//! * v_r = k_v sign(f_x cos θ + f_y sin θ) ‖f‖  (18a; ‖f‖ is the whole field;
+//!   opt-in, ours: v_r = k_v (f_x cos θ + f_y sin θ), [`SpeedLaw`])
 //! * ω_r = k_o (θ_d − θ) when w_r ≥ 0, else −v_r (f_x cos θ + f_y sin θ) / f_θ  (18b)
 //! * u_a = K_a f_a  (18c)
 //!
@@ -87,6 +88,25 @@ pub struct Gains {
     pub approach_radius: f64,
     /// The cap on |θ − θ_goal| within `approach_radius`, rad.
     pub approach_heading: f64,
+    /// Eq. 18a's speed law, or our continuous alternative.
+    pub speed: SpeedLaw,
+}
+
+/// How v_r follows the field (Eq. 18a or ours).
+#[derive(
+    Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum SpeedLaw {
+    /// Eq. 18a: v = k_v sign(f·h) ‖f‖. Where the field is nearly
+    /// perpendicular to the heading, f·h changes sign from sample to sample
+    /// and v jumps between ±the speed limit.
+    #[default]
+    Sign,
+    /// Ours: v = k_v (f·h), the field's component along the heading h =
+    /// (cos θ, sin θ). Continuous, zero where the field is perpendicular to
+    /// the heading; the platform's V̇ term k_v (f·h)² stays ≥ 0.
+    Projection,
 }
 
 /// Which branch of Eq. 18b robot r took.
@@ -157,7 +177,10 @@ pub fn control_aligning(
         let (fx, fy, fth) = (f[i], f[i + 1], f[i + 2]);
         let proj = fx * th.cos() + fy * th.sin();
         // The speed limit acts as a state-dependent k_v ≤ the configured one.
-        let v = (g.kv_gain * norm_f).min(g.max_speed) * sign(proj);
+        let v = match g.speed {
+            SpeedLaw::Sign => (g.kv_gain * norm_f).min(g.max_speed) * sign(proj),
+            SpeedLaw::Projection => (g.kv_gain * proj).clamp(-g.max_speed, g.max_speed),
+        };
         // Goal frame: origin at the platform's goal, x along the goal heading.
         let (c, s) = (th_goal.cos(), th_goal.sin());
         let x_goal = (q[i] - goal[i]) * c + (q[i + 1] - goal[i + 1]) * s;
@@ -262,6 +285,7 @@ mod tests {
             goal_lock_radius: 0.02,
             approach_radius: 0.0,
             approach_heading: 0.0,
+            speed: SpeedLaw::Sign,
         }
     }
 
@@ -275,22 +299,43 @@ mod tests {
                 let q: Vec<f64> = (0..DOF * robots)
                     .map(|_| rng.random_range(-3.0..3.0))
                     .collect();
-                let f: Vec<f64> = (0..DOF * robots)
+                let mut f: Vec<f64> = (0..DOF * robots)
                     .map(|_| rng.random_range(-2.0..2.0))
                     .collect();
+                if rng.random_bool(0.25) {
+                    // f_θ = 0: no ω can make up for the speed law, v·(f·h)
+                    // itself must be ≥ 0.
+                    for r in 0..robots {
+                        f[DOF * r + 2] = 0.0;
+                    }
+                }
                 let goal: Vec<f64> = (0..DOF * robots)
                     .map(|_| rng.random_range(-3.0..3.0))
                     .collect();
                 let mut g = gains();
                 if rng.random_bool(0.5) {
+                    // The continuous speed law (ours): k_v (f·h)² ≥ 0.
+                    g.speed = SpeedLaw::Projection;
+                }
+                if rng.random_bool(0.5) {
                     // The approach cap (ours) must keep V̇ ≥ 0 as well.
                     g.approach_radius = rng.random_range(0.0..6.0);
                     g.approach_heading = rng.random_range(0.01..3.2);
                 }
-                let (u, _) = control(&q, &f, &goal, &g);
+                let (u, branches) = control(&q, &f, &goal, &g);
                 let vd = vdot_scaled(&q, &f, &u);
                 let size = f.iter().map(|x| x * x).sum::<f64>() * 10.0;
                 assert!(vd >= -1e-12 * size, "V̇ = {vd}");
+                // Each platform's own term, which the arms' could mask.
+                for (r, b) in branches.iter().enumerate() {
+                    let (i, j) = (DOF * r, INPUTS * r);
+                    let th = q[i + 2];
+                    let term = (f[i] * th.cos() + f[i + 1] * th.sin()) * u[j] + f[i + 2] * u[j + 1];
+                    assert!(
+                        *b == Branch::Align || term >= -1e-12 * size,
+                        "robot {r}: {term}"
+                    );
+                }
                 let g = gains();
                 for r in 0..robots {
                     assert!(u[INPUTS * r].abs() <= g.max_speed * (1.0 + 1e-12));
@@ -332,6 +377,27 @@ mod tests {
         let right = q(-30f64.to_radians());
         let (back, _) = control(&right, &f, &goal, &g);
         assert!(back[1] > 0.0 && back[1] == control(&right, &f, &goal, &gains()).0[1]);
+    }
+
+    /// Where the field turns perpendicular to the heading, Eq. 18a's v jumps
+    /// between ±the speed limit; the projection law passes through 0, is
+    /// k_v (f·h) below the limit and saturates as Eq. 18a does.
+    #[test]
+    fn the_projection_speed_is_continuous_across_a_perpendicular_field() {
+        let goal = [0.0; 9];
+        // Heading east, field (±ε, 1): f·h = ±ε.
+        let q = [-2.0, -1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let f = |fx: f64| [fx, 1.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0];
+        let mut g = gains();
+        let v = |g: &Gains, fx: f64| control(&q, &f(fx), &goal, g).0[0];
+        assert_eq!(v(&g, 1e-6), g.max_speed);
+        assert_eq!(v(&g, -1e-6), -g.max_speed);
+        g.speed = SpeedLaw::Projection;
+        assert!((v(&g, 1e-6) - g.kv_gain * 1e-6).abs() < 1e-15);
+        assert!((v(&g, -1e-6) + g.kv_gain * 1e-6).abs() < 1e-15);
+        assert!((v(&g, 0.1) - g.kv_gain * 0.1).abs() < 1e-12);
+        assert_eq!(v(&g, 3.0), g.max_speed);
+        assert_eq!(v(&g, -3.0), -g.max_speed);
     }
 
     #[test]

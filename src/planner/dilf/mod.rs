@@ -30,6 +30,7 @@ use crate::model::mobile_manipulator::{self as mm, DOF, INPUTS};
 use crate::model::{Input, State};
 use crate::plan::{Command, ControlLaw, Controller, Plan, PolicyFactory};
 use crate::planner::{check_param, PlanError};
+pub use control::SpeedLaw;
 use control::{Branch, Gains};
 use potential::{DipoleProduct, GoalFrame, GraspCorrection, Scene, SingularityEnclosure, Warm};
 use schemars::JsonSchema;
@@ -164,6 +165,9 @@ pub struct DilfParams {
     /// default, the paper's law).
     #[serde(default)]
     pub approach: Approach,
+    /// The platform's speed law; both saturate at `max_speed`.
+    #[serde(default)]
+    pub speed: SpeedLaw,
 }
 
 /// `[planner.approach]`: near its goal a platform's heading stays within
@@ -330,6 +334,7 @@ impl DilfParams {
             goal_lock_radius: 0.5 * self.tolerance.position,
             approach_radius: self.approach.radius,
             approach_heading: self.approach.heading_deg.to_radians(),
+            speed: self.speed,
         }
     }
 }
