@@ -8,6 +8,7 @@
 //! far below its limit. The rotor's reflected inertia (armature, Jm·G²)
 //! makes the wrist a spring again on the link's time scale.
 
+use super::joints::add_rotor_inertia;
 use super::*;
 
 /// The link's largest angle (rad) over 2 s while a 0.5 kg gripper beyond
