@@ -286,27 +286,38 @@ fn run_plan(
         plan: plan_wall_s,
         ..Default::default()
     };
-    let t0 = Instant::now();
-    let ideal = ideal_run(prep, plan, &opts.cancel)?;
-    timings.ideal = t0.elapsed().as_secs_f64();
-
-    let t0 = Instant::now();
-    let cpu0 = thread_cpu_s();
-    let mut sys = prep.physics()?;
-    let bar = crate::progress::Delayed::new(&sc.name, opts.progress);
-    let sim = replay_perturbed(
-        sys.as_mut(),
-        plan,
-        &replay_options(prep, opts),
-        &sc.sim.perturb,
-        &mut |_| false,
-        &mut |f| bar.set(f),
-        &opts.cancel,
+    // The ideal run and the physics replay are independent: both start from
+    // the plan (a feedback law starts a controller of its own in each).
+    let (ideal, physics) = rayon::join(
+        || {
+            let t0 = Instant::now();
+            ideal_run(prep, plan, &opts.cancel).map(|tr| (tr, t0.elapsed().as_secs_f64()))
+        },
+        || {
+            let t0 = Instant::now();
+            let cpu0 = thread_cpu_s();
+            let mut sys = prep.physics()?;
+            let bar = crate::progress::Delayed::new(&sc.name, opts.progress);
+            let sim = replay_perturbed(
+                sys.as_mut(),
+                plan,
+                &replay_options(prep, opts),
+                &sc.sim.perturb,
+                &mut |_| false,
+                &mut |f| bar.set(f),
+                &opts.cancel,
+            );
+            bar.finish();
+            let sim = sim.map_err(|e| replay_error(prep, e))?;
+            let cpu = thread_cpu_s().zip(cpu0).map(|(b, a)| b - a);
+            Ok::<_, Error>((sim, t0.elapsed().as_secs_f64(), cpu))
+        },
     );
-    bar.finish();
-    let sim = sim.map_err(|e| replay_error(prep, e))?;
-    timings.physics = t0.elapsed().as_secs_f64();
-    timings.physics_cpu = thread_cpu_s().zip(cpu0).map(|(b, a)| b - a);
+    let (ideal, ideal_s) = ideal?;
+    let (sim, physics_s, physics_cpu) = physics?;
+    timings.ideal = ideal_s;
+    timings.physics = physics_s;
+    timings.physics_cpu = physics_cpu;
     let runs = Runs {
         ideal,
         sim,

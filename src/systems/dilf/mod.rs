@@ -487,13 +487,13 @@ impl System for Dilf {
             return (Vec::new(), Vec::new());
         };
         let gains = self.params.gains();
-        let a_ideal = along(&scene, &gains, ideal, &self.policy_samples(ideal), "ideal");
-        let a_sim = along(
-            &scene,
-            &gains,
-            &sim.traj,
-            &self.policy_samples(&sim.traj),
-            "sim",
+        // Each run's evaluations are independent (each keeps its own warm starts).
+        let (a_ideal, a_sim) = rayon::join(
+            || along(&scene, &gains, ideal, &self.policy_samples(ideal), "ideal"),
+            || {
+                let samples = self.policy_samples(&sim.traj);
+                along(&scene, &gains, &sim.traj, &samples, "sim")
+            },
         );
         let mut clear = Series::new("clearance/ideal".into());
         for k in self.policy_samples(ideal) {
