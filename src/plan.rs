@@ -110,6 +110,13 @@ pub trait PolicyFactory: Send + Sync {
     fn labels(&self) -> Option<Vec<String>> {
         None
     }
+    /// Whether two controllers of this factory may run at the same time
+    /// (the ideal run beside the physics replay). `false` for laws outside
+    /// the harness, which may share state between their controllers and
+    /// name labels in the order they meet them.
+    fn concurrent(&self) -> bool {
+        true
+    }
 }
 
 /// Label names interned while running, shared by the controllers of one

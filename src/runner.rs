@@ -286,35 +286,45 @@ fn run_plan(
         plan: plan_wall_s,
         ..Default::default()
     };
-    // The ideal run and the physics replay are independent: both start from
-    // the plan (a feedback law starts a controller of its own in each).
-    let (ideal, physics) = rayon::join(
-        || {
-            let t0 = Instant::now();
-            ideal_run(prep, plan, &opts.cancel).map(|tr| (tr, t0.elapsed().as_secs_f64()))
-        },
-        || {
-            let t0 = Instant::now();
-            let cpu0 = thread_cpu_s();
-            let mut sys = prep.physics()?;
-            let bar = crate::progress::Delayed::new(&sc.name, opts.progress);
-            let sim = replay_perturbed(
-                sys.as_mut(),
-                plan,
-                &replay_options(prep, opts),
-                &sc.sim.perturb,
-                &mut |_| false,
-                &mut |f| bar.set(f),
-                &opts.cancel,
-            );
-            bar.finish();
-            let sim = sim.map_err(|e| replay_error(prep, e))?;
-            let cpu = thread_cpu_s().zip(cpu0).map(|(b, a)| b - a);
-            Ok::<_, Error>((sim, t0.elapsed().as_secs_f64(), cpu))
-        },
-    );
-    let (ideal, ideal_s) = ideal?;
-    let (sim, physics_s, physics_cpu) = physics?;
+    let ideal_part = || {
+        let t0 = Instant::now();
+        ideal_run(prep, plan, &opts.cancel).map(|tr| (tr, t0.elapsed().as_secs_f64()))
+    };
+    let physics_part = || {
+        let t0 = Instant::now();
+        let cpu0 = thread_cpu_s();
+        let mut sys = prep.physics()?;
+        let bar = crate::progress::Delayed::new(&sc.name, opts.progress);
+        let sim = replay_perturbed(
+            sys.as_mut(),
+            plan,
+            &replay_options(prep, opts),
+            &sc.sim.perturb,
+            &mut |_| false,
+            &mut |f| bar.set(f),
+            &opts.cancel,
+        );
+        bar.finish();
+        let sim = sim.map_err(|e| replay_error(prep, e))?;
+        let cpu = thread_cpu_s().zip(cpu0).map(|(b, a)| b - a);
+        Ok::<_, Error>((sim, t0.elapsed().as_secs_f64(), cpu))
+    };
+    // The two runs are independent (a feedback law starts a controller of
+    // its own in each), so a law of the harness runs them side by side. A
+    // law outside it (a process, a Python callable) runs them one after the
+    // other, as its author may expect: it may share state between its
+    // controllers, and it names labels in the order the runs meet them.
+    let concurrent = match &plan.law {
+        ControlLaw::Feedback { factory, .. } => factory.concurrent(),
+        _ => true,
+    };
+    let ((ideal, ideal_s), (sim, physics_s, physics_cpu)) = if concurrent {
+        let (ideal, physics) = rayon::join(ideal_part, physics_part);
+        (ideal?, physics?)
+    } else {
+        let ideal = ideal_part()?;
+        (ideal, physics_part()?)
+    };
     timings.ideal = ideal_s;
     timings.physics = physics_s;
     timings.physics_cpu = physics_cpu;

@@ -83,6 +83,11 @@ impl PyLaw {
 }
 
 impl PolicyFactory for PyLaw {
+    /// A Python callable may keep state across runs: they take turns.
+    fn concurrent(&self) -> bool {
+        false
+    }
+
     fn start(&self) -> Box<dyn Controller> {
         // Asked once per sample, as an external law is (the runs ask twice
         // at t = 0): a law that counts its calls or keeps state sees the

@@ -139,13 +139,13 @@ fn options(logs: Option<PathBuf>, pose_rate: f64, cancel: &Cancel) -> RunOptions
 /// What one scenario gave.
 enum Ran {
     Run(Box<Finished>),
-    Sweep(RunOutcome, String),
+    Sweep(Box<RunOutcome>, String),
 }
 
 fn run_one(prep: &Prepared, opts: &RunOptions) -> Result<Ran, Error> {
     if prep.scenario.sweep.is_some() {
         let (o, table) = anholonomy::sweep::run_sweep_report(prep, opts, None, None)?;
-        Ok(Ran::Sweep(o, table))
+        Ok(Ran::Sweep(Box::new(o), table))
     } else {
         run_detailed(prep, opts).map(|f| Ran::Run(Box::new(f)))
     }

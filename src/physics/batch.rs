@@ -16,8 +16,14 @@
 //! solved in the same order with the same arithmetic as in a world of its
 //! own, so every variant's trajectory is bit-identical to its unbatched run
 //! ([`capacity`] keeps batches below those sizes; the sweep test
-//! `batched_sweep_equals_unbatched` checks it). Robots that finish early are
-//! disabled, which removes their bodies from the solver.
+//! `batched_sweep_equals_unbatched` checks it). One assumption more: Rapier
+//! puts a pair's second and later contact manifolds, and pairs beyond a
+//! colour's capacity, in an overflow colour that it groups across every
+//! body of the world, so a robot whose own parts make such contacts could be
+//! solved in another order beside other robots. The bit-identity test
+//! passes for every batched system (rover, disk, sphere, car, diff drive),
+//! which it would not if their contacts went there. Robots that finish early are disabled, which removes their bodies
+//! from the solver.
 //!
 //! **Building.** A system builds its own [`SimWorld`](super::world::SimWorld) in its constructor;
 //! [`Host::build`] runs that constructor with the batch's world parked in a
@@ -85,6 +91,15 @@ struct Slot {
 
 thread_local! {
     static SLOT: RefCell<Option<Slot>> = const { RefCell::new(None) };
+}
+
+/// Empties this thread's slot when dropped.
+struct ClearSlot;
+
+impl Drop for ClearSlot {
+    fn drop(&mut self) {
+        SLOT.with(|s| s.borrow_mut().take());
+    }
 }
 
 /// For [`SimWorld::new`](super::world::SimWorld::new): `None` outside a batch build (or when the robot
@@ -224,6 +239,10 @@ impl Host {
                 joined: false,
             })
         });
+        // Emptied on every way out, a panic in `build` included: a slot left
+        // behind would host the next world made on this thread, which would
+        // then never step.
+        let _clear = ClearSlot;
         let res = build();
         let slot = SLOT
             .with(|s| s.borrow_mut().take())
@@ -371,5 +390,31 @@ fn retire(world: &mut PhysicsWorld, sys: &mut dyn PhysicsSystem) {
                 b.set_enabled(false);
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A constructor that panics inside [`Host::build`] must not leave the
+    /// slot behind: the next world made on the thread would join it and
+    /// never step.
+    #[test]
+    fn a_panicking_constructor_leaves_no_slot_behind() {
+        let settings = PhysicsSettings::default();
+        let opts = WorldOptions {
+            settings: &settings,
+            root_pose: super::super::rapier::math::Pose::identity(),
+            ground: true,
+        };
+        let mut host = Host::new();
+        let caught = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+            let _ = host.build(|| -> Result<Box<dyn PhysicsSystem>, ()> {
+                panic!("the constructor fails")
+            });
+        }));
+        assert!(caught.is_err());
+        assert!(join(&opts).is_none(), "a slot outlived the build");
     }
 }

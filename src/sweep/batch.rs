@@ -72,6 +72,11 @@ pub fn run_group(
     // What an unbatched run of variant `i` records.
     let alone = |i: usize| (i, run_variant(prep, cfg, &cfg.variant(i), cancel));
     for &i in indices {
+        // Stopped: nothing of this group is recorded (the caller drops it),
+        // so the rest is not built.
+        if cancel.is_cancelled() {
+            return Vec::new();
+        }
         let t0 = Instant::now();
         let v = cfg.variant(i);
         let p = match prep.variant(&v) {
@@ -86,6 +91,9 @@ pub fn run_group(
         // A failing ideal run (a law's fault) is recorded as the unbatched
         // run records it.
         let Ok(ideal) = runner::ideal_run(&p, &p.planned, cancel) else {
+            if cancel.is_cancelled() {
+                return Vec::new();
+            }
             lines.push(alone(i));
             continue;
         };

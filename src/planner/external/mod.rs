@@ -154,6 +154,11 @@ struct Law {
 pub struct ExternalFactory(Arc<Law>);
 
 impl PolicyFactory for ExternalFactory {
+    /// One process per run, one after the other (see the trait).
+    fn concurrent(&self) -> bool {
+        false
+    }
+
     fn start(&self) -> Box<dyn Controller> {
         let law = self.0.clone();
         let (proc, fault) = match LawProcess::start(&law.program, &law.command[1..], &law.dir) {
