@@ -8,6 +8,8 @@ pub mod file;
 pub mod json_numbers;
 pub mod rover_primitives;
 pub mod sphere_geometric;
+#[cfg(test)]
+mod sphere_test_support;
 pub mod sphere_triangle;
 pub mod stokes_disk;
 pub mod stokes_space;

@@ -557,51 +557,11 @@ pub fn plan(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::integrate::simulate;
-    use crate::model::rolling_sphere::{
-        euler_state_to_quat_state, quat_state_error, RollingSphereQuat,
-    };
+    use crate::planner::sphere_test_support::*;
     use proptest::prelude::*;
 
     fn st(v: [f64; 5]) -> State {
         State::from_vec(v.to_vec())
-    }
-    fn deg_state(x: f64, y: f64, al: f64, th: f64, ph: f64) -> State {
-        st([x, y, al.to_radians(), th.to_radians(), ph.to_radians()])
-    }
-    /// Integration step of the ideal runs: the harness's 1e-3 s. The quintic smoothstep ramps
-    /// keep u, u̇ and ü continuous (also where a ramp meets the cruise phase off the dt grid),
-    /// so RK4 stays fourth order: ideal goal errors are ~1e-12 (the cycloidal ramps this code
-    /// was first written for needed 2.5e-4 s for 1e-9).
-    const DT: f64 = 1e-3;
-    /// Random starts can produce very short legs (e.g. a 0.015-rad tilt), whose ramps last only
-    /// a few 1e-3 s steps: RK4 then loses its order (measured 4.8e-7 at dt = 1e-3 for a
-    /// 0.0146-rad leg). The random tests integrate with a finer step.
-    const DT_FINE: f64 = 2.5e-4;
-    fn limits() -> Limits {
-        Limits {
-            max_rate: vec![2.0, 2.0],
-            ramp: 0.25,
-            step: 1e-3,
-        }
-    }
-    /// (position error, geodesic orientation error) of the ideal quaternion run.
-    fn ideal_error(a: f64, plan: &Plan, start: &State, goal: &State) -> (f64, f64) {
-        ideal_error_dt(a, plan, start, goal, DT)
-    }
-    /// As [`ideal_error`] with step `dt`.
-    fn ideal_error_dt(a: f64, plan: &Plan, start: &State, goal: &State, dt: f64) -> (f64, f64) {
-        let traj = simulate(
-            &RollingSphereQuat::new(a),
-            plan,
-            &euler_state_to_quat_state(start),
-            dt,
-        );
-        quat_state_error(traj.last(), &euler_state_to_quat_state(goal))
-    }
-    fn round_to(x: f64, digits: i32) -> f64 {
-        let s = 10f64.powi(digits);
-        (x * s).round() / s
     }
 
     /// §5.1, Eqs. 23-28, counter-clockwise as in the paper.
@@ -659,8 +619,7 @@ mod tests {
                 ..Default::default()
             };
             let plan = plan(&m, &start, &goal, &p, &limits()).unwrap();
-            let (dp, dr) = ideal_error(1.0, &plan, &start, &goal);
-            assert!(dp < 1e-9 && dr < 1e-9, "{dir:?}: {dp:e} {dr:e}");
+            assert_reaches(1.0, &plan, &start, &goal, &format!("{dir:?}: "));
             assert_eq!(plan.segments.len(), 4);
         }
     }
@@ -700,8 +659,7 @@ mod tests {
                 &limits(),
             )
             .unwrap();
-            let (dp, dr) = ideal_error(a, &plan, &start, &goal);
-            assert!(dp < 1e-9 && dr < 1e-9, "{start} -> {goal}: {dp:e} {dr:e}");
+            assert_reaches(a, &plan, &start, &goal, "");
         }
     }
 

@@ -1,50 +1,13 @@
 //! Unit and property tests of `planner::sphere_triangle`.
 
 use super::*;
-use crate::integrate::simulate;
-use crate::model::rolling_sphere::{
-    euler_state_to_quat_state, geodesic_angle, quat_state_error, RollingSphereQuat,
-};
+use crate::model::rolling_sphere::geodesic_angle;
+use crate::planner::sphere_test_support::*;
 use proptest::prelude::*;
 
-/// See the geometric planner's tests: the harness's 1e-3 s keeps RK4's error ≪ 1e-9.
-const DT: f64 = 1e-3;
-/// Random starts can produce very short legs (e.g. a 0.015-rad tilt), whose ramps last only
-/// a few 1e-3 s steps: RK4 then loses its order (measured 4.8e-7 at dt = 1e-3 for a
-/// 0.0146-rad leg). The random tests integrate with a finer step.
-const DT_FINE: f64 = 2.5e-4;
-fn limits() -> Limits {
-    Limits {
-        max_rate: vec![2.0, 2.0],
-        ramp: 0.25,
-        step: 1e-3,
-    }
-}
-fn deg_state(x: f64, y: f64, al: f64, th: f64, ph: f64) -> State {
-    State::from_vec(vec![
-        x,
-        y,
-        al.to_radians(),
-        th.to_radians(),
-        ph.to_radians(),
-    ])
-}
-fn ideal_error(a: f64, plan: &Plan, start: &State, goal: &State) -> (f64, f64) {
-    ideal_error_dt(a, plan, start, goal, DT)
-}
-/// As [`ideal_error`] with step `dt`.
-fn ideal_error_dt(a: f64, plan: &Plan, start: &State, goal: &State, dt: f64) -> (f64, f64) {
-    let traj = simulate(
-        &RollingSphereQuat::new(a),
-        plan,
-        &euler_state_to_quat_state(start),
-        dt,
-    );
-    quat_state_error(traj.last(), &euler_state_to_quat_state(goal))
-}
-fn round_to(x: f64, digits: i32) -> f64 {
-    let s = 10f64.powi(digits);
-    (x * s).round() / s
+/// The plan with the default parameters and the test limits.
+fn default_plan(m: &RollingSphere, start: &State, goal: &State) -> Plan {
+    plan(m, start, goal, &SphereTriangleParams::default(), &limits()).unwrap()
 }
 /// Plan made of the triangles' legs only (the paper simulates step 3 alone).
 fn triangle_plan(tris: &[SphericalTriangle]) -> Plan {
@@ -143,8 +106,7 @@ fn paper_triangle_numbers() {
     // Ideal run of the manoeuvre: from Q upright with R along +x to the origin, R along −y.
     let start = State::from_vec(vec![q.0, q.1, 0.0, 0.0, 0.0]);
     let goal = State::from_vec(vec![0.0, 0.0, 0.0, 0.0, yaw]);
-    let (dp, dr) = ideal_error(1.0, &triangle_plan(&[t]), &start, &goal);
-    assert!(dp < 1e-9 && dr < 1e-9, "{dp:e} {dr:e}");
+    assert_reaches(1.0, &triangle_plan(&[t]), &start, &goal, "");
 }
 
 /// The free-ψ default on the same (d, φ, α) and the full planner from that start (its
@@ -158,8 +120,7 @@ fn paper_triangle_free_psi_and_full_plan() {
     let q = (-d * phi.cos(), -d * phi.sin());
     let start = State::from_vec(vec![q.0, q.1, 0.0, 0.0, 0.0]);
     let goal = State::from_vec(vec![0.0, 0.0, 0.0, 0.0, yaw]);
-    let (dp, dr) = ideal_error(1.0, &triangle_plan(&tris), &start, &goal);
-    assert!(dp < 1e-9 && dr < 1e-9, "{dp:e} {dr:e}");
+    assert_reaches(1.0, &triangle_plan(&tris), &start, &goal, "");
     // Full planner (steps 1-3) from the same start, paper's ψ mode and default.
     for params in [
         p.clone(),
@@ -169,8 +130,7 @@ fn paper_triangle_free_psi_and_full_plan() {
         },
     ] {
         let plan = plan(&RollingSphere { a: 1.0 }, &start, &goal, &params, &limits()).unwrap();
-        let (dp, dr) = ideal_error(1.0, &plan, &start, &goal);
-        assert!(dp < 1e-9 && dr < 1e-9, "{dp:e} {dr:e}");
+        assert_reaches(1.0, &plan, &start, &goal, "");
     }
 }
 
@@ -184,8 +144,13 @@ fn two_triangle_cases() {
         assert_eq!(tris.len(), 2, "d = {d}, yaw = {yaw}");
         let start = State::from_vec(vec![-d * 0.4f64.cos(), -d * 0.4f64.sin(), 0.0, 0.0, 0.3]);
         let goal = State::from_vec(vec![0.0, 0.0, 0.0, 0.0, 0.3 + yaw]);
-        let (dp, dr) = ideal_error(1.0, &triangle_plan(&tris), &start, &goal);
-        assert!(dp < 1e-9 && dr < 1e-9, "{d} {yaw}: {dp:e} {dr:e}");
+        assert_reaches(
+            1.0,
+            &triangle_plan(&tris),
+            &start,
+            &goal,
+            &format!("{d} {yaw}: "),
+        );
     }
 }
 
@@ -216,16 +181,8 @@ fn full_plans_reach_goal() {
     ];
     for (a, start, goal) in cases {
         let m = RollingSphere { a };
-        let plan = plan(
-            &m,
-            &start,
-            &goal,
-            &SphereTriangleParams::default(),
-            &limits(),
-        )
-        .unwrap();
-        let (dp, dr) = ideal_error(a, &plan, &start, &goal);
-        assert!(dp < 1e-9 && dr < 1e-9, "{start} -> {goal}: {dp:e} {dr:e}");
+        let plan = default_plan(&m, &start, &goal);
+        assert_reaches(a, &plan, &start, &goal, "");
     }
 }
 
@@ -245,16 +202,8 @@ fn step_one_is_skipped_within_reach() {
         let sol = solve(&m, &start, &goal, &SphereTriangleParams::default()).unwrap();
         assert_eq!(sol.roll1 == [0.0, 0.0], skipped, "{start}");
         assert!(sol.d < PI);
-        let plan = plan(
-            &m,
-            &start,
-            &goal,
-            &SphereTriangleParams::default(),
-            &limits(),
-        )
-        .unwrap();
-        let (dp, dr) = ideal_error(1.0, &plan, &start, &goal);
-        assert!(dp < 1e-9 && dr < 1e-9, "{start}: {dp:e} {dr:e}");
+        let plan = default_plan(&m, &start, &goal);
+        assert_reaches(1.0, &plan, &start, &goal, "");
     }
 }
 
