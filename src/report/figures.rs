@@ -132,7 +132,7 @@ pub(super) fn single_figures(summary: &Value, sf: &SeriesFile) -> Result<String,
         let mut paths = Vec::new();
         for o in sf.overlays.iter().filter(|o| o.link.is_none()) {
             paths.push(Path2 {
-                name: &o.name,
+                name: "obstacles",
                 points: o.points.iter().map(|p| (p[0], p[1])).collect(),
                 color: plotters::style::RGBColor(
                     (o.rgba[0] * 255.0) as u8,

@@ -305,19 +305,25 @@ pub fn path_chart(paths: &[Path2<'_>], markers: &[Marker<'_>]) -> Res<String> {
             .y_label_formatter(&|v| tick(*v))
             .draw()
             .map_err(err)?;
+        // One legend entry per name: a scene's obstacles share one (a door's
+        // wall segments each drawn as several rings would fill the legend
+        // and cover the plot).
+        let mut named: Vec<&str> = Vec::new();
         for p in paths {
             let c = p.color;
             let wdt = p.width;
-            chart
+            let series = chart
                 .draw_series(LineSeries::new(
                     p.points.iter().copied(),
                     c.stroke_width(wdt),
                 ))
-                .map_err(err)?
-                .label(p.name)
-                .legend(move |(x, y)| {
+                .map_err(err)?;
+            if !p.name.is_empty() && !named.contains(&p.name) {
+                named.push(p.name);
+                series.label(p.name).legend(move |(x, y)| {
                     PathElement::new(vec![(x, y), (x + 14, y)], c.stroke_width(2))
                 });
+            }
         }
         for m in markers {
             let c = m.color;
@@ -588,6 +594,45 @@ mod tests {
         for label in ["0.02", "0.05", "0.1", "0.2"] {
             assert!(texts.contains(&label), "{label} missing: {texts:?}");
         }
+    }
+
+    /// Paths that share a name share one legend entry (a door's segments
+    /// are all "obstacles"); an unnamed path has none.
+    #[test]
+    fn a_legend_names_each_path_name_once() {
+        let path = |name, y: f64| Path2 {
+            name,
+            points: vec![(0.0, y), (1.0, y)],
+            color: IDEAL,
+            width: 1,
+        };
+        let svg = path_chart(
+            &[
+                path("obstacles", 0.0),
+                path("obstacles", 1.0),
+                path("obstacles", 2.0),
+                path("", 3.0),
+                path("ideal", 4.0),
+            ],
+            &[],
+        )
+        .unwrap();
+        let texts: Vec<&str> = svg
+            .split("<text")
+            .skip(1)
+            .filter_map(|t| t.split_once('>').and_then(|(_, r)| r.split_once('<')))
+            .map(|(t, _)| t.trim())
+            .collect();
+        assert_eq!(
+            texts.iter().filter(|t| **t == "obstacles").count(),
+            1,
+            "{texts:?}"
+        );
+        assert_eq!(
+            texts.iter().filter(|t| **t == "ideal").count(),
+            1,
+            "{texts:?}"
+        );
     }
 
     #[test]
