@@ -45,3 +45,8 @@ impl Direction {
         }
     }
 }
+
+/// The value of metric `name` in a run's `(name, value)` list.
+pub fn find(metrics: &[(String, f64)], name: &str) -> Option<f64> {
+    metrics.iter().find(|(n, _)| n == name).map(|(_, v)| *v)
+}

@@ -12,10 +12,12 @@ use crate::model::{KinematicModel, State};
 use crate::physics::{replay_perturbed, ReplayError, ReplayOptions};
 use crate::plan::{ControlLaw, Plan};
 use crate::record::{RunRecord, Series, SimTrajectory};
+use crate::systems::{EarlyAnalysis, SimFollower};
 use crate::verdict::Verdict;
 use serde::Serialize;
 use serde_json::json;
 use std::path::{Path, PathBuf};
+use std::sync::mpsc;
 use std::time::Instant;
 
 pub use crate::compare::metric_spec;
@@ -78,11 +80,13 @@ pub fn pose_stride(rate: f64, dt: f64) -> usize {
 pub struct Timings {
     /// Planner.
     pub plan: f64,
-    /// Ideal RK4 run.
+    /// Ideal RK4 run, and the part of the analysis that needs it alone
+    /// (computed beside the physics replay).
     pub ideal: f64,
     /// Physics replay.
     pub physics: f64,
-    /// Comparison, metrics and the system's analysis (e.g. V along both runs).
+    /// Comparison, metrics and the rest of the system's analysis (e.g. V
+    /// along the physics run), once both runs exist.
     pub analysis: f64,
     /// Log writing.
     pub logs: f64,
@@ -133,10 +137,7 @@ pub struct RunOutcome {
 impl RunOutcome {
     /// A metric by name.
     pub fn metric(&self, name: &str) -> Option<f64> {
-        self.metrics
-            .iter()
-            .find(|(n, _)| n == name)
-            .map(|(_, v)| *v)
+        crate::metric::find(&self.metrics, name)
     }
 }
 
@@ -286,31 +287,50 @@ fn run_plan(
         plan: plan_wall_s,
         ..Default::default()
     };
+    let goal = prep.start_goal().1;
     let ideal_part = || {
         let t0 = Instant::now();
-        ideal_run(prep, plan, &opts.cancel).map(|tr| (tr, t0.elapsed().as_secs_f64()))
+        let tr = ideal_run(prep, plan, &opts.cancel)?;
+        let of_ideal = prep.system.analysis_of_ideal(&goal, &tr);
+        Ok::<_, Error>((tr, of_ideal, t0.elapsed().as_secs_f64()))
     };
-    let physics_part = || {
+    // `feed`: where every recorded physics sample goes, for a follower.
+    let physics_part = |feed: Option<mpsc::Sender<(usize, f64, Vec<f64>)>>| {
         let t0 = Instant::now();
         let cpu0 = thread_cpu_s();
         let mut sys = prep.physics()?;
         let bar = crate::progress::Delayed::new(&sc.name, opts.progress);
+        let mut fed = 0;
+        let mut send = |traj: &Trajectory| {
+            if let Some(tx) = &feed {
+                for k in fed..traj.t.len() {
+                    // A follower that stopped needs nothing more.
+                    let _ = tx.send((k, traj.t[k], traj.q[k].as_slice().to_vec()));
+                }
+                fed = traj.t.len();
+            }
+        };
         let sim = replay_perturbed(
             sys.as_mut(),
             plan,
             &replay_options(prep, opts),
             &sc.sim.perturb,
-            &mut |_| false,
+            &mut |out| {
+                send(&out.traj);
+                false
+            },
             &mut |f| bar.set(f),
             &opts.cancel,
         );
         bar.finish();
         let sim = sim.map_err(|e| replay_error(prep, e))?;
+        send(&sim.traj);
         let cpu = thread_cpu_s().zip(cpu0).map(|(b, a)| b - a);
         Ok::<_, Error>((sim, t0.elapsed().as_secs_f64(), cpu))
     };
     // The two runs are independent (a feedback law starts a controller of
-    // its own in each), so a law of the harness runs them side by side. A
+    // its own in each), so a law of the harness runs them side by side,
+    // the ideal run then following the physics replay for the analysis. A
     // law outside it (a process, a Python callable) runs them one after the
     // other, as its author may expect: it may share state between its
     // controllers, and it names labels in the order the runs meet them.
@@ -318,23 +338,62 @@ fn run_plan(
         ControlLaw::Feedback { factory, .. } => factory.concurrent(),
         _ => true,
     };
-    let ((ideal, ideal_s), (sim, physics_s, physics_cpu)) = if concurrent {
-        let (ideal, physics) = rayon::join(ideal_part, physics_part);
+    let ((ideal, early, ideal_s), (sim, physics_s, physics_cpu)) = if concurrent {
+        let follower = prep
+            .system
+            .sim_follower(&prep.start_goal().0, &goal, sc.sim.dt);
+        let following = follower.is_some();
+        let (tx, rx) = mpsc::channel();
+        // A thread of its own, not a rayon job: the follower waits for the
+        // physics, which a busy pool might otherwise run after it.
+        let (ideal, physics) = std::thread::scope(|s| {
+            let beside = s.spawn(|| {
+                let ideal = ideal_part();
+                (ideal, follower.map(|f| follow(f, rx)))
+            });
+            let physics = physics_part(following.then_some(tx));
+            let (ideal, followed) = beside
+                .join()
+                .unwrap_or_else(|p| std::panic::resume_unwind(p));
+            (
+                ideal.map(|(tr, early, s)| {
+                    let early = match followed {
+                        Some(f) => early.and(f),
+                        None => early,
+                    };
+                    (tr, early, s)
+                }),
+                physics,
+            )
+        });
         (ideal?, physics?)
     } else {
         let ideal = ideal_part()?;
-        (ideal, physics_part()?)
+        (ideal, physics_part(None)?)
     };
     timings.ideal = ideal_s;
     timings.physics = physics_s;
     timings.physics_cpu = physics_cpu;
     let runs = Runs {
         ideal,
+        early: Some(early),
         sim,
         timings,
         started,
     };
     finish(prep, plan, opts, summarize, runs)
+}
+
+/// A follower fed every physics sample until the replay ends (and drops
+/// its sender).
+fn follow(
+    mut f: Box<dyn SimFollower>,
+    rx: mpsc::Receiver<(usize, f64, Vec<f64>)>,
+) -> EarlyAnalysis {
+    for (k, t, q) in rx {
+        f.sample(k, t, &q);
+    }
+    f.finish()
 }
 
 /// The ideal kinematic run of `plan` (stopped by `cancel`).
@@ -391,6 +450,11 @@ fn cancelled(prep: &Prepared) -> Error {
 pub struct Runs {
     /// The ideal kinematic run.
     pub ideal: Trajectory,
+    /// What the system's analysis computed beside the physics replay
+    /// ([`crate::systems::System::analysis_of_ideal`], a follower's result),
+    /// when the runs were side by side (else `finish` computes the ideal
+    /// part and the analysis the rest).
+    pub early: Option<EarlyAnalysis>,
     /// The physics replay.
     pub sim: SimTrajectory,
     /// The plan, ideal and physics stages' timings.
@@ -415,6 +479,7 @@ pub fn finish(
     let (_, goal) = prep.start_goal();
     let Runs {
         ideal,
+        early,
         mut sim,
         mut timings,
         started: t_all,
@@ -428,7 +493,8 @@ pub fn finish(
     let spec = metric_spec(model);
     let cmp = compare(&ideal, &sim.traj, sc.sim.dt, spec.angular, &spec.positions);
     let mut metrics = spec.compute(&goal, ideal.last(), sim.traj.last(), &cmp);
-    let (extra, series) = prep.system.analysis(&goal, &ideal, &sim, &cmp);
+    let early = early.unwrap_or_else(|| prep.system.analysis_of_ideal(&goal, &ideal));
+    let (extra, series) = prep.system.analysis_with(&goal, &ideal, early, &sim, &cmp);
     metrics.extend(extra);
     let failures = crate::gate::breaches(&sc.thresholds, &sc.minimums, &metrics)
         .iter()

@@ -115,3 +115,30 @@ fn the_paper_table_shows_that_table_i_admits_no_solid_object() {
     assert!(r.iter().all(|x| !x.agrees && x.printed == "0"));
     assert!(rows("dilf_table_i_rigid_goal.toml").is_empty());
 }
+
+/// The part of the analysis that follows the physics replay while it runs
+/// (V, V̇ ≥ 0 and the ellipsoid metrics along the physics run) gives, bit
+/// for bit, the metrics and series an analysis of the finished runs gives.
+#[test]
+fn the_analysis_beside_the_replay_equals_the_analysis_of_the_finished_run() {
+    let prep = prepared("dilf_pair_open.toml");
+    let done = anholonomy::runner::run_detailed(&prep, &Default::default()).unwrap();
+    let (_, goal) = prep.start_goal();
+    let cmp = anholonomy::record::Comparison::default();
+    let (metrics, series) = prep.system.analysis(&goal, &done.ideal, &done.sim, &cmp);
+    assert!(metrics.len() > 20, "{metrics:?}");
+    for (name, v) in &metrics {
+        let ran = done.outcome.metric(name).unwrap_or(f64::NAN);
+        assert_eq!(
+            ran.to_bits(),
+            v.to_bits(),
+            "{name}: {ran} beside, {v} after"
+        );
+    }
+    assert_eq!(series.len(), done.series.len());
+    for (a, b) in series.iter().zip(&done.series) {
+        assert_eq!(a.name, b.name);
+        assert!(!a.values.is_empty(), "{}", a.name);
+        assert_eq!((&a.t, &a.values), (&b.t, &b.values), "{}", a.name);
+    }
+}

@@ -341,3 +341,24 @@ fn write_3000_samples() {
     );
     assert!(std::fs::metadata(dir.path().join("big.rrd")).unwrap().len() > 10_000);
 }
+
+/// Messages are encoded in parallel windows and logged in order: the file
+/// is the same, byte for byte, on one thread and on three.
+#[test]
+fn the_mcap_file_does_not_depend_on_threads() {
+    let dir = tempfile::tempdir().unwrap();
+    let fx = Fixture::new(3000);
+    let rec = fx.record();
+    let written = |threads: usize| {
+        let path = dir.path().join(format!("t{threads}.mcap"));
+        rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .unwrap()
+            .install(|| write_mcap(&path, &rec).unwrap());
+        std::fs::read(path).unwrap()
+    };
+    let one = written(1);
+    assert!(one.len() > 100_000, "several encoding windows");
+    assert!(one == written(3), "the files differ");
+}

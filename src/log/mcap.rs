@@ -51,16 +51,17 @@ use std::path::Path;
 use std::sync::Arc;
 
 use foxglove::messages::{
-    line_primitive, ArrowPrimitive, Color, CubePrimitive, CylinderPrimitive, FrameTransform,
-    FrameTransforms, LinePrimitive, Point3, Pose as FgPose, Quaternion, SceneEntity, SceneUpdate,
-    SpherePrimitive, Timestamp, Vector3,
+    line_primitive, ArrowPrimitive, Color, CubePrimitive, CylinderPrimitive, FrameTransforms,
+    LinePrimitive, Point3, Pose as FgPose, Quaternion, SceneEntity, SceneUpdate, SpherePrimitive,
+    Timestamp, Vector3,
 };
-use foxglove::{Context, FoxgloveError, PartialMetadata, RawChannel, Schema};
+use foxglove::{Context, FoxgloveError, RawChannel, Schema};
+
+mod events;
 
 use super::atomic::write_atomically;
 use super::scene::{
-    coord_name, goal_pose, label_at, link_frame, marker_scale, nanos, planar_path, segment_name,
-    GOAL_RGBA, IDEAL_RGBA, SIM_RGBA,
+    coord_name, goal_pose, link_frame, marker_scale, planar_path, GOAL_RGBA, IDEAL_RGBA, SIM_RGBA,
 };
 use super::{validate, LogError};
 use crate::record::{Pose, RunRecord, Shape};
@@ -281,22 +282,6 @@ fn json_channel(
 
 // ------------------------------------------------------------------- logging
 
-/// What to log next, in time order.
-#[derive(Clone, Copy)]
-enum Ev {
-    Series(usize, usize),
-    Command(usize),
-    /// A step of the physics run while the plan was in force (the one at
-    /// `plan_steps` marks its end).
-    SimCommand(usize),
-    Ideal(usize),
-    Sim(usize),
-    Channels(usize),
-    Error(usize),
-    /// A row of `link_poses` (not a sample index: poses are thinned).
-    Tf(usize),
-}
-
 fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), LogError> {
     let state_names: Vec<Cow<'_, str>> = (0..rec.state_names.len())
         .map(|i| coord_name(rec.state_names, i))
@@ -385,7 +370,10 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
             )
         })
         .collect::<Result<Vec<_>, _>>()?;
-    let ch_tf = ctx.channel_builder("/tf").build::<FrameTransforms>();
+    let ch_tf = ctx
+        .channel_builder("/tf")
+        .build::<FrameTransforms>()
+        .into_inner();
     let ch_scene = ctx.channel_builder("/scene").build::<SceneUpdate>();
 
     // Static scene at t = 0.
@@ -395,176 +383,31 @@ fn log_all(ctx: &Arc<Context>, tmp: &Path, rec: &RunRecord<'_>) -> Result<(), Lo
         ch_paths.log_with_time(&paths, 0u64);
     }
 
-    // Time-ordered events (stable sort keeps topic order at equal times).
-    let ideal = rec.ideal;
-    let sim = rec.sim;
-    let cmp = rec.comparison;
-    let mut evs: Vec<(u64, Ev)> =
-        Vec::with_capacity(2 * ideal.len() + 2 * sim.traj.len() + cmp.t.len());
-    for (k, &t) in ideal.t.iter().enumerate() {
-        evs.push((nanos(t), Ev::Command(k)));
-        evs.push((nanos(t), Ev::Ideal(k)));
-    }
-    // Steps while the plan was in force, then the plan's end (a zero).
-    let plan_end = sim.plan_steps.min(sim.traj.t.len().saturating_sub(1));
-    for (k, &t) in sim.traj.t.iter().enumerate().take(plan_end + 1) {
-        evs.push((nanos(t), Ev::SimCommand(k)));
-    }
-    for (k, &t) in sim.traj.t.iter().enumerate() {
-        evs.push((nanos(t), Ev::Sim(k)));
-        if ch_chan.is_some() {
-            evs.push((nanos(t), Ev::Channels(k)));
-        }
-    }
-    for (row, t) in sim.link_pose_times().enumerate() {
-        evs.push((nanos(t), Ev::Tf(row)));
-    }
-    for (k, &t) in cmp.t.iter().enumerate() {
-        evs.push((nanos(t), Ev::Error(k)));
-    }
-    for (i, s) in rec.series.iter().enumerate() {
-        for (k, &t) in s.t.iter().enumerate() {
-            evs.push((nanos(t), Ev::Series(i, k)));
-        }
-    }
-    evs.sort_by_key(|&(ns, _)| ns);
-
-    let frames: Vec<String> = rec
-        .links
-        .iter()
-        .map(|l| link_frame(&l.name).into_owned())
-        .collect();
-    let keys_value_name = Keys::new(&value_name);
-    let keys_input_names = Keys::new(&input_names);
-    let keys_state_names = Keys::new(&state_names);
-    let keys_channel_names = Keys::new(&channel_names);
-    let keys_error_names = Keys::new(&error_names);
-    let mut buf: Vec<u8> = Vec::with_capacity(512);
-    let mut err_row = vec![0.0; error_names.len()];
-    let zeros = vec![0.0; input_names.len()];
-    let json_err = |source| LogError::Json {
-        path: tmp.to_path_buf(),
-        source,
+    let topics = events::Topics {
+        rec,
+        tmp,
+        cmd: ch_cmd,
+        sim_cmd: ch_sim_cmd,
+        ideal: ch_ideal,
+        sim: ch_sim,
+        err: ch_err,
+        series: ch_series,
+        tf: ch_tf,
+        keys_value: Keys::new(&value_name),
+        keys_input: Keys::new(&input_names),
+        keys_state: Keys::new(&state_names),
+        keys_channel: Keys::new(&channel_names),
+        keys_error: Keys::new(&error_names),
+        error_len: error_names.len(),
+        state_len: state_names.len(),
+        frames: rec
+            .links
+            .iter()
+            .map(|l| link_frame(&l.name).into_owned())
+            .collect(),
+        chan: ch_chan,
     };
-    let mut emit = |ch: &RawChannel, ns: u64, msg: &JsonMsg<'_>| -> Result<(), LogError> {
-        buf.clear();
-        msg.write(&mut buf).map_err(json_err)?;
-        ch.log_with_meta(&buf, PartialMetadata::with_log_time(ns));
-        Ok(())
-    };
-    for (ns, ev) in evs {
-        match ev {
-            Ev::Series(i, k) => {
-                let s = &rec.series[i];
-                let msg = JsonMsg {
-                    t: s.t[k],
-                    segment: "",
-                    keys: &keys_value_name,
-                    values: &s.values[k..k + 1],
-                };
-                emit(&ch_series[i], ns, &msg)?;
-            }
-            Ev::Command(k) => {
-                let seg = segment_name(rec.labels, ideal.label[k]);
-                let msg = JsonMsg {
-                    t: ideal.t[k],
-                    segment: &seg,
-                    keys: &keys_input_names,
-                    values: ideal.u[k].as_slice(),
-                };
-                emit(&ch_cmd, ns, &msg)?;
-            }
-            Ev::SimCommand(k) => {
-                let seg = segment_name(rec.labels, sim.traj.label[k]);
-                let values = if k < plan_end {
-                    sim.traj.u[k].as_slice()
-                } else {
-                    &zeros
-                };
-                let msg = JsonMsg {
-                    t: sim.traj.t[k],
-                    segment: &seg,
-                    keys: &keys_input_names,
-                    values,
-                };
-                emit(&ch_sim_cmd, ns, &msg)?;
-            }
-            Ev::Ideal(k) => {
-                let seg = segment_name(rec.labels, ideal.label[k]);
-                let msg = JsonMsg {
-                    t: ideal.t[k],
-                    segment: &seg,
-                    keys: &keys_state_names,
-                    values: ideal.q[k].as_slice(),
-                };
-                emit(&ch_ideal, ns, &msg)?;
-            }
-            Ev::Sim(k) => {
-                let seg = segment_name(rec.labels, sim.traj.label[k]);
-                let msg = JsonMsg {
-                    t: sim.traj.t[k],
-                    segment: &seg,
-                    keys: &keys_state_names,
-                    values: sim.traj.q[k].as_slice(),
-                };
-                emit(&ch_sim, ns, &msg)?;
-            }
-            Ev::Channels(k) => {
-                if let Some(ch) = &ch_chan {
-                    let seg = segment_name(rec.labels, sim.traj.label[k]);
-                    let row: Vec<f64> = sim.channels.iter().map(|(_, v)| v[k]).collect();
-                    let msg = JsonMsg {
-                        t: sim.traj.t[k],
-                        segment: &seg,
-                        keys: &keys_channel_names,
-                        values: &row,
-                    };
-                    emit(ch, ns, &msg)?;
-                }
-            }
-            Ev::Error(k) => {
-                let t = cmp.t[k];
-                for (slot, series) in err_row.iter_mut().zip(&cmp.coord_error) {
-                    *slot = series[k];
-                }
-                if let Some(p) = &cmp.position_error {
-                    err_row[state_names.len()] = p[k];
-                }
-                // Per-robot position errors (several robots) come last.
-                let first = err_row.len() - cmp.robot_position_error.len();
-                for (slot, series) in err_row[first..].iter_mut().zip(&cmp.robot_position_error) {
-                    *slot = series[k];
-                }
-                let seg = match label_at(ideal, t) {
-                    Some(l) => segment_name(rec.labels, l),
-                    None => Cow::Borrowed(""),
-                };
-                let msg = JsonMsg {
-                    t,
-                    segment: &seg,
-                    keys: &keys_error_names,
-                    values: &err_row,
-                };
-                emit(&ch_err, ns, &msg)?;
-            }
-            Ev::Tf(row) => {
-                let ts = Some(timestamp(ns));
-                let transforms = sim.link_poses[row]
-                    .iter()
-                    .zip(&frames)
-                    .map(|(p, frame)| FrameTransform {
-                        timestamp: ts,
-                        parent_frame_id: WORLD_FRAME.to_string(),
-                        child_frame_id: frame.clone(),
-                        translation: Some(vec3(p.translation)),
-                        rotation: Some(quat(p.rotation)),
-                    })
-                    .collect();
-                ch_tf.log_with_time(&FrameTransforms { transforms }, ns);
-            }
-        }
-    }
-    Ok(())
+    topics.log(&events::events(rec, topics.chan.is_some()))
 }
 
 // --------------------------------------------------------------------- scene

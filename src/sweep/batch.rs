@@ -151,6 +151,7 @@ pub fn run_group(
                 .and_then(|sim| {
                     let runs = Runs {
                         ideal: m.ideal,
+                        early: None,
                         sim,
                         timings,
                         started: t1,

@@ -58,6 +58,52 @@ use crate::planner::PlanError;
 use crate::record::{Comparison, LinkVisual, Overlay, Series, SimTrajectory};
 use std::path::Path;
 
+/// What a system's analysis computed beside the physics replay, on the core
+/// the replay leaves idle: from the ideal run alone
+/// ([`System::analysis_of_ideal`]) and by following the replay
+/// ([`SimFollower`]). Named metrics and series, which the system's
+/// [`System::analysis_with`] places among the rest.
+#[derive(Debug, Clone, Default)]
+pub struct EarlyAnalysis {
+    /// Metrics by name.
+    pub metrics: Vec<(String, f64)>,
+    /// Series (each named).
+    pub series: Vec<Series>,
+}
+
+impl EarlyAnalysis {
+    /// The metric `name`, if computed.
+    pub fn get(&self, name: &str) -> Option<f64> {
+        crate::metric::find(&self.metrics, name)
+    }
+    /// The metric `name` (NaN when absent: the gate then reports it).
+    pub fn metric(&self, name: &str) -> f64 {
+        self.get(name).unwrap_or(f64::NAN)
+    }
+    /// The series `name`, taken out (empty when absent).
+    pub fn take_series(&mut self, name: &str) -> Series {
+        match self.series.iter().position(|s| s.name == name) {
+            Some(i) => self.series.remove(i),
+            None => Series::new(name.into()),
+        }
+    }
+    /// Both parts together.
+    pub fn and(mut self, other: EarlyAnalysis) -> EarlyAnalysis {
+        self.metrics.extend(other.metrics);
+        self.series.extend(other.series);
+        self
+    }
+}
+
+/// Part of a system's analysis that follows the physics replay sample by
+/// sample while it runs ([`System::sim_follower`]).
+pub trait SimFollower: Send {
+    /// Physics sample `k` at time `t`, state `q`; every sample, in order.
+    fn sample(&mut self, k: usize, t: f64, q: &[f64]);
+    /// What it computed.
+    fn finish(self: Box<Self>) -> EarlyAnalysis;
+}
+
 /// A model, a configured planner and the physics counterpart.
 pub trait System: Send + Sync {
     /// The kinematic model (state and input names, ideal dynamics).
@@ -124,12 +170,45 @@ pub trait System: Send + Sync {
     }
     /// System metrics together with time series computed from the two runs
     /// (logged beside the state: MCAP `/analysis/<name>`, Rerun
-    /// `analysis/<name>`). Systems whose series share work with their metrics
-    /// override this; the default is [`System::extra_metrics`] and no series.
+    /// `analysis/<name>`): [`System::analysis_of_ideal`], then
+    /// [`System::analysis_with`].
     fn analysis(
         &self,
         goal: &State,
         ideal: &Trajectory,
+        sim: &SimTrajectory,
+        cmp: &Comparison,
+    ) -> (Vec<(String, f64)>, Vec<Series>) {
+        let of_ideal = self.analysis_of_ideal(goal, ideal);
+        self.analysis_with(goal, ideal, of_ideal, sim, cmp)
+    }
+    /// The part of [`System::analysis`] that needs the ideal run alone. The
+    /// runner computes it beside the physics replay, on the core the replay
+    /// leaves idle. Default: nothing.
+    fn analysis_of_ideal(&self, _goal: &State, _ideal: &Trajectory) -> EarlyAnalysis {
+        EarlyAnalysis::default()
+    }
+    /// A follower of the physics replay from `start`, started before it
+    /// (the physics step is `dt`), whose result [`System::analysis_with`] then receives;
+    /// `None` (the default): the analysis reads the finished run instead.
+    fn sim_follower(
+        &self,
+        _start: &State,
+        _goal: &State,
+        _dt: f64,
+    ) -> Option<Box<dyn SimFollower>> {
+        None
+    }
+    /// [`System::analysis`] given `early`: this system's
+    /// [`System::analysis_of_ideal`] of `ideal`, with its follower's result
+    /// when the runner ran one. Systems whose series share work with their
+    /// metrics override this; the default is [`System::extra_metrics`] and
+    /// no series.
+    fn analysis_with(
+        &self,
+        goal: &State,
+        ideal: &Trajectory,
+        _early: EarlyAnalysis,
         sim: &SimTrajectory,
         cmp: &Comparison,
     ) -> (Vec<(String, f64)>, Vec<Series>) {

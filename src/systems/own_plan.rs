@@ -4,7 +4,7 @@
 //! metrics, logs); only the plan comes from elsewhere, so a model added
 //! later gets both without code of its own.
 
-use super::System;
+use super::{EarlyAnalysis, SimFollower, System};
 use crate::integrate::Trajectory;
 use crate::metric::Direction;
 use crate::model::{KinematicModel, State};
@@ -121,14 +121,21 @@ impl System for OwnPlan {
     ) -> Vec<(String, f64)> {
         self.inner.extra_metrics(goal, ideal, sim, cmp)
     }
-    fn analysis(
+    fn analysis_of_ideal(&self, goal: &State, ideal: &Trajectory) -> EarlyAnalysis {
+        self.inner.analysis_of_ideal(goal, ideal)
+    }
+    fn sim_follower(&self, start: &State, goal: &State, dt: f64) -> Option<Box<dyn SimFollower>> {
+        self.inner.sim_follower(start, goal, dt)
+    }
+    fn analysis_with(
         &self,
         goal: &State,
         ideal: &Trajectory,
+        early: EarlyAnalysis,
         sim: &SimTrajectory,
         cmp: &Comparison,
     ) -> (Vec<(String, f64)>, Vec<Series>) {
-        self.inner.analysis(goal, ideal, sim, cmp)
+        self.inner.analysis_with(goal, ideal, early, sim, cmp)
     }
     fn metric_direction(&self, name: &str) -> Option<Direction> {
         self.inner.metric_direction(name)

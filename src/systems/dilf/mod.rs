@@ -33,7 +33,7 @@ pub use config::{
     DEFAULT_MAX_FORCE, DEFAULT_MAX_MOMENT,
 };
 
-use super::System;
+use super::{EarlyAnalysis, SimFollower, System};
 use crate::integrate::Trajectory;
 use crate::model::ellipsoid::Superellipsoid;
 use crate::model::mobile_manipulator::{self as mm, MobileManipulator, Wrist};
@@ -49,7 +49,7 @@ use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::dilf::control::{self, vdot_scaled, Gains};
 use crate::planner::dilf::object::Carried;
-use crate::planner::dilf::potential::{Obstacle, PotentialParams, Scene};
+use crate::planner::dilf::potential::{Obstacle, PotentialParams, Scene, Warm};
 use crate::planner::dilf::{self, DilfParams};
 use crate::planner::PlanError;
 use crate::record::{Comparison, LinkVisual, Overlay, Series, SimTrajectory};
@@ -270,6 +270,8 @@ fn manipulability(q: &[f64]) -> f64 {
 
 /// Metrics of the V̇ ≥ 0 claim and the ellipsoid model along one run.
 struct Along {
+    /// `ideal` or `sim`: the metrics' prefix and the series' suffix.
+    run: &'static str,
     min_beta: f64,
     /// Least √det(JᵀJ) = |det J| of any arm, m³ (zero at a singularity).
     min_manipulability: f64,
@@ -279,48 +281,101 @@ struct Along {
     beta: Series,
 }
 
-fn along(scene: &Scene, gains: &Gains, tr: &Trajectory, samples: &[usize], name: &str) -> Along {
-    let mut warm = scene.warm();
-    let mut out = Along {
-        min_beta: f64::INFINITY,
-        min_manipulability: f64::INFINITY,
-        max_deformation: 0.0,
-        vdot_violations: 0,
-        v: Series::new(format!("V/{name}")),
-        beta: Series::new(format!("min_obstacle_function/{name}")),
-    };
-    for &k in samples {
-        let q = tr.q[k].as_slice();
-        for arm in q.chunks(mm::DOF) {
-            out.min_manipulability = out.min_manipulability.min(manipulability(&arm[3..]));
-        }
-        match scene.field(q, &mut warm) {
-            Ok((e, f)) => {
-                out.min_beta = out.min_beta.min(e.min_beta);
-                out.max_deformation = out.max_deformation.max(e.max_deformation);
-                // The law's input at this very state (the recorded one may have
-                // been computed a step earlier when sample times round).
-                let (u, branches) = control::control(q, &f, &scene.goal, gains);
-                if branches.contains(&control::Branch::Align) {
-                    // The final alignment is ours, not Eq. 18: not counted.
-                    out.v.push(tr.t[k], e.v);
-                    out.beta.push(tr.t[k], e.min_beta);
-                    continue;
-                }
-                let u = u.as_slice();
-                let vd = vdot_scaled(q, &f, u);
-                let size = f.iter().map(|x| x * x).sum::<f64>().sqrt()
-                    * u.iter().map(|x| x * x).sum::<f64>().sqrt();
-                if vd < -1e-9 * size {
-                    out.vdot_violations += 1;
-                }
-                out.v.push(tr.t[k], e.v);
-                out.beta.push(tr.t[k], e.min_beta);
-            }
-            Err(_) => out.vdot_violations += 1,
+impl Along {
+    fn new(run: &'static str) -> Along {
+        Along {
+            run,
+            min_beta: f64::INFINITY,
+            min_manipulability: f64::INFINITY,
+            max_deformation: 0.0,
+            vdot_violations: 0,
+            v: Series::new(format!("V/{run}")),
+            beta: Series::new(format!("min_obstacle_function/{run}")),
         }
     }
+
+    /// The law's V and field at one policy sample (in order: `warm` carries
+    /// the inner solves' warm starts from one sample to the next).
+    fn sample(&mut self, scene: &Scene, gains: &Gains, warm: &mut Warm, t: f64, q: &[f64]) {
+        for arm in q.chunks(mm::DOF) {
+            self.min_manipulability = self.min_manipulability.min(manipulability(&arm[3..]));
+        }
+        let Ok((e, f)) = scene.field(q, warm) else {
+            self.vdot_violations += 1;
+            return;
+        };
+        self.min_beta = self.min_beta.min(e.min_beta);
+        self.max_deformation = self.max_deformation.max(e.max_deformation);
+        // The law's input at this very state (the recorded one may have
+        // been computed a step earlier when sample times round).
+        let (u, branches) = control::control(q, &f, &scene.goal, gains);
+        // The final alignment is ours, not Eq. 18: not counted.
+        if !branches.contains(&control::Branch::Align) {
+            let u = u.as_slice();
+            let vd = vdot_scaled(q, &f, u);
+            let size = f.iter().map(|x| x * x).sum::<f64>().sqrt()
+                * u.iter().map(|x| x * x).sum::<f64>().sqrt();
+            if vd < -1e-9 * size {
+                self.vdot_violations += 1;
+            }
+        }
+        self.v.push(t, e.v);
+        self.beta.push(t, e.min_beta);
+    }
+
+    /// As named metrics and series.
+    fn into_early(self) -> EarlyAnalysis {
+        let run = self.run;
+        EarlyAnalysis {
+            metrics: vec![
+                (format!("{run}_min_obstacle_function"), self.min_beta),
+                (
+                    format!("{run}_vdot_violations"),
+                    self.vdot_violations as f64,
+                ),
+                (format!("{run}_min_manipulability"), self.min_manipulability),
+                (format!("{run}_max_deformation"), self.max_deformation),
+            ],
+            series: vec![self.v, self.beta],
+        }
+    }
+}
+
+fn along(
+    scene: &Scene,
+    gains: &Gains,
+    tr: &Trajectory,
+    samples: &[usize],
+    run: &'static str,
+) -> Along {
+    let mut warm = scene.warm();
+    let mut out = Along::new(run);
+    for &k in samples {
+        out.sample(scene, gains, &mut warm, tr.t[k], tr.q[k].as_slice());
+    }
     out
+}
+
+/// [`Along`] of the physics run, sample by sample while the replay runs.
+struct FollowSim {
+    scene: Scene,
+    gains: Gains,
+    warm: Warm,
+    /// Physics samples per policy sample.
+    every: usize,
+    along: Along,
+}
+
+impl SimFollower for FollowSim {
+    fn sample(&mut self, k: usize, t: f64, q: &[f64]) {
+        if k.is_multiple_of(self.every) {
+            self.along
+                .sample(&self.scene, &self.gains, &mut self.warm, t, q);
+        }
+    }
+    fn finish(self: Box<Self>) -> EarlyAnalysis {
+        self.along.into_early()
+    }
 }
 
 impl System for Dilf {
@@ -476,34 +531,56 @@ impl System for Dilf {
         }
         names
     }
-    fn analysis(
-        &self,
-        goal: &State,
-        ideal: &Trajectory,
-        sim: &SimTrajectory,
-        _cmp: &Comparison,
-    ) -> (Vec<(String, f64)>, Vec<Series>) {
+    fn analysis_of_ideal(&self, goal: &State, ideal: &Trajectory) -> EarlyAnalysis {
         let Ok(scene) = self.scene(ideal.q[0].as_slice(), goal) else {
-            return (Vec::new(), Vec::new());
+            return EarlyAnalysis::default();
         };
-        let gains = self.params.gains();
-        // Each run's evaluations are independent (each keeps its own warm starts).
-        let (a_ideal, a_sim) = rayon::join(
-            || along(&scene, &gains, ideal, &self.policy_samples(ideal), "ideal"),
-            || {
-                let samples = self.policy_samples(&sim.traj);
-                along(&scene, &gains, &sim.traj, &samples, "sim")
-            },
-        );
+        let samples = self.policy_samples(ideal);
+        let a = along(&scene, &self.params.gains(), ideal, &samples, "ideal");
         let mut clear = Series::new("clearance/ideal".into());
-        for k in self.policy_samples(ideal) {
+        for k in samples {
             clear.push(
                 ideal.t[k],
                 self.probe
                     .clearance(ideal.q[k].as_slice(), scene.object.as_ref()),
             );
         }
-        let ideal_clear = clear.values.iter().copied().fold(f64::INFINITY, f64::min);
+        let min_clear = clear.values.iter().copied().fold(f64::INFINITY, f64::min);
+        a.into_early().and(EarlyAnalysis {
+            metrics: vec![("ideal_min_clearance".into(), min_clear)],
+            series: vec![clear],
+        })
+    }
+    fn sim_follower(&self, start: &State, goal: &State, dt: f64) -> Option<Box<dyn SimFollower>> {
+        let scene = self.scene(start.as_slice(), goal).ok()?;
+        Some(Box::new(FollowSim {
+            warm: scene.warm(),
+            scene,
+            gains: self.params.gains(),
+            every: ((self.params.period / dt).round() as usize).max(1),
+            along: Along::new("sim"),
+        }))
+    }
+    fn analysis_with(
+        &self,
+        goal: &State,
+        ideal: &Trajectory,
+        early: EarlyAnalysis,
+        sim: &SimTrajectory,
+        _cmp: &Comparison,
+    ) -> (Vec<(String, f64)>, Vec<Series>) {
+        let Ok(scene) = self.scene(ideal.q[0].as_slice(), goal) else {
+            return (Vec::new(), Vec::new());
+        };
+        // The physics run's part, unless a follower computed it already.
+        let mut early = if early.get("sim_min_obstacle_function").is_some() {
+            early
+        } else {
+            let samples = self.policy_samples(&sim.traj);
+            let a = along(&scene, &self.params.gains(), &sim.traj, &samples, "sim");
+            early.and(a.into_early())
+        };
+        let metric = |name: &str| (name.to_string(), early.metric(name));
         let chan = |n: &str| sim.channel(n).unwrap_or(&[]);
         let min_of = |v: &[f64]| v.iter().copied().fold(f64::INFINITY, f64::min);
         let max_abs = |v: &[f64]| v.iter().fold(0.0f64, |m, x| m.max(x.abs()));
@@ -513,24 +590,18 @@ impl System for Dilf {
                 "sim_time_to_goal".into(),
                 self.time_to_goal(&sim.traj, goal),
             ),
-            ("ideal_min_clearance".into(), ideal_clear),
+            metric("ideal_min_clearance"),
             ("sim_min_clearance".into(), min_of(chan("min_clearance"))),
             (
                 "sim_obstacle_contacts".into(),
                 max_abs(chan("obstacle_contacts")),
             ),
-            ("ideal_min_obstacle_function".into(), a_ideal.min_beta),
-            ("sim_min_obstacle_function".into(), a_sim.min_beta),
-            (
-                "ideal_vdot_violations".into(),
-                a_ideal.vdot_violations as f64,
-            ),
-            ("sim_vdot_violations".into(), a_sim.vdot_violations as f64),
-            (
-                "ideal_min_manipulability".into(),
-                a_ideal.min_manipulability,
-            ),
-            ("sim_min_manipulability".into(), a_sim.min_manipulability),
+            metric("ideal_min_obstacle_function"),
+            metric("sim_min_obstacle_function"),
+            metric("ideal_vdot_violations"),
+            metric("sim_vdot_violations"),
+            metric("ideal_min_manipulability"),
+            metric("sim_min_manipulability"),
             ("slip_lateral_max".into(), max_abs(chan("slip_lateral"))),
             (
                 "joint_rate_error_max".into(),
@@ -543,8 +614,8 @@ impl System for Dilf {
         if self.beam.is_some() {
             // ‖q_f‖∞ of the FE model at the ideal and at the simulated grasps,
             // at every policy sample.
-            metrics.push(("ideal_max_deformation".into(), a_ideal.max_deformation));
-            metrics.push(("sim_max_deformation".into(), a_sim.max_deformation));
+            metrics.push(metric("ideal_max_deformation"));
+            metrics.push(metric("sim_max_deformation"));
             let max_of = |v: &[f64]| v.iter().copied().fold(f64::NEG_INFINITY, f64::max);
             let gap = chan("beam_deformation")
                 .iter()
@@ -573,7 +644,15 @@ impl System for Dilf {
                 ("sim_max_tilt_2_deg".into(), max_abs(chan("tilt_2_deg"))),
             ]);
         }
-        let mut series = vec![a_ideal.v, a_sim.v, a_ideal.beta, a_sim.beta, clear];
+        let mut series = [
+            "V/ideal",
+            "V/sim",
+            "min_obstacle_function/ideal",
+            "min_obstacle_function/sim",
+            "clearance/ideal",
+        ]
+        .map(|name| early.take_series(name))
+        .to_vec();
         if let Some(c) = &scene.object {
             let dt = match sim.traj.t.as_slice() {
                 [a, b, ..] => b - a,
