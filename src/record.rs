@@ -161,6 +161,9 @@ pub struct RunRecord<'a> {
     pub angular: &'a [usize],
     /// Indices of the planar position (x, y) in the state, when the model has one.
     pub position: Option<[usize; 2]>,
+    /// Every robot's planar position indices, the first robot's first (it
+    /// is `position`); empty when the model has no planar position.
+    pub robot_positions: Vec<[usize; 2]>,
     /// Goal state.
     pub goal: &'a [f64],
     /// Goal heading as a world yaw (rad, from +x towards +y), when the model has one.

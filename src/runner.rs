@@ -602,6 +602,7 @@ fn write_logs(
         input_names: model.input_names(),
         angular: model.angular_states(),
         position: model.position_states(),
+        robot_positions: model.robot_positions(),
         goal: &goal_v,
         goal_heading: prep.system.goal_heading(goal),
         overlays: &overlays,

@@ -362,3 +362,89 @@ fn the_mcap_file_does_not_depend_on_threads() {
     assert!(one.len() > 100_000, "several encoding windows");
     assert!(one == written(3), "the files differ");
 }
+
+/// Several robots: every robot's ideal and simulated path and goal in both
+/// logs (`ideal_path_2`, `paths/ideal_2`, ...), the first robot's under the
+/// one-robot names; the goal heading is the first robot's.
+#[test]
+fn every_robots_paths_and_goal_are_logged() {
+    let dir = tempfile::tempdir().unwrap();
+    let fx = Fixture::new(100);
+    let mut rec = fx.record();
+    // The fixture's (theta, phi) stand in for a second robot's (x, y).
+    rec.robot_positions = vec![[0, 1], [2, 3]];
+    let mcap_path = dir.path().join("run.mcap");
+    write_mcap(&mcap_path, &rec).unwrap();
+    let bytes = std::fs::read(&mcap_path).unwrap();
+    let scene = mcap::MessageStream::new(&bytes)
+        .unwrap()
+        .map(Result::unwrap)
+        .find(|m| m.channel.topic == "/scene/paths")
+        .map(|m| SceneUpdate::decode(&m.data[..]).unwrap())
+        .expect("a /scene/paths message");
+    let ids: Vec<&str> = scene.entities.iter().map(|e| e.id.as_str()).collect();
+    assert_eq!(
+        ids,
+        [
+            "ideal_path",
+            "sim_path",
+            "ideal_path_2",
+            "sim_path_2",
+            "goal",
+            "goal_2"
+        ]
+    );
+    let second: Vec<(f64, f64)> = scene.entities[2].lines[0]
+        .points
+        .iter()
+        .map(|p| (p.x, p.y))
+        .collect();
+    let want: Vec<(f64, f64)> = fx.ideal.q.iter().map(|q| (q[2], q[3])).collect();
+    assert_eq!(second, want, "robot 2's ideal path is its own coordinates");
+    assert_eq!(scene.entities[4].arrows.len(), 1, "robot 1's goal heading");
+    assert!(scene.entities[5].arrows.is_empty());
+    let sphere = &scene.entities[5].spheres[0];
+    let at = sphere.pose.as_ref().unwrap().position.as_ref().unwrap();
+    assert_eq!((at.x, at.y), (fx.goal[2], fx.goal[3]));
+
+    let rrd_path = dir.path().join("run.rrd");
+    write_rrd(&rrd_path, &rec).unwrap();
+    use re_log_encoding::DecoderApp;
+    use re_sdk::log::{Chunk, LogMsg};
+    let rrd = std::fs::read(&rrd_path).unwrap();
+    let mut entities = BTreeSet::new();
+    for msg in DecoderApp::decode_eager(std::io::BufReader::new(&rrd[..])).unwrap() {
+        if let LogMsg::ArrowMsg(store, arrow) = msg.unwrap() {
+            if store.kind() == re_sdk::StoreKind::Recording {
+                let chunk = Chunk::from_arrow_msg(&arrow).unwrap();
+                entities.insert(chunk.entity_path().to_string());
+            }
+        }
+    }
+    for e in [
+        "/paths/ideal",
+        "/paths/sim",
+        "/paths/goal",
+        "/paths/ideal_2",
+        "/paths/sim_2",
+        "/paths/ideal_2/now",
+        "/paths/goal_2",
+    ] {
+        assert!(
+            entities.contains(e),
+            "entity {e} missing; have {entities:?}"
+        );
+    }
+    assert!(!entities.contains("/paths/goal_2/heading"));
+
+    // The report's data: the first robot's paths as before, the others beside.
+    let sf = anholonomy::report::data::SeriesFile::from_record(&rec);
+    assert_eq!(sf.path_ideal.len(), fx.ideal.len());
+    assert_eq!(sf.other_robots.len(), 1);
+    assert_eq!(sf.other_robots[0].position, [2, 3]);
+    let last = fx.sim.traj.q.last().unwrap();
+    assert_eq!(
+        sf.other_robots[0].sim.last(),
+        Some(&[last[2] as f32, last[3] as f32])
+    );
+}

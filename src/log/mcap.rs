@@ -31,7 +31,8 @@
 //!
 //! Link frame ids are the URDF link names (a link called `world` becomes
 //! `world_link`); scene entity ids are the link names, plus `ideal_path`,
-//! `sim_path` and `goal` on `/scene/paths`.
+//! `sim_path` and `goal` on `/scene/paths` (the first robot's; a second
+//! robot's are `ideal_path_2`, `sim_path_2`, `goal_2`, and so on).
 //!
 //! # Metadata
 //!
@@ -61,7 +62,8 @@ mod events;
 
 use super::atomic::write_atomically;
 use super::scene::{
-    coord_name, goal_pose, link_frame, marker_scale, planar_path, GOAL_RGBA, IDEAL_RGBA, SIM_RGBA,
+    coord_name, goal_points, link_frame, marker_scale, planar_path, planar_paths, robot_suffix,
+    GOAL_RGBA, IDEAL_RGBA, SIM_RGBA,
 };
 use super::{validate, LogError};
 use crate::record::{Pose, RunRecord, Shape};
@@ -557,10 +559,10 @@ fn line(points: &[[f64; 2]], rgba: [f32; 4]) -> LinePrimitive {
     }
 }
 
-/// Ideal / simulated paths and goal marker (models with a planar position).
+/// Ideal / simulated paths and goal marker of every robot (models with a
+/// planar position).
 fn paths_scene(rec: &RunRecord<'_>) -> Option<SceneUpdate> {
-    let ideal = planar_path(rec, rec.ideal)?;
-    let sim = planar_path(rec, &rec.sim.traj)?;
+    let s = marker_scale(&planar_path(rec, rec.ideal)?);
     let entity = |id: &str| SceneEntity {
         timestamp: Some(timestamp(0)),
         frame_id: WORLD_FRAME.to_string(),
@@ -569,16 +571,21 @@ fn paths_scene(rec: &RunRecord<'_>) -> Option<SceneUpdate> {
         frame_locked: true,
         ..Default::default()
     };
-    let mut entities = vec![
-        SceneEntity {
+    let mut entities = Vec::new();
+    let paths = planar_paths(rec, rec.ideal)
+        .into_iter()
+        .zip(planar_paths(rec, &rec.sim.traj));
+    for (r, (ideal, sim)) in paths.enumerate() {
+        let sfx = robot_suffix(r);
+        entities.push(SceneEntity {
             lines: vec![line(&ideal, IDEAL_RGBA)],
-            ..entity("ideal_path")
-        },
-        SceneEntity {
+            ..entity(&format!("ideal_path{sfx}"))
+        });
+        entities.push(SceneEntity {
             lines: vec![line(&sim, SIM_RGBA)],
-            ..entity("sim_path")
-        },
-    ];
+            ..entity(&format!("sim_path{sfx}"))
+        });
+    }
     for o in rec.overlays {
         let mut line = line(&[], o.rgba);
         line.points = o
@@ -599,15 +606,15 @@ fn paths_scene(rec: &RunRecord<'_>) -> Option<SceneUpdate> {
         }
         entities.push(e);
     }
-    if let Some(([gx, gy], heading)) = goal_pose(rec) {
-        let s = marker_scale(&ideal);
+    for (r, [gx, gy]) in goal_points(rec).into_iter().enumerate() {
         let at = Pose {
             translation: [gx, gy, 0.0],
             rotation: [0.0, 0.0, 0.0, 1.0],
         };
-        let mut goal = entity("goal");
+        let mut goal = entity(&format!("goal{}", robot_suffix(r)));
         goal.spheres.push(sphere(&at, 0.5 * s, color(GOAL_RGBA)));
-        if let Some(h) = heading {
+        // The goal heading is the first robot's.
+        if let Some(h) = rec.goal_heading.filter(|_| r == 0) {
             let yaw = Pose {
                 translation: at.translation,
                 rotation: [0.0, 0.0, (0.5 * h).sin(), (0.5 * h).cos()],

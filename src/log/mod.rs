@@ -247,7 +247,8 @@ fn check(rec: &RunRecord<'_>) -> Result<(), String> {
             p.len()
         ));
     }
-    if let Some([ix, iy]) = rec.position {
+    for [ix, iy] in rec.position.iter().chain(&rec.robot_positions) {
+        let (ix, iy) = (*ix, *iy);
         if ix >= ns || iy >= ns {
             return Err(format!(
                 "position indices [{ix}, {iy}] out of range for {ns} coordinates"

@@ -9,7 +9,8 @@
 //! * `paths/ideal` (green) and `paths/sim` (orange): static `LineStrips3D` of
 //!   the planar path at z = 0, with a moving `Points3D` marker `paths/<run>/now`;
 //!   `paths/goal` (+ `paths/goal/heading` arrow). Only for models with a planar
-//!   position.
+//!   position. With several robots these are the first robot's; the others'
+//!   are `paths/ideal_2`, `paths/sim_2`, `paths/goal_2`, ... (no heading).
 //! * `state/<coord>/ideal`, `state/<coord>/sim`, `errors/<coord>`,
 //!   `errors/position`, `command/<input>`, `sim/<channel>`: `Scalars` series.
 //! * `segment`: `TextLog` entry whenever the plan label changes.
@@ -53,7 +54,8 @@ use rr::{EntityPath, EntityPathPart, RecordingStream, TimeColumn};
 
 use super::atomic::write_atomically;
 use super::scene::{
-    coord_name, goal_pose, marker_scale, planar_path, segment_name, GOAL_RGBA, IDEAL_RGBA, SIM_RGBA,
+    coord_name, goal_points, marker_scale, planar_path, planar_paths, robot_suffix, segment_name,
+    GOAL_RGBA, IDEAL_RGBA, SIM_RGBA,
 };
 use super::{validate, LogError};
 use crate::record::{Pose, RunRecord, Shape};
@@ -365,52 +367,60 @@ fn log_paths(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrErro
                 .with_show_labels(false),
         )?;
     }
-    let (Some(ideal), Some(sim)) = (planar_path(rec, rec.ideal), planar_path(rec, &rec.sim.traj))
-    else {
+    let Some(first) = planar_path(rec, rec.ideal) else {
         return Ok(());
     };
-    let s = marker_scale(&ideal) as f32;
+    let s = marker_scale(&first) as f32;
     let xyz = |p: &[f64; 2]| [p[0] as f32, p[1] as f32, 0.0];
-    for (name, path, t, color) in [
-        ("ideal", &ideal, &rec.ideal.t, IDEAL_RGBA),
-        ("sim", &sim, &rec.sim.traj.t, SIM_RGBA),
-    ] {
-        let strip: Vec<[f32; 3]> = path.iter().map(xyz).collect();
-        stream.log_static(
-            ep(&["paths", name]),
-            &rr::LineStrips3D::new([strip.clone()])
-                .with_colors([rgba(color)])
-                .with_radii([Radius::new_ui_points(1.5)])
-                .with_labels([name])
-                // In 3D the label sits on the robot; colours and hover name it.
-                .with_show_labels(false),
-        )?;
-        let now = ep(&["paths", name, "now"]);
-        stream.log_static(
-            now.clone(),
-            &rr::Points3D::update_fields()
-                .with_colors([rgba(color)])
-                .with_radii([Radius::new_scene_units(0.4 * s)]),
-        )?;
-        let cols = rr::Points3D::update_fields()
-            .with_positions(strip)
-            .columns_of_unit_batches()?;
-        stream.send_columns(now, [time_col(t)], cols)?;
+    let paths = planar_paths(rec, rec.ideal)
+        .into_iter()
+        .zip(planar_paths(rec, &rec.sim.traj));
+    for (r, (ideal, sim)) in paths.enumerate() {
+        let sfx = robot_suffix(r);
+        for (run, path, t, color) in [
+            ("ideal", &ideal, &rec.ideal.t, IDEAL_RGBA),
+            ("sim", &sim, &rec.sim.traj.t, SIM_RGBA),
+        ] {
+            let name = format!("{run}{sfx}");
+            let strip: Vec<[f32; 3]> = path.iter().map(xyz).collect();
+            stream.log_static(
+                ep(&["paths", &name]),
+                &rr::LineStrips3D::new([strip.clone()])
+                    .with_colors([rgba(color)])
+                    .with_radii([Radius::new_ui_points(1.5)])
+                    .with_labels([name.as_str()])
+                    // In 3D the label sits on the robot; colours and hover name it.
+                    .with_show_labels(false),
+            )?;
+            let now = ep(&["paths", &name, "now"]);
+            stream.log_static(
+                now.clone(),
+                &rr::Points3D::update_fields()
+                    .with_colors([rgba(color)])
+                    .with_radii([Radius::new_scene_units(0.4 * s)]),
+            )?;
+            let cols = rr::Points3D::update_fields()
+                .with_positions(strip)
+                .columns_of_unit_batches()?;
+            stream.send_columns(now, [time_col(t)], cols)?;
+        }
     }
-    if let Some(([gx, gy], heading)) = goal_pose(rec) {
+    for (r, [gx, gy]) in goal_points(rec).into_iter().enumerate() {
         let at = [gx as f32, gy as f32, 0.0];
+        let name = format!("goal{}", robot_suffix(r));
         stream.log_static(
-            ep(&["paths", "goal"]),
+            ep(&["paths", &name]),
             &rr::Points3D::new([at])
                 .with_colors([rgba(GOAL_RGBA)])
                 .with_radii([Radius::new_scene_units(0.5 * s)])
-                .with_labels(["goal"])
+                .with_labels([name.as_str()])
                 .with_show_labels(false),
         )?;
-        if let Some(h) = heading {
+        // The goal heading is the first robot's.
+        if let Some(h) = rec.goal_heading.filter(|_| r == 0) {
             let len = 3.0 * s;
             stream.log_static(
-                ep(&["paths", "goal", "heading"]),
+                ep(&["paths", &name, "heading"]),
                 &rr::Arrows3D::from_vectors([[len * h.cos() as f32, len * h.sin() as f32, 0.0]])
                     .with_origins([at])
                     .with_colors([rgba(GOAL_RGBA)]),

@@ -35,18 +35,38 @@ pub(crate) fn nanos(t: f64) -> u64 {
     }
 }
 
-/// Planar path (x, y) of a trajectory, when the record has a planar position.
+/// Planar path (x, y) of a trajectory, when the record has a planar
+/// position (the first robot's).
 pub(crate) fn planar_path(rec: &RunRecord<'_>, traj: &Trajectory) -> Option<Vec<[f64; 2]>> {
     let [ix, iy] = rec.position?;
     Some(traj.q.iter().map(|q| [q[ix], q[iy]]).collect())
 }
 
-/// Goal position (x, y) and heading (first angular coordinate), when available.
-pub(crate) fn goal_pose(rec: &RunRecord<'_>) -> Option<([f64; 2], Option<f64>)> {
-    let [ix, iy] = rec.position?;
-    let p = [*rec.goal.get(ix)?, *rec.goal.get(iy)?];
-    let heading = rec.goal_heading;
-    Some((p, heading))
+/// Every robot's planar path (x, y) of a trajectory, the first robot's first.
+pub(crate) fn planar_paths(rec: &RunRecord<'_>, traj: &Trajectory) -> Vec<Vec<[f64; 2]>> {
+    rec.robot_positions
+        .iter()
+        .map(|&[ix, iy]| traj.q.iter().map(|q| [q[ix], q[iy]]).collect())
+        .collect()
+}
+
+/// Every robot's goal position (x, y), the first robot's first.
+pub(crate) fn goal_points(rec: &RunRecord<'_>) -> Vec<[f64; 2]> {
+    rec.robot_positions
+        .iter()
+        .filter_map(|&[ix, iy]| Some([*rec.goal.get(ix)?, *rec.goal.get(iy)?]))
+        .collect()
+}
+
+/// What a robot's paths and goal are called in the logs: `ideal`, `sim`,
+/// `goal` for the first robot (the names a one-robot log has always had),
+/// with `_2`, `_3`, ... for the others.
+pub(crate) fn robot_suffix(r: usize) -> String {
+    if r == 0 {
+        String::new()
+    } else {
+        format!("_{}", r + 1)
+    }
 }
 
 /// Frame / entity name of a link (a link literally called `world` would

@@ -94,6 +94,22 @@ pub struct SeriesFile {
     pub path_ideal: Vec<[f32; 2]>,
     /// Simulated planar path.
     pub path_sim: Vec<[f32; 2]>,
+    /// The other robots' planar position indices and paths (models with
+    /// several robots; `position`, `path_ideal` and `path_sim` are the
+    /// first robot's).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub other_robots: Vec<RobotPaths>,
+}
+
+/// One more robot's planar paths ([`SeriesFile::other_robots`]).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]
+pub struct RobotPaths {
+    /// Indices of its planar position (x, y) in the state.
+    pub position: [usize; 2],
+    /// Its ideal path.
+    pub ideal: Vec<[f32; 2]>,
+    /// Its simulated path.
+    pub sim: Vec<[f32; 2]>,
 }
 
 fn opt(x: f64) -> Option<f32> {
@@ -250,6 +266,16 @@ impl SeriesFile {
                 .collect(),
             path_ideal: rec.position.map(|p| path(ideal, p)).unwrap_or_default(),
             path_sim: rec.position.map(|p| path(sim, p)).unwrap_or_default(),
+            other_robots: rec
+                .robot_positions
+                .iter()
+                .skip(1)
+                .map(|&p| RobotPaths {
+                    position: p,
+                    ideal: path(ideal, p),
+                    sim: path(sim, p),
+                })
+                .collect(),
             state_names: names,
         }
     }

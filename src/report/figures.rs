@@ -143,38 +143,45 @@ pub(super) fn single_figures(summary: &Value, sf: &SeriesFile) -> Result<String,
             });
         }
         let pp = |p: &[[f32; 2]]| p.iter().map(|q| (q[0] as f64, q[1] as f64)).collect();
-        paths.push(Path2 {
-            name: "ideal",
-            points: pp(&sf.path_ideal),
-            color: plots::IDEAL,
-            width: 3,
-        });
-        paths.push(Path2 {
-            name: "simulated",
-            points: pp(&sf.path_sim),
-            color: plots::SIM,
-            width: 2,
-        });
-        let at = |q: &[f64]| {
-            (
-                q.get(ix).copied().unwrap_or(0.0),
-                q.get(iy).copied().unwrap_or(0.0),
-            )
-        };
-        let markers = [
-            Marker {
+        let robots = std::iter::once(([ix, iy], &sf.path_ideal, &sf.path_sim)).chain(
+            sf.other_robots
+                .iter()
+                .map(|r| (r.position, &r.ideal, &r.sim)),
+        );
+        let mut markers = Vec::new();
+        for (r, ([ix, iy], ideal, sim)) in robots.enumerate() {
+            paths.push(Path2 {
+                name: "ideal",
+                points: pp(ideal),
+                color: plots::IDEAL,
+                width: 3,
+            });
+            paths.push(Path2 {
+                name: "simulated",
+                points: pp(sim),
+                color: plots::SIM,
+                width: 2,
+            });
+            let at = |q: &[f64]| {
+                (
+                    q.get(ix).copied().unwrap_or(0.0),
+                    q.get(iy).copied().unwrap_or(0.0),
+                )
+            };
+            markers.push(Marker {
                 name: "start",
                 at: at(&sf.start),
                 heading: None,
                 color: plots::GREY,
-            },
-            Marker {
+            });
+            markers.push(Marker {
                 name: "goal",
                 at: at(&sf.goal),
-                heading: sf.goal_heading,
+                // The goal heading is the first robot's.
+                heading: sf.goal_heading.filter(|_| r == 0),
                 color: plots::RED,
-            },
-        ];
+            });
+        }
         b.push_str("<h2>Planar path</h2><div class=\"grid\">");
         b.push_str(&plots::path_chart(&paths, &markers)?);
         b.push_str("</div>");

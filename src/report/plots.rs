@@ -327,11 +327,16 @@ pub fn path_chart(paths: &[Path2<'_>], markers: &[Marker<'_>]) -> Res<String> {
         }
         for m in markers {
             let c = m.color;
-            chart
+            let series = chart
                 .draw_series([Circle::new(m.at, 5, c.filled())])
-                .map_err(err)?
-                .label(m.name)
-                .legend(move |(x, y)| Circle::new((x + 7, y), 4, c.filled()));
+                .map_err(err)?;
+            // Several robots' starts and goals: one entry each.
+            if !named.contains(&m.name) {
+                named.push(m.name);
+                series
+                    .label(m.name)
+                    .legend(move |(x, y)| Circle::new((x + 7, y), 4, c.filled()));
+            }
             if let Some(hd) = m.heading {
                 let tip = (m.at.0 + arrow * hd.cos(), m.at.1 + arrow * hd.sin());
                 chart
@@ -600,6 +605,13 @@ mod tests {
     /// are all "obstacles"); an unnamed path has none.
     #[test]
     fn a_legend_names_each_path_name_once() {
+        // Two robots' goals and starts: one entry each too.
+        let marker = |name, y: f64| Marker {
+            name,
+            at: (0.5, y),
+            heading: None,
+            color: RED,
+        };
         let path = |name, y: f64| Path2 {
             name,
             points: vec![(0.0, y), (1.0, y)],
@@ -614,7 +626,12 @@ mod tests {
                 path("", 3.0),
                 path("ideal", 4.0),
             ],
-            &[],
+            &[
+                marker("goal", 0.0),
+                marker("goal", 1.0),
+                marker("start", 2.0),
+                marker("start", 3.0),
+            ],
         )
         .unwrap();
         let texts: Vec<&str> = svg
@@ -628,11 +645,13 @@ mod tests {
             1,
             "{texts:?}"
         );
-        assert_eq!(
-            texts.iter().filter(|t| **t == "ideal").count(),
-            1,
-            "{texts:?}"
-        );
+        for name in ["ideal", "goal", "start"] {
+            assert_eq!(
+                texts.iter().filter(|t| **t == name).count(),
+                1,
+                "{name}: {texts:?}"
+            );
+        }
     }
 
     #[test]

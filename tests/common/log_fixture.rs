@@ -150,6 +150,7 @@ impl Fixture {
             input_names: &INPUT,
             angular: &[2, 3],
             position: Some([0, 1]),
+            robot_positions: vec![[0, 1]],
             goal: &self.goal,
             labels: &self.labels,
             ideal: &self.ideal,

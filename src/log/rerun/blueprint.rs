@@ -18,7 +18,7 @@ use rr::external::re_sdk_types::datatypes::{
 use rr::log::LogMsg;
 use rr::AsComponents;
 
-use crate::log::scene::{coord_name, planar_path};
+use crate::log::scene::{coord_name, planar_paths};
 use crate::record::{RunRecord, Shape};
 
 use super::{ep, RrError, TIMELINE};
@@ -98,7 +98,7 @@ fn scene_extent(rec: &RunRecord<'_>) -> (Bounds, f64) {
         }
     }
     for traj in [rec.ideal, &rec.sim.traj] {
-        if let Some(path) = planar_path(rec, traj) {
+        for path in planar_paths(rec, traj) {
             for p in path.iter().step_by((path.len() / 2000).max(1)) {
                 scene.add([p[0], p[1], 0.0]);
             }
