@@ -140,12 +140,14 @@ mod dilf;
 mod files;
 mod own_plan;
 mod runaway;
+mod studies;
 mod tables;
 
 /// Every case.
 pub fn corpus() -> Vec<Case> {
     let mut c = Corpus(Vec::new());
     tables::cases(&mut c);
+    studies::cases(&mut c);
     dilf::cases(&mut c);
     files::cases(&mut c);
     own_plan::cases(&mut c);
