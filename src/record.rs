@@ -159,10 +159,8 @@ pub struct RunRecord<'a> {
     pub input_names: &'a [&'static str],
     /// Indices of angular coordinates.
     pub angular: &'a [usize],
-    /// Indices of the planar position (x, y) in the state, when the model has one.
-    pub position: Option<[usize; 2]>,
-    /// Every robot's planar position indices, the first robot's first (it
-    /// is `position`); empty when the model has no planar position.
+    /// Every robot's planar position indices (x, y) in the state, the
+    /// first robot's first; empty when the model has no planar position.
     pub robot_positions: Vec<[usize; 2]>,
     /// Goal state.
     pub goal: &'a [f64],
@@ -190,4 +188,11 @@ pub struct RunRecord<'a> {
     /// [`crate::runner::tracking_meaningful`]); a feedback policy's sim run reacts to its own
     /// state, so its distance to the ideal run is not a tracking error.
     pub tracking_meaningful: bool,
+}
+
+impl RunRecord<'_> {
+    /// Indices of the (first robot's) planar position, when the model has one.
+    pub fn position(&self) -> Option<[usize; 2]> {
+        self.robot_positions.first().copied()
+    }
 }

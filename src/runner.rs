@@ -287,7 +287,7 @@ fn run_plan(
         plan: plan_wall_s,
         ..Default::default()
     };
-    let goal = prep.start_goal().1;
+    let (start, goal) = prep.start_goal();
     let ideal_part = || {
         let t0 = Instant::now();
         let tr = ideal_run(prep, plan, &opts.cancel)?;
@@ -339,9 +339,7 @@ fn run_plan(
         _ => true,
     };
     let ((ideal, early, ideal_s), (sim, physics_s, physics_cpu)) = if concurrent {
-        let follower = prep
-            .system
-            .sim_follower(&prep.start_goal().0, &goal, sc.sim.dt);
+        let follower = prep.system.sim_follower(&start, &goal, sc.sim.dt);
         let following = follower.is_some();
         let (tx, rx) = mpsc::channel();
         // A thread of its own, not a rayon job: the follower waits for the
@@ -355,16 +353,11 @@ fn run_plan(
             let (ideal, followed) = beside
                 .join()
                 .unwrap_or_else(|p| std::panic::resume_unwind(p));
-            (
-                ideal.map(|(tr, early, s)| {
-                    let early = match followed {
-                        Some(f) => early.and(f),
-                        None => early,
-                    };
-                    (tr, early, s)
-                }),
-                physics,
-            )
+            let ideal = ideal.map(|(tr, early, s)| match followed {
+                Some(f) => (tr, early.and(f), s),
+                None => (tr, early, s),
+            });
+            (ideal, physics)
         });
         (ideal?, physics?)
     } else {
@@ -601,7 +594,6 @@ fn write_logs(
         state_names: model.state_names(),
         input_names: model.input_names(),
         angular: model.angular_states(),
-        position: model.position_states(),
         robot_positions: model.robot_positions(),
         goal: &goal_v,
         goal_heading: prep.system.goal_heading(goal),

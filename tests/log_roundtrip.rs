@@ -304,7 +304,7 @@ fn overwrite_and_no_planar_position() {
         robot_position_error: Vec::new(),
     };
     let mut rec = fx.record();
-    rec.position = None;
+    rec.robot_positions.clear();
     rec.comparison = &cmp;
     let mcap_path = dir.path().join("a.mcap");
     let rrd_path = dir.path().join("a.rrd");

@@ -62,8 +62,8 @@ mod events;
 
 use super::atomic::write_atomically;
 use super::scene::{
-    coord_name, goal_points, link_frame, marker_scale, planar_path, planar_paths, robot_suffix,
-    GOAL_RGBA, IDEAL_RGBA, SIM_RGBA,
+    coord_name, goal_points, link_frame, marker_scale, planar_paths, robot_suffix, GOAL_RGBA,
+    IDEAL_RGBA, SIM_RGBA,
 };
 use super::{validate, LogError};
 use crate::record::{Pose, RunRecord, Shape};
@@ -562,7 +562,8 @@ fn line(points: &[[f64; 2]], rgba: [f32; 4]) -> LinePrimitive {
 /// Ideal / simulated paths and goal marker of every robot (models with a
 /// planar position).
 fn paths_scene(rec: &RunRecord<'_>) -> Option<SceneUpdate> {
-    let s = marker_scale(&planar_path(rec, rec.ideal)?);
+    let ideal_paths = planar_paths(rec, rec.ideal);
+    let s = marker_scale(ideal_paths.first()?);
     let entity = |id: &str| SceneEntity {
         timestamp: Some(timestamp(0)),
         frame_id: WORLD_FRAME.to_string(),
@@ -572,13 +573,11 @@ fn paths_scene(rec: &RunRecord<'_>) -> Option<SceneUpdate> {
         ..Default::default()
     };
     let mut entities = Vec::new();
-    let paths = planar_paths(rec, rec.ideal)
-        .into_iter()
-        .zip(planar_paths(rec, &rec.sim.traj));
+    let paths = ideal_paths.iter().zip(planar_paths(rec, &rec.sim.traj));
     for (r, (ideal, sim)) in paths.enumerate() {
         let sfx = robot_suffix(r);
         entities.push(SceneEntity {
-            lines: vec![line(&ideal, IDEAL_RGBA)],
+            lines: vec![line(ideal, IDEAL_RGBA)],
             ..entity(&format!("ideal_path{sfx}"))
         });
         entities.push(SceneEntity {

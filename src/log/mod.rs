@@ -247,8 +247,7 @@ fn check(rec: &RunRecord<'_>) -> Result<(), String> {
             p.len()
         ));
     }
-    for [ix, iy] in rec.position.iter().chain(&rec.robot_positions) {
-        let (ix, iy) = (*ix, *iy);
+    for &[ix, iy] in &rec.robot_positions {
         if ix >= ns || iy >= ns {
             return Err(format!(
                 "position indices [{ix}, {iy}] out of range for {ns} coordinates"

@@ -54,8 +54,8 @@ use rr::{EntityPath, EntityPathPart, RecordingStream, TimeColumn};
 
 use super::atomic::write_atomically;
 use super::scene::{
-    coord_name, goal_points, marker_scale, planar_path, planar_paths, robot_suffix, segment_name,
-    GOAL_RGBA, IDEAL_RGBA, SIM_RGBA,
+    coord_name, goal_points, marker_scale, planar_paths, robot_suffix, segment_name, GOAL_RGBA,
+    IDEAL_RGBA, SIM_RGBA,
 };
 use super::{validate, LogError};
 use crate::record::{Pose, RunRecord, Shape};
@@ -367,18 +367,17 @@ fn log_paths(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrErro
                 .with_show_labels(false),
         )?;
     }
-    let Some(first) = planar_path(rec, rec.ideal) else {
+    let ideal_paths = planar_paths(rec, rec.ideal);
+    let Some(first) = ideal_paths.first() else {
         return Ok(());
     };
-    let s = marker_scale(&first) as f32;
+    let s = marker_scale(first) as f32;
     let xyz = |p: &[f64; 2]| [p[0] as f32, p[1] as f32, 0.0];
-    let paths = planar_paths(rec, rec.ideal)
-        .into_iter()
-        .zip(planar_paths(rec, &rec.sim.traj));
+    let paths = ideal_paths.iter().zip(planar_paths(rec, &rec.sim.traj));
     for (r, (ideal, sim)) in paths.enumerate() {
         let sfx = robot_suffix(r);
         for (run, path, t, color) in [
-            ("ideal", &ideal, &rec.ideal.t, IDEAL_RGBA),
+            ("ideal", ideal, &rec.ideal.t, IDEAL_RGBA),
             ("sim", &sim, &rec.sim.traj.t, SIM_RGBA),
         ] {
             let name = format!("{run}{sfx}");

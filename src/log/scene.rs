@@ -35,14 +35,8 @@ pub(crate) fn nanos(t: f64) -> u64 {
     }
 }
 
-/// Planar path (x, y) of a trajectory, when the record has a planar
-/// position (the first robot's).
-pub(crate) fn planar_path(rec: &RunRecord<'_>, traj: &Trajectory) -> Option<Vec<[f64; 2]>> {
-    let [ix, iy] = rec.position?;
-    Some(traj.q.iter().map(|q| [q[ix], q[iy]]).collect())
-}
-
-/// Every robot's planar path (x, y) of a trajectory, the first robot's first.
+/// Every robot's planar path (x, y) of a trajectory, the first robot's
+/// first (none when the model has no planar position).
 pub(crate) fn planar_paths(rec: &RunRecord<'_>, traj: &Trajectory) -> Vec<Vec<[f64; 2]>> {
     rec.robot_positions
         .iter()

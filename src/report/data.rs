@@ -230,7 +230,7 @@ impl SeriesFile {
             scenario: rec.scenario.to_string(),
             input_names: rec.input_names.iter().map(|s| s.to_string()).collect(),
             angular: rec.angular.to_vec(),
-            position: rec.position,
+            position: rec.position(),
             start: ideal
                 .q
                 .first()
@@ -264,8 +264,8 @@ impl SeriesFile {
                 .iter()
                 .map(|(n, v)| series(n, &sim.t, |k| v[k]))
                 .collect(),
-            path_ideal: rec.position.map(|p| path(ideal, p)).unwrap_or_default(),
-            path_sim: rec.position.map(|p| path(sim, p)).unwrap_or_default(),
+            path_ideal: rec.position().map(|p| path(ideal, p)).unwrap_or_default(),
+            path_sim: rec.position().map(|p| path(sim, p)).unwrap_or_default(),
             other_robots: rec
                 .robot_positions
                 .iter()

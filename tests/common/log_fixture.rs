@@ -149,7 +149,6 @@ impl Fixture {
             state_names: &STATE,
             input_names: &INPUT,
             angular: &[2, 3],
-            position: Some([0, 1]),
             robot_positions: vec![[0, 1]],
             goal: &self.goal,
             labels: &self.labels,

@@ -167,10 +167,12 @@ impl Topics<'_> {
             }
             Ev::SimCommand(k) => {
                 let seg = segment_name(rec.labels, sim.traj.label[k]);
-                let zeros = vec![0.0; rec.input_names.len()];
+                // Only the plan's end (one message) holds zeros.
+                let zeros;
                 let values = if k < plan_end(rec) {
                     sim.traj.u[k].as_slice()
                 } else {
+                    zeros = vec![0.0; rec.input_names.len()];
                     &zeros
                 };
                 let msg = JsonMsg {

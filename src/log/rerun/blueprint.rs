@@ -252,7 +252,7 @@ fn blueprint(rec: &RunRecord<'_>) -> (Blueprint, Vec<Property>) {
         .collect();
 
     // Tracking errors by unit: one axis never mixes metres and radians.
-    let position_idx = rec.position.map(|p| p.to_vec()).unwrap_or_default();
+    let position_idx = rec.position().map(|p| p.to_vec()).unwrap_or_default();
     let mut groups: [ErrorGroup<'_>; 3] = [
         ("tracking error, lengths (m)", Vec::new(), Vec::new()),
         ("tracking error, angles (rad)", Vec::new(), Vec::new()),

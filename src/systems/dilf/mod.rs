@@ -236,8 +236,12 @@ impl Dilf {
         } else {
             1.0
         };
-        let every = ((self.params.period / dt).round() as usize).max(1);
-        (0..tr.t.len()).step_by(every).collect()
+        (0..tr.t.len()).step_by(self.steps_per_period(dt)).collect()
+    }
+
+    /// Steps of `dt` per policy period (at least 1).
+    fn steps_per_period(&self, dt: f64) -> usize {
+        ((self.params.period / dt).round() as usize).max(1)
     }
 }
 
@@ -557,7 +561,7 @@ impl System for Dilf {
             warm: scene.warm(),
             scene,
             gains: self.params.gains(),
-            every: ((self.params.period / dt).round() as usize).max(1),
+            every: self.steps_per_period(dt),
             along: Along::new("sim"),
         }))
     }
@@ -658,7 +662,7 @@ impl System for Dilf {
                 [a, b, ..] => b - a,
                 _ => self.params.period,
             };
-            let every = ((self.params.period / dt).round() as usize).max(1);
+            let every = self.steps_per_period(dt);
             let samples = self.policy_samples(ideal);
             let compliant = self.wrist != Wrist::Rigid;
             let (m, s) = grasp::analysis(c, compliant, ideal, &samples, sim, every);
