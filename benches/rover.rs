@@ -36,8 +36,9 @@ fn physics_steps(c: &mut Criterion) {
                     settings: &settings,
                     root_pose: anholonomy::physics::rapier::math::Pose::IDENTITY,
                     ground: false,
+                    keep_fixed: &[],
                 };
-                SimWorld::new(&prep.robot, &dir, &opts)
+                SimWorld::new(&prep.robot, &dir, &opts).unwrap()
             },
             |mut w| {
                 for _ in 0..STEPS {

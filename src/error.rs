@@ -49,6 +49,10 @@ pub enum Error {
         /// What went wrong.
         message: String,
     },
+    /// Several problems of one input (every problem of a URDF at once), each
+    /// an error of its own; printed one per line.
+    #[error("{}", .0.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\nerror: "))]
+    Several(Vec<Error>),
     /// Writing logs failed.
     #[error("{path}: writing logs: {message}")]
     Log {
@@ -69,10 +73,28 @@ impl Error {
         }
     }
 
+    /// Several errors as one (a single one as itself).
+    pub fn several(mut errors: Vec<Error>) -> Error {
+        if errors.len() == 1 {
+            errors.remove(0)
+        } else {
+            Error::Several(errors)
+        }
+    }
+
+    /// The errors this one holds, one per problem.
+    pub fn into_list(self) -> Vec<Error> {
+        match self {
+            Error::Several(v) => v.into_iter().flat_map(Error::into_list).collect(),
+            e => vec![e],
+        }
+    }
+
     /// Exit status: 2 for bad input (including planner refusals), 3 for runtime failures.
     pub fn exit_code(&self) -> i32 {
         match self {
             Error::Input { .. } | Error::Plan { .. } => 2,
+            Error::Several(v) => v.iter().map(Error::exit_code).max().unwrap_or(2),
             Error::Physics { .. } | Error::Law { .. } | Error::Log { .. } => 3,
         }
     }

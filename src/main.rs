@@ -299,6 +299,12 @@ fn run_cmd(args: &RunArgs, mode: Mode) -> Result<u8, Vec<Error>> {
         }
     }
     print_table(&rows);
+    // What the physics filled in or left out of a URDF, once per scenario.
+    for p in &preps {
+        for w in &p.reading.warnings {
+            eprintln!("warning: {}: {w}", p.scenario.name);
+        }
+    }
 
     // Baselines: compare or write.
     let mut deltas: Vec<Option<Vec<Delta>>> = results.iter().map(|_| None).collect();
@@ -466,6 +472,7 @@ fn plan_cmd(file: &std::path::Path, as_json: bool, max_steps: u64) -> Result<u8,
             "details": plan.details,
             "ideal_final_state": fin,
             "paper": paper,
+            "read_from_urdf": prep.reading,
         });
         say!("{}", serde_json::to_string_pretty(&v).unwrap_or_default());
     } else {
@@ -485,6 +492,10 @@ fn plan_cmd(file: &std::path::Path, as_json: bool, max_steps: u64) -> Result<u8,
         }
         say!("  details: {}", plan.details);
         say!("  ideal final state: {}", display_state(prep.model(), &fin));
+        say!("read from {}:", prep.scenario.urdf.display());
+        for line in prep.reading.lines() {
+            say!("{line}");
+        }
         if !paper.is_empty() {
             say!("{}", anholonomy::paper::format_table(&paper).trim_end());
         }

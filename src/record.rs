@@ -32,6 +32,61 @@ pub enum Shape {
     Sphere { radius: f64 },
     /// Capsule along local z.
     Capsule { radius: f64, length: f64 },
+    /// A triangle mesh from a file (its vertices in the visual's frame, scaled).
+    Mesh {
+        /// The mesh file.
+        file: String,
+        /// Its triangles.
+        #[serde(skip)]
+        mesh: std::sync::Arc<TriMesh>,
+    },
+}
+
+/// A triangle mesh.
+#[derive(Debug, Clone, PartialEq, Default)]
+pub struct TriMesh {
+    /// Vertex positions, m.
+    pub vertices: Vec<[f64; 3]>,
+    /// Triangles (indices into `vertices`).
+    pub triangles: Vec<[u32; 3]>,
+}
+
+impl TriMesh {
+    /// Unit normal per vertex: the area-weighted mean of its triangles'
+    /// normals (for shading in the viewers).
+    pub fn vertex_normals(&self) -> Vec<[f64; 3]> {
+        let mut n = vec![[0.0; 3]; self.vertices.len()];
+        for t in &self.triangles {
+            let [a, b, c] = t.map(|i| self.vertices[i as usize]);
+            let u = [b[0] - a[0], b[1] - a[1], b[2] - a[2]];
+            let v = [c[0] - a[0], c[1] - a[1], c[2] - a[2]];
+            let f = [
+                u[1] * v[2] - u[2] * v[1],
+                u[2] * v[0] - u[0] * v[2],
+                u[0] * v[1] - u[1] * v[0],
+            ];
+            for &i in t {
+                for k in 0..3 {
+                    n[i as usize][k] += f[k];
+                }
+            }
+        }
+        for v in &mut n {
+            let l = (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt();
+            if l > 0.0 {
+                *v = v.map(|x| x / l);
+            }
+        }
+        n
+    }
+
+    /// The largest distance of a vertex from the origin, m.
+    pub fn radius(&self) -> f64 {
+        self.vertices
+            .iter()
+            .map(|v| (v[0] * v[0] + v[1] * v[1] + v[2] * v[2]).sqrt())
+            .fold(0.0, f64::max)
+    }
 }
 
 /// One `<visual>` element.

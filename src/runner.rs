@@ -654,7 +654,7 @@ fn summary_json(
         "failures": o.failures,
         "thresholds": sc.thresholds,
         "minimums": sc.minimums,
-        "model": sc.model,
+        "model": model_json(prep),
         "planner": sc.planner,
         "plan": {
             "duration_s": plan.duration,
@@ -693,6 +693,19 @@ fn summary_json(
         // rest of the summary is identical across runs.
         "wall_time_s": timing_json(o),
     })
+}
+
+/// The `model` object: the scenario's `[model]` table and what the physics
+/// read from the URDF (`read_from_urdf`).
+fn model_json(prep: &Prepared) -> serde_json::Value {
+    let mut m = serde_json::to_value(&prep.scenario.model).unwrap_or_default();
+    if let Some(o) = m.as_object_mut() {
+        o.insert(
+            "read_from_urdf".into(),
+            serde_json::to_value(&prep.reading).unwrap_or_default(),
+        );
+    }
+    m
 }
 
 /// The `wall_time_s` object: stage timings, s, and the physics step rate.

@@ -167,7 +167,8 @@ fn solver_and_drive_settings_out_of_range() {
 
 #[test]
 fn urdf_the_loader_cannot_represent() {
-    // A mesh collision, and a second root link: both named, nothing simulated.
+    // A collision mesh that is not there, and a second root link: both
+    // named, nothing simulated.
     let base = std::fs::read_to_string(model("rolling_disk.urdf")).unwrap();
     for (edit, needle) in [
         (
@@ -175,7 +176,7 @@ fn urdf_the_loader_cannot_represent() {
                 "<collision>",
                 "<collision><geometry><mesh filename=\"w.stl\"/></geometry></collision><collision>",
             ),
-            "mesh <collision>",
+            "collision mesh: `w.stl`: no such file",
         ),
         (
             base.replace(

@@ -29,8 +29,8 @@ fn shipped() -> String {
 fn names() -> DiffDriveNames {
     DiffDriveNames {
         base: "base_link".into(),
-        left: "left_wheel_joint".into(),
-        right: "right_wheel_joint".into(),
+        left: vec!["left_wheel_joint".into()],
+        right: vec!["right_wheel_joint".into()],
         casters: vec!["caster".into()],
     }
 }
@@ -175,7 +175,10 @@ fn geometry_from_the_urdf_and_rest() {
         DiffDrivePhysics::new(&robot(&shipped()), Path::new("."), &names(), &start, &sim).unwrap();
     let g = sys.geometry();
     assert_eq!(g.half_track, 0.13);
-    assert_eq!(g.wheels.each_ref().map(|w| w.radius), [0.05, 0.05]);
+    assert_eq!(
+        g.wheels.iter().map(|w| w.radius).collect::<Vec<_>>(),
+        [0.05, 0.05]
+    );
     assert_eq!((g.point, g.ground), ([0.0, 0.0], -0.05));
     assert_eq!(g.effort, [Some(1.0), Some(1.0)]);
     assert_eq!(sys.state().as_slice(), &start);
@@ -228,8 +231,8 @@ fn own_urdf_with_other_names_frames_and_axes() {
         );
     let own = DiffDriveNames {
         base: "chassis".into(),
-        left: "wheel_l".into(),
-        right: "wheel_r".into(),
+        left: vec!["wheel_l".into()],
+        right: vec!["wheel_r".into()],
         casters: vec!["ball".into()],
     };
     let start = [0.3, 0.2, -1.0];
@@ -244,7 +247,10 @@ fn own_urdf_with_other_names_frames_and_axes() {
     let sys = DiffDrivePhysics::new(&robot(&text), Path::new("."), &own, &start, &sim).unwrap();
     let g = sys.geometry();
     assert!((g.point[0] + 0.07).abs() < 1e-12 && (g.ground + 0.15).abs() < 1e-12);
-    assert_eq!(g.wheels.each_ref().map(|w| w.sign), [-1.0, -1.0]);
+    assert_eq!(
+        g.wheels.iter().map(|w| w.sign).collect::<Vec<_>>(),
+        [-1.0, -1.0]
+    );
 }
 
 /// What the physics refuses, naming the joint or link.
@@ -257,8 +263,8 @@ fn urdf_that_does_not_fit_is_refused() {
             .unwrap()
     };
     let swapped = DiffDriveNames {
-        left: "right_wheel_joint".into(),
-        right: "left_wheel_joint".into(),
+        left: vec!["right_wheel_joint".into()],
+        right: vec!["left_wheel_joint".into()],
         ..names()
     };
     let e = err(shipped(), &swapped);

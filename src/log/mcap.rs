@@ -54,7 +54,7 @@ use std::sync::Arc;
 use foxglove::messages::{
     line_primitive, ArrowPrimitive, Color, CubePrimitive, CylinderPrimitive, FrameTransforms,
     LinePrimitive, Point3, Pose as FgPose, Quaternion, SceneEntity, SceneUpdate, SpherePrimitive,
-    Timestamp, Vector3,
+    Timestamp, TriangleListPrimitive, Vector3,
 };
 use foxglove::{Context, FoxgloveError, RawChannel, Schema};
 
@@ -510,17 +510,37 @@ fn robot_scene(rec: &RunRecord<'_>) -> SceneUpdate {
             };
             for v in &link.visuals {
                 let c = color(v.rgba);
-                match v.shape {
+                match &v.shape {
                     Shape::Box { size } => e.cubes.push(CubePrimitive {
                         pose: Some(fg_pose(&v.origin)),
-                        size: Some(vec3(size)),
+                        size: Some(vec3(*size)),
                         color: Some(c),
                     }),
                     Shape::Cylinder { radius, length } => {
-                        e.cylinders.push(cylinder(&v.origin, radius, length, c))
+                        e.cylinders.push(cylinder(&v.origin, *radius, *length, c))
                     }
-                    Shape::Sphere { radius } => e.spheres.push(sphere(&v.origin, radius, c)),
-                    Shape::Capsule { radius, length } => {
+                    Shape::Sphere { radius } => e.spheres.push(sphere(&v.origin, *radius, c)),
+                    Shape::Mesh { mesh, .. } => e.triangles.push(TriangleListPrimitive {
+                        pose: Some(fg_pose(&v.origin)),
+                        // Foxglove draws a list of corners, three per triangle.
+                        points: mesh
+                            .triangles
+                            .iter()
+                            .flatten()
+                            .map(|&i| {
+                                let p = mesh.vertices[i as usize];
+                                Point3 {
+                                    x: p[0],
+                                    y: p[1],
+                                    z: p[2],
+                                }
+                            })
+                            .collect(),
+                        color: Some(c),
+                        colors: vec![],
+                        indices: vec![],
+                    }),
+                    &Shape::Capsule { radius, length } => {
                         // No capsule primitive in Foxglove: cylinder + two end spheres.
                         e.cylinders.push(cylinder(&v.origin, radius, length, c));
                         for s in [-0.5, 0.5] {

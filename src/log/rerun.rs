@@ -303,27 +303,34 @@ fn log_robot(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrErro
             let vp = ep(&["robot", &link.name, &format!("visual_{k}")]);
             stream.log_static(vp.clone(), &rr_transform(&v.origin))?;
             let c = [rgba(v.rgba)];
-            match v.shape {
+            match &v.shape {
+                Shape::Mesh { mesh, .. } => stream.log_static(
+                    vp,
+                    &rr::Mesh3D::new(mesh.vertices.iter().map(|p| f32x3(*p)))
+                        .with_triangle_indices(mesh.triangles.iter().copied())
+                        .with_vertex_normals(mesh.vertex_normals().into_iter().map(f32x3))
+                        .with_albedo_factor(c[0].0),
+                )?,
                 Shape::Box { size } => stream.log_static(
                     vp,
                     &rr::Boxes3D::from_half_sizes([f32x3(size.map(|s| 0.5 * s))])
                         .with_colors(c)
                         .with_fill_mode(FillMode::Solid),
                 )?,
-                Shape::Cylinder { radius, length } => stream.log_static(
+                &Shape::Cylinder { radius, length } => stream.log_static(
                     vp,
                     &rr::Cylinders3D::from_lengths_and_radii([length as f32], [radius as f32])
                         .with_colors(c)
                         .with_fill_mode(FillMode::Solid),
                 )?,
-                Shape::Sphere { radius } => stream.log_static(
+                &Shape::Sphere { radius } => stream.log_static(
                     vp,
                     &rr::Ellipsoids3D::from_radii([radius as f32])
                         .with_colors(c)
                         .with_fill_mode(FillMode::Solid),
                 )?,
                 // Rerun capsules run from z = 0 to z = length; URDF-style ones are centred.
-                Shape::Capsule { radius, length } => stream.log_static(
+                &Shape::Capsule { radius, length } => stream.log_static(
                     vp,
                     &rr::Capsules3D::from_lengths_and_radii([length as f32], [radius as f32])
                         .with_translations([[0.0, 0.0, -0.5 * length as f32]])

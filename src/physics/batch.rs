@@ -407,6 +407,7 @@ mod tests {
             settings: &settings,
             root_pose: super::super::rapier::math::Pose::identity(),
             ground: true,
+            keep_fixed: &[],
         };
         let mut host = Host::new();
         let caught = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {

@@ -39,6 +39,7 @@
 
 use super::diff_drive::effort;
 use super::rapier::prelude::*;
+use super::reading::UrdfReading;
 use super::real::{f, vector};
 use super::required::Required;
 use super::urdf::{Drive, SimWorld};
@@ -307,16 +308,27 @@ impl CarPhysics {
             ));
         }
         let frames = wheeled::link_frames(robot);
+        // Worn or mismatched tyres (`wheel_radius_scale`): every simulated
+        // wheel gets the scaled radius, the model and the drives keep the
+        // URDF's; the body starts that much lower, on its wheels.
+        let all: Vec<&Wheel> = geom.rear.iter().chain(&geom.front).collect();
+        let wear = (1.0 - sim.wheel_radius_scale) * all[0].radius;
+        let links: Vec<&str> = all.iter().map(|w| w.link.as_str()).collect();
+        let worn = (sim.wheel_radius_scale != 1.0).then(|| {
+            super::perturb::shrink_round_collisions(robot, &links, sim.wheel_radius_scale, None)
+        });
         let root = wheeled::root_pose(
             &frames,
             &names.base,
             geom.point,
-            geom.ground,
+            geom.ground + wear,
             start[0],
             start[1],
             start[2],
         );
-        let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root);
+        let mut sw = SimWorld::on_ground(worn.as_ref().unwrap_or(robot), urdf_dir, sim, root)?;
+        let balls: Vec<Wheel> = all.iter().map(|w| (*w).clone()).collect();
+        wheeled::roll_on_balls(&mut sw, &balls)?;
         let base = sw.require_link(&names.base)?;
         let link = |w: &Wheel| sw.require_link(&w.link);
         let wheels = [
@@ -448,6 +460,28 @@ impl PhysicsSystem for CarPhysics {
 
     fn sim_world(&mut self) -> Option<&mut SimWorld> {
         Some(&mut self.sim)
+    }
+
+    fn reading(&self) -> UrdfReading {
+        let g = &self.geom;
+        let default = self.sim.settings.motor_max_torque;
+        let mut out = UrdfReading::default();
+        for w in g.rear.iter().chain(&g.front) {
+            out.wheels.push(w.reading());
+        }
+        for (w, e) in g.rear.iter().zip(g.rear_effort) {
+            out.drive(&w.joint, e, default);
+        }
+        for s in &g.steer {
+            out.drive(&s.joint, s.effort, default);
+        }
+        out.geometry = vec![
+            ("wheelbase_m".into(), vec![g.wheelbase]),
+            ("rear_track_m".into(), vec![2.0 * g.rear_half_track]),
+            ("front_pivot_track_m".into(), vec![2.0 * g.front_half_track]),
+            ("reference_point_m".into(), g.point.to_vec()),
+        ];
+        out
     }
 
     fn channel_names(&self) -> Vec<String> {

@@ -20,11 +20,14 @@
 //! m/s) and its rim speed relative to the body (`rim_speed_left`,
 //! `rim_speed_right`, m/s).
 
+use super::rapier::math::Pose as RPose;
 use super::rapier::prelude::*;
+use super::reading::UrdfReading;
 use super::real::{f, vector};
 use super::required::Required;
 use super::urdf::{Drive, SimWorld};
 use super::wheeled::{self, Wheel};
+use super::world::origin;
 use super::{angles, PhysicsSettings, PhysicsSystem};
 use crate::model::{Input, State};
 use crate::record::Pose;
@@ -68,10 +71,10 @@ pub const REQUIRED: [Required; 4] = [
 pub struct DiffDriveNames {
     /// Body link.
     pub base: String,
-    /// Left wheel joint.
-    pub left: String,
-    /// Right wheel joint.
-    pub right: String,
+    /// Left wheel joints (one, or several for a skid steer).
+    pub left: Vec<String>,
+    /// Right wheel joints.
+    pub right: Vec<String>,
     /// Caster links.
     pub casters: Vec<String>,
 }
@@ -79,16 +82,19 @@ pub struct DiffDriveNames {
 /// What the kinematics needs from the URDF, in the body frame.
 #[derive(Debug, Clone)]
 pub struct DiffDriveGeometry {
-    /// Left and right wheels.
-    pub wheels: [Wheel; 2],
-    /// Half the track (wheel centres' distance across the body), m.
+    /// Left wheels, then right wheels.
+    pub wheels: Vec<Wheel>,
+    /// How many of [`DiffDriveGeometry::wheels`] are on the left.
+    pub n_left: usize,
+    /// Half the track (the wheel lines' distance across the body), m.
     pub half_track: f64,
-    /// The axle midpoint (the model's reference point) in the body frame, m.
+    /// The reference point in the body frame, m: the axle midpoint (two
+    /// wheels), or the wheel centres' centroid (several per side).
     pub point: [f64; 2],
     /// Height of the wheels' contact plane in the body frame, m.
     pub ground: f64,
     /// Torque limit of each wheel drive from its joint's `<limit effort>`, N·m.
-    pub effort: [Option<f64>; 2],
+    pub effort: Vec<Option<f64>>,
 }
 
 /// The `<limit effort>` of a joint, when the URDF gives one (> 0).
@@ -101,51 +107,108 @@ pub fn effort(robot: &urdf_rs::Robot, joint: &str) -> Option<f64> {
         .filter(|e| e.is_finite() && *e > 0.0)
 }
 
+/// The mean of `f` over `wheels`.
+fn mean(wheels: &[Wheel], f: impl Fn(&Wheel) -> f64) -> f64 {
+    wheels.iter().map(f).sum::<f64>() / wheels.len() as f64
+}
+
 impl DiffDriveGeometry {
     /// Read and check the URDF: errors name the joint or link at fault.
     pub fn read(robot: &urdf_rs::Robot, names: &DiffDriveNames) -> Result<Self, String> {
         let frames = wheeled::link_frames(robot);
         let base = names.base.as_str();
-        let mut wheels = Vec::new();
-        for j in [&names.left, &names.right] {
-            let w = wheeled::wheel(robot, &frames, base, j)?;
-            let parent = &wheeled::joint(robot, j)?.parent.link;
-            wheeled::rigidly_on(robot, parent, base, &format!("joint `{j}`"))?;
-            wheels.push(w);
-        }
-        let [l, r]: [Wheel; 2] = wheels.try_into().expect("two wheels");
-        if !wheeled::same_position(l.center[0], r.center[0]) {
+        let side = |joints: &[String]| -> Result<Vec<Wheel>, String> {
+            let mut out = Vec::new();
+            for j in joints {
+                let w = wheeled::wheel(robot, &frames, base, j)?;
+                let parent = &wheeled::joint(robot, j)?.parent.link;
+                wheeled::rigidly_on(robot, parent, base, &format!("joint `{j}`"))?;
+                out.push(w);
+            }
+            Ok(out)
+        };
+        let (left, right) = (side(&names.left)?, side(&names.right)?);
+        let (l, r) = (&left[0], &right[0]);
+        if left.len() == 1 && right.len() == 1 && !wheeled::same_position(l.center[0], r.center[0])
+        {
             return Err(format!(
                 "URDF joints `{}` and `{}` must put both wheels on one axle: their centres sit at x = {:.4} and {:.4} m in `{base}`",
                 l.joint, r.joint, l.center[0], r.center[0]
             ));
         }
-        if l.center[1] <= r.center[1] {
+        for ws in [&left, &right] {
+            // A side's wheels roll on one line along the body's x axis.
+            if let Some(w) = ws
+                .iter()
+                .find(|w| !wheeled::same_position(w.center[1], ws[0].center[1]))
+            {
+                return Err(format!(
+                    "URDF joints `{}` and `{}` are on one side but their wheels sit at y = {:.4} and {:.4} m in `{base}`: a side's wheels must share one line",
+                    ws[0].joint, w.joint, ws[0].center[1], w.center[1]
+                ));
+            }
+        }
+        let (yl, yr) = (left[0].center[1], right[0].center[1]);
+        if yl <= yr {
             return Err(format!(
-                "URDF joint `{}` puts its wheel at y = {:.4} m in `{base}`, not left of `{}`'s ({:.4} m): left and right swapped?",
-                l.joint, l.center[1], r.joint, r.center[1]
+                "URDF joint `{}` puts its wheel at y = {yl:.4} m in `{base}`, not left of `{}`'s ({yr:.4} m): left and right swapped?",
+                left[0].joint, right[0].joint
             ));
         }
-        let ground = wheeled::contact_plane(&[&l, &r])?;
+        let wheels: Vec<Wheel> = left.iter().chain(&right).cloned().collect();
+        let ground = wheeled::contact_plane(&wheels.iter().collect::<Vec<_>>())?;
         for c in &names.casters {
             caster_on_plane(robot, &frames, base, c, ground)?;
         }
+        let (xl, xr) = (mean(&left, |w| w.center[0]), mean(&right, |w| w.center[0]));
         Ok(DiffDriveGeometry {
-            half_track: 0.5 * (l.center[1] - r.center[1]),
-            point: [
-                0.5 * (l.center[0] + r.center[0]),
-                0.5 * (l.center[1] + r.center[1]),
-            ],
+            half_track: 0.5 * (yl - yr),
+            point: [0.5 * (xl + xr), 0.5 * (yl + yr)],
             ground,
-            effort: [effort(robot, &l.joint), effort(robot, &r.joint)],
-            wheels: [l, r],
+            effort: wheels.iter().map(|w| effort(robot, &w.joint)).collect(),
+            n_left: left.len(),
+            wheels,
         })
+    }
+
+    /// The ground speed of each wheel for (v, ω), left wheels first.
+    pub fn wheel_speeds(&self, v: f64, omega: f64) -> impl Iterator<Item = f64> + '_ {
+        let b = self.half_track;
+        (0..self.wheels.len()).map(move |i| {
+            if i < self.n_left {
+                v - omega * b
+            } else {
+                v + omega * b
+            }
+        })
+    }
+
+    /// What was read, for the user.
+    pub fn reading(&self, default_torque: f64) -> UrdfReading {
+        let mut out = UrdfReading::default();
+        for (w, e) in self.wheels.iter().zip(&self.effort) {
+            out.wheels.push(w.reading());
+            out.drive(&w.joint, *e, default_torque);
+        }
+        out.geometry = vec![
+            ("track_m".into(), vec![2.0 * self.half_track]),
+            ("reference_point_m".into(), self.point.to_vec()),
+        ];
+        if self.n_left > 1 || self.wheels.len() - self.n_left > 1 {
+            let xs = self.wheels.iter().map(|w| w.center[0]);
+            let span =
+                xs.clone().fold(f64::NEG_INFINITY, f64::max) - xs.fold(f64::INFINITY, f64::min);
+            out.geometry.push(("wheelbase_m".into(), vec![span]));
+        }
+        out
     }
 }
 
-/// A caster has collisions, and its spheres (if it moves with the body)
-/// reach the wheels' contact plane within 2 mm: a caster above it would tip
-/// the robot, one below it lift a wheel.
+/// A caster has collisions, and (if it moves with the body) the lowest
+/// point of each reaches the wheels' contact plane within 2 mm: a caster
+/// above it would tip the robot, one below it lift a wheel. Any collision
+/// shape: its lowest point is the bottom of its bounding box in the body
+/// frame, exact for spheres, boxes, cylinders and convex meshes alike.
 pub fn caster_on_plane(
     robot: &urdf_rs::Robot,
     frames: &std::collections::HashMap<String, super::rapier::math::Pose>,
@@ -166,16 +229,17 @@ pub fn caster_on_plane(
     }
     let in_base = frames[base].inverse() * frames[caster];
     for c in &link.collision {
-        if let urdf_rs::Geometry::Sphere { radius } = c.geometry {
-            let o = c.origin.xyz.0;
-            let z = f(in_base.transform_point(vector(o[0], o[1], o[2])).z) - radius;
-            if (z - ground).abs() > 2e-3 {
-                return Err(format!(
-                    "URDF link `{caster}`: its sphere's lowest point is {:.4} m {} the wheels' contact plane",
-                    (z - ground).abs(),
-                    if z > ground { "above" } else { "below" }
-                ));
-            }
+        let Some(z) = super::world::lowest_point(&c.geometry, &(in_base * origin(&c.origin)))
+        else {
+            continue;
+        };
+        if (z - ground).abs() > 2e-3 {
+            return Err(format!(
+                "URDF link `{caster}`: the lowest point of its {} collision is {:.4} m {} the wheels' contact plane",
+                super::urdf::shape_tag(&c.geometry),
+                (z - ground).abs(),
+                if z > ground { "above" } else { "below" }
+            ));
         }
     }
     Ok(())
@@ -186,8 +250,10 @@ pub struct DiffDrivePhysics {
     sim: SimWorld,
     geom: DiffDriveGeometry,
     base: RigidBodyHandle,
-    wheels: [RigidBodyHandle; 2],
-    drives: [Drive; 2],
+    /// The base link's pose in its body (identity unless it was lumped).
+    base_offset: RPose,
+    wheels: Vec<RigidBodyHandle>,
+    drives: Vec<Drive>,
     /// Unwrapped heading.
     theta: f64,
     /// Model coordinates read back after the last step.
@@ -205,42 +271,52 @@ impl DiffDrivePhysics {
     ) -> Result<Self, String> {
         let geom = DiffDriveGeometry::read(robot, names)?;
         let frames = wheeled::link_frames(robot);
+        // Worn or mismatched tyres (`wheel_radius_scale`): the simulated
+        // wheels get the scaled radius, the model and the drives keep the
+        // URDF's; the body starts that much lower, on its wheels.
+        let wear = (1.0 - sim.wheel_radius_scale) * geom.wheels[0].radius;
         let root = wheeled::root_pose(
             &frames,
             &names.base,
             geom.point,
-            geom.ground,
+            geom.ground + wear,
             start[0],
             start[1],
             start[2],
         );
-        let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root);
-        let base = sw.require_link(&names.base)?;
-        let wheels = [
-            sw.require_link(&geom.wheels[0].link)?,
-            sw.require_link(&geom.wheels[1].link)?,
-        ];
+        let links: Vec<&str> = geom.wheels.iter().map(|w| w.link.as_str()).collect();
+        let worn = (sim.wheel_radius_scale != 1.0).then(|| {
+            super::perturb::shrink_round_collisions(robot, &links, sim.wheel_radius_scale, None)
+        });
+        let mut sw = SimWorld::on_ground(worn.as_ref().unwrap_or(robot), urdf_dir, sim, root)?;
+        let (base, base_offset) = sw.require_frame(&names.base)?;
+        let wheels = geom
+            .wheels
+            .iter()
+            .map(|w| sw.require_link(&w.link))
+            .collect::<Result<Vec<_>, _>>()?;
         let mut drives = Vec::new();
-        for (w, e) in geom.wheels.iter().zip(geom.effort) {
+        for (w, e) in geom.wheels.iter().zip(&geom.effort) {
             let mut d = sw.drive_for(sw.require_joint(&w.joint)?, JointAxis::AngX, 0.0);
-            d.max_torque = e;
+            d.max_torque = *e;
             drives.push(d);
         }
         for c in &names.casters {
-            let b = sw.require_link(c)?;
-            for h in sw.world.bodies[b].colliders().to_vec() {
+            for h in sw.colliders_of(c)? {
                 if let Some(col) = sw.world.colliders.get_mut(h) {
                     col.set_friction(0.0);
                 }
             }
         }
+        wheeled::roll_on_balls(&mut sw, &geom.wheels)?;
         // Slow robot on a half-space: CCD never acts (see the rover).
         sw.world.integration_parameters.max_ccd_substeps = 0;
         let mut me = DiffDrivePhysics {
             sim: sw,
             base,
+            base_offset,
             wheels,
-            drives: drives.try_into().expect("two drives"),
+            drives,
             theta: start[2],
             q: State::zeros(3),
             geom,
@@ -255,10 +331,14 @@ impl DiffDrivePhysics {
         &self.geom
     }
 
+    /// The base link's world pose.
+    fn base_pose(&self) -> RPose {
+        *self.sim.world.bodies[self.base].position() * self.base_offset
+    }
+
     fn read_back(&mut self) {
-        let b = &self.sim.world.bodies[self.base];
         let p = self.geom.point;
-        let c = b.position().transform_point(vector(p[0], p[1], 0.0));
+        let c = self.base_pose().transform_point(vector(p[0], p[1], 0.0));
         self.q.copy_from_slice(&[f(c.x), f(c.y), self.theta]);
     }
 }
@@ -269,8 +349,7 @@ impl PhysicsSystem for DiffDrivePhysics {
     }
 
     fn apply(&mut self, u: &Input) {
-        let b = self.geom.half_track;
-        let speeds = [u[0] - u[1] * b, u[0] + u[1] * b];
+        let speeds: Vec<f64> = self.geom.wheel_speeds(u[0], u[1]).collect();
         for ((wheel, drive), speed) in self.geom.wheels.iter().zip(&mut self.drives).zip(speeds) {
             self.sim.drive(drive, wheel.rate(speed));
         }
@@ -278,7 +357,7 @@ impl PhysicsSystem for DiffDrivePhysics {
 
     fn step(&mut self) {
         self.sim.step();
-        let yaw = angles::yaw(self.sim.world.bodies[self.base].rotation());
+        let yaw = angles::yaw(&self.base_pose().rotation);
         self.theta = angles::unwrap(self.theta, yaw);
         self.read_back();
     }
@@ -291,22 +370,25 @@ impl PhysicsSystem for DiffDrivePhysics {
         Some(&mut self.sim)
     }
 
+    fn reading(&self) -> UrdfReading {
+        self.geom.reading(self.sim.settings.motor_max_torque)
+    }
+
     fn channel_names(&self) -> Vec<String> {
-        [
-            "slip_left_lon",
-            "slip_left_lat",
-            "slip_right_lon",
-            "slip_right_lat",
-            "rim_speed_left",
-            "rim_speed_right",
-        ]
-        .map(String::from)
-        .to_vec()
+        let g = &self.geom;
+        let names = wheel_names(g);
+        let mut out = Vec::new();
+        for n in &names {
+            out.push(format!("slip_{n}_lon"));
+            out.push(format!("slip_{n}_lat"));
+        }
+        out.extend(names.iter().map(|n| format!("rim_speed_{n}")));
+        out
     }
 
     fn channels(&self) -> Vec<f64> {
         let bodies = &self.sim.world.bodies;
-        let mut out = Vec::with_capacity(6);
+        let mut out = Vec::with_capacity(3 * self.wheels.len());
         for (h, w) in self.wheels.iter().zip(&self.geom.wheels) {
             let (lon, lat) = wheeled::contact_slip(&bodies[*h], w);
             out.push(lon);
@@ -317,4 +399,20 @@ impl PhysicsSystem for DiffDrivePhysics {
         }
         out
     }
+}
+
+/// Channel names of the wheels: `left`, `right` for two wheels; `left_1`,
+/// `left_2`, ... (front to back as the joints are listed) for several.
+fn wheel_names(g: &DiffDriveGeometry) -> Vec<String> {
+    let n_right = g.wheels.len() - g.n_left;
+    let side = |name: &str, n: usize| -> Vec<String> {
+        if n == 1 {
+            vec![name.to_string()]
+        } else {
+            (1..=n).map(|k| format!("{name}_{k}")).collect()
+        }
+    };
+    let mut out = side("left", g.n_left);
+    out.extend(side("right", n_right));
+    out
 }

@@ -78,7 +78,7 @@ impl DiskPhysics {
             vector(start[0], start[1], radius),
             Rotation::from_rotation_z(r(yaw0)),
         );
-        let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root);
+        let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root)?;
         let yoke = sw.require_link(YOKE)?;
         let wheel = sw.require_link(WHEEL)?;
         let wheel_joint = sw.require_joint(WHEEL_JOINT)?;

@@ -13,8 +13,11 @@ pub mod beam;
 pub mod car;
 pub mod diff_drive;
 pub mod disk;
+pub mod lump;
+pub mod mesh;
 pub mod mobile_manipulator;
 pub mod perturb;
+pub mod reading;
 pub mod real;
 pub mod required;
 pub mod rover;
@@ -68,6 +71,11 @@ pub trait PhysicsSystem {
     /// alone.
     fn sim_world(&mut self) -> Option<&mut world::SimWorld> {
         None
+    }
+    /// What this counterpart read from its URDF beyond the bodies (wheels,
+    /// drives, derived geometry, defaults it filled in): shown to the user.
+    fn reading(&self) -> reading::UrdfReading {
+        reading::UrdfReading::default()
     }
 }
 

@@ -138,7 +138,7 @@ impl RoverPhysics {
             vector(start[0], start[1], rim),
             Rotation::from_rotation_z(real(start[2])),
         );
-        let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root);
+        let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root)?;
         let chassis = sw.require_link(CHASSIS)?;
         let steering = sw.require_link(STEERING)?;
         let wheels = WHEELS

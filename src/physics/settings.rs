@@ -19,8 +19,12 @@ pub struct PhysicsSettings {
     pub friction: f64,
     /// Gravity, m/s².
     pub gravity: [f64; 3],
-    /// Maximum torque of each joint drive (motor), N·m.
+    /// Maximum torque of each joint drive (motor) whose URDF joint gives no
+    /// `<limit effort>`, N·m.
     pub motor_max_torque: f64,
+    /// Factor on every drive's effective torque limit, whatever its source
+    /// (URDF effort, model key or `motor_max_torque`): `[sim.perturb] torque_scale`.
+    pub torque_scale: f64,
     /// Velocity motor gain (Rapier's motor damping factor); higher tracks tighter.
     pub motor_gain: f64,
     /// Rate (1/s) at which a joint drive removes the error between the joint
@@ -45,6 +49,7 @@ impl Default for PhysicsSettings {
             friction: 1.0,
             gravity: [0.0, 0.0, -9.81],
             motor_max_torque: 50.0,
+            torque_scale: 1.0,
             motor_gain: 1.0e6,
             motor_angle_gain: 1000.0,
             mass_scale: 1.0,

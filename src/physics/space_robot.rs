@@ -245,8 +245,9 @@ impl SpaceRobotPhysics {
                 settings: sim,
                 root_pose: root,
                 ground: false,
+                keep_fixed: &[],
             },
-        );
+        )?;
         let mut bodies = [RigidBodyHandle::invalid(); 3];
         for (b, name) in bodies.iter_mut().zip(LINKS) {
             *b = sw.require_link(name)?;

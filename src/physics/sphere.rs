@@ -79,7 +79,7 @@ impl SpherePhysics {
             vector(start[0], start[1], radius),
             rotation(q0.i, q0.j, q0.k, q0.w),
         );
-        let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root);
+        let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root)?;
         let ball = sw.require_link(BALL)?;
         // The drive: no locked axes, angular velocity motors about the world axes.
         let mut b = GenericJointBuilder::new(JointAxesMask::empty())
@@ -88,7 +88,7 @@ impl SpherePhysics {
         for axis in [JointAxis::AngX, JointAxis::AngY, JointAxis::AngZ] {
             b = b
                 .motor_velocity(axis, 0.0, r(sim.motor_gain))
-                .motor_max_force(axis, r(sim.motor_max_torque));
+                .motor_max_force(axis, r(sim.motor_max_torque * sim.torque_scale));
         }
         let drive = sw
             .world

@@ -9,13 +9,24 @@ use urdf_rs::{Geometry, JointType, Robot};
 
 pub use super::world::{Drive, RobotHandles, SimWorld, WorldOptions};
 
+/// Where a scenario's robot description finds what it names: mesh
+/// packages (`[model] packages`) and xacro arguments (`[model] xacro_args`).
+#[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
+pub struct Source {
+    /// Package directories by name (resolved against the scenario's directory).
+    pub packages: std::collections::BTreeMap<String, std::path::PathBuf>,
+    /// `name:=value` arguments for xacro.
+    pub xacro_args: std::collections::BTreeMap<String, String>,
+}
+
 /// Read and validate a URDF file. Errors are one-line, user-facing strings.
 ///
 /// The loader ([`super::world`]) indexes links by name and places them from
-/// the root down, so everything it cannot represent is rejected here: dangling
-/// joint references, a graph that is not one tree, links without positive
-/// mass or with a non-finite or negative inertia, collision meshes, and
-/// moving joints without an axis.
+/// the root down, so everything it cannot represent is rejected here:
+/// dangling joint references, a graph that is not one tree, a body that
+/// moves without mass ([`super::lump`]), a non-finite or negative inertia,
+/// and moving joints without an axis. Meshes are not resolved here (the
+/// validation pass does it, `crate::validate::urdf`).
 pub fn read(path: &Path) -> Result<Robot, String> {
     let robot = parse(path)?;
     validate(&robot)?;
@@ -26,7 +37,12 @@ pub fn read(path: &Path) -> Result<Robot, String> {
 /// numbers first, to name the element and line).
 pub fn parse(path: &Path) -> Result<Robot, String> {
     let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read URDF: {e}"))?;
-    urdf_rs::read_from_string(&text)
+    parse_text(&text)
+}
+
+/// Parse URDF text.
+pub fn parse_text(text: &str) -> Result<Robot, String> {
+    urdf_rs::read_from_string(text)
         .map_err(|e| format!("URDF does not parse: {}", e.to_string().replace('\n', " ")))
 }
 
@@ -36,29 +52,52 @@ pub fn validate(robot: &Robot) -> Result<(), String> {
     validate_loadable(robot)
 }
 
-/// One tree of uniquely named links with positive masses (the validation pass
-/// runs this first, then its own number checks, then [`validate_loadable`]).
+/// One tree of uniquely named links with finite, non-negative masses, where
+/// every body that moves has mass: the first problem.
 pub fn validate_tree(robot: &Robot) -> Result<(), String> {
-    if robot.links.is_empty() {
-        return Err("URDF has no links".into());
+    match tree_problems(robot).into_iter().next() {
+        Some(p) => Err(p),
+        None => Ok(()),
     }
+}
+
+/// Every problem of [`validate_tree`]: [`structure_problems`], then (on a
+/// tree) [`mass_problems`].
+pub fn tree_problems(robot: &Robot) -> Vec<String> {
+    let out = structure_problems(robot);
+    if out.is_empty() {
+        mass_problems(robot)
+    } else {
+        out
+    }
+}
+
+/// Why `robot` is not one tree of uniquely named links.
+pub fn structure_problems(robot: &Robot) -> Vec<String> {
+    if robot.links.is_empty() {
+        return vec!["URDF has no links".into()];
+    }
+    let mut out = Vec::new();
     let names: HashSet<&str> = robot.links.iter().map(|l| l.name.as_str()).collect();
     if names.len() != robot.links.len() {
-        return Err("URDF has duplicate link names".into());
+        out.push("URDF has duplicate link names".into());
     }
     let mut has_parent = HashSet::new();
     for j in &robot.joints {
         for l in [&j.parent.link, &j.child.link] {
             if !names.contains(l.as_str()) {
-                return Err(format!("URDF joint `{}` names unknown link `{l}`", j.name));
+                out.push(format!("URDF joint `{}` names unknown link `{l}`", j.name));
             }
         }
         if !has_parent.insert(j.child.link.as_str()) {
-            return Err(format!(
+            out.push(format!(
                 "URDF link `{}` has two parent joints",
                 j.child.link
             ));
         }
+    }
+    if !out.is_empty() {
+        return out;
     }
     let roots: Vec<&str> = robot
         .links
@@ -67,14 +106,14 @@ pub fn validate_tree(robot: &Robot) -> Result<(), String> {
         .filter(|n| !has_parent.contains(n))
         .collect();
     match roots.len() {
-        0 => return Err("URDF kinematic graph has no root (cycle)".into()),
+        0 => return vec!["URDF kinematic graph has no root (cycle)".into()],
         1 => {}
         _ => {
-            return Err(format!(
+            return vec![format!(
                 "URDF has {} root links ({}): it must be one tree",
                 roots.len(),
                 roots.join(", ")
-            ))
+            )]
         }
     }
     // One root and one parent per link: a tree exactly when every link is reachable.
@@ -88,50 +127,63 @@ pub fn validate_tree(robot: &Robot) -> Result<(), String> {
         }
     }
     if reached.len() != robot.links.len() {
-        return Err("URDF kinematic graph has a cycle".into());
+        return vec!["URDF kinematic graph has a cycle".into()];
     }
+    out
+}
+
+/// Masses of a tree: finite and ≥ 0, and every body that moves has some.
+pub fn mass_problems(robot: &Robot) -> Vec<String> {
+    let mut out = Vec::new();
     for l in &robot.links {
         let m = l.inertial.mass.value;
-        if !(m.is_finite() && m > 0.0) {
-            return Err(format!(
-                "URDF link `{}` needs an <inertial> with mass > 0",
+        if !(m.is_finite() && m >= 0.0) {
+            out.push(format!(
+                "URDF link `{}` <mass> must be finite and ≥ 0 (0 or no <inertial>: a frame)",
                 l.name
             ));
         }
     }
-    Ok(())
+    if out.is_empty() {
+        // Frames (no mass) are lumped into the bodies they are fixed to; a
+        // body that moves on its own needs mass.
+        if let Err(e) = super::lump::lump(robot, &[]) {
+            out.push(e);
+        }
+    }
+    out
 }
 
-/// What the loader needs beyond a tree: finite inertias, axes on moving
-/// joints, no mesh collisions.
+/// What the loader needs beyond a tree: the first problem of [`loadable_problems`].
 pub fn validate_loadable(robot: &Robot) -> Result<(), String> {
+    match loadable_problems(robot).into_iter().next() {
+        Some(p) => Err(p),
+        None => Ok(()),
+    }
+}
+
+/// What the loader needs beyond a tree: finite inertias of the bodies' links
+/// (frames' are ignored), axes on moving joints.
+pub fn loadable_problems(robot: &Robot) -> Vec<String> {
+    let mut out = Vec::new();
     for j in &robot.joints {
         let moving = !matches!(j.joint_type, JointType::Fixed | JointType::Floating);
         let a = j.axis.xyz.0;
         if moving && !(a.iter().all(|c| c.is_finite()) && a.iter().any(|c| *c != 0.0)) {
-            return Err(format!("URDF joint `{}` needs a non-zero <axis>", j.name));
+            out.push(format!("URDF joint `{}` needs a non-zero <axis>", j.name));
         }
     }
-    for l in &robot.links {
+    for l in robot.links.iter().filter(|l| !super::lump::is_frame(l)) {
         let t = &l.inertial.inertia;
         let all = [t.ixx, t.ixy, t.ixz, t.iyy, t.iyz, t.izz];
         if all.iter().any(|v| !v.is_finite()) || t.ixx < 0.0 || t.iyy < 0.0 || t.izz < 0.0 {
-            return Err(format!(
+            out.push(format!(
                 "URDF link `{}` inertia must be finite with ixx, iyy, izz ≥ 0",
                 l.name
             ));
         }
-        if l.collision
-            .iter()
-            .any(|c| matches!(c.geometry, Geometry::Mesh { .. }))
-        {
-            return Err(format!(
-                "URDF link `{}` has a mesh <collision>: only box, cylinder, capsule and sphere are supported",
-                l.name
-            ));
-        }
     }
-    Ok(())
+    out
 }
 
 /// Radius of the first sphere or cylinder collision of `link`, if any.
@@ -172,6 +224,17 @@ pub fn require_radius(robot: &Robot, link: &str, what: &str, radius: f64) -> Res
     Ok(())
 }
 
+/// The tag of a geometry (`box`, `cylinder`, ...).
+pub fn shape_tag(g: &Geometry) -> &'static str {
+    match g {
+        Geometry::Box { .. } => "box",
+        Geometry::Cylinder { .. } => "cylinder",
+        Geometry::Capsule { .. } => "capsule",
+        Geometry::Sphere { .. } => "sphere",
+        Geometry::Mesh { .. } => "mesh",
+    }
+}
+
 /// URDF pose (xyz, rpy) as a [`Pose`].
 pub fn pose_of(p: &urdf_rs::Pose) -> Pose {
     let q = UnitQuaternion::from_euler_angles(p.rpy[0], p.rpy[1], p.rpy[2]);
@@ -181,7 +244,8 @@ pub fn pose_of(p: &urdf_rs::Pose) -> Pose {
     }
 }
 
-/// Visual geometry of every link, in URDF link order. Meshes are skipped.
+/// Visual geometry of every link, in URDF link order (meshes as loaded:
+/// their file names resolved by the validation pass).
 pub fn visuals(robot: &Robot) -> Vec<LinkVisual> {
     let named: HashMap<&str, [f64; 4]> = robot
         .materials
@@ -208,7 +272,15 @@ pub fn visuals(robot: &Robot) -> Vec<LinkVisual> {
                             radius: *radius,
                             length: *length,
                         },
-                        urdf_rs::Geometry::Mesh { .. } => return None,
+                        // Resolved by the validation pass; one that does not load is left out.
+                        urdf_rs::Geometry::Mesh { filename, scale } => Shape::Mesh {
+                            file: filename.clone(),
+                            mesh: super::mesh::load(
+                                Path::new(filename),
+                                super::mesh::scale_of(scale),
+                            )
+                            .ok()?,
+                        },
                     };
                     let rgba = v
                         .material
@@ -268,10 +340,6 @@ mod tests {
 
     #[test]
     fn unsupported_content_is_rejected() {
-        let mesh = r#"<link name="m"><inertial><mass value="1"/><inertia ixx="1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial><collision><geometry><mesh filename="m.stl"/></geometry></collision></link>
-            <joint name="jm" type="fixed"><parent link="a"/><child link="m"/></joint>"#;
-        let e = robot(&["a"], &[], mesh).unwrap_err();
-        assert!(e.contains("`m` has a mesh <collision>"), "{e}");
         let neg = r#"<link name="n"><inertial><mass value="1"/><inertia ixx="-1" ixy="0" ixz="0" iyy="1" iyz="0" izz="1"/></inertial></link>
             <joint name="jn" type="fixed"><parent link="a"/><child link="n"/></joint>"#;
         let e = robot(&["a"], &[], neg).unwrap_err();

@@ -61,8 +61,10 @@ pub fn mass_properties(i: &urdf_rs::Inertial) -> MassProperties {
 }
 
 /// Collision shape of a URDF geometry and its pose in the geometry frame
-/// (URDF cylinders are along z, Rapier's along y). Meshes: `None` ([`super::urdf::read`]
-/// rejects them).
+/// (URDF cylinders are along z, Rapier's along y). A mesh becomes its
+/// convex hull; `None` for a mesh file that cannot be read (the validation
+/// pass has refused those, `crate::validate::urdf`, with its file name
+/// resolved).
 fn collision_shape(g: &Geometry) -> Option<(SharedShape, RPose)> {
     Some(match g {
         Geometry::Box { size } => (
@@ -78,13 +80,30 @@ fn collision_shape(g: &Geometry) -> Option<(SharedShape, RPose)> {
             RPose::IDENTITY,
         ),
         Geometry::Sphere { radius } => (SharedShape::ball(r(*radius)), RPose::IDENTITY),
-        Geometry::Mesh { .. } => return None,
+        Geometry::Mesh { filename, scale } => {
+            let m = super::mesh::load(Path::new(filename), super::mesh::scale_of(scale)).ok()?;
+            let points: Vec<Vector> = m
+                .vertices
+                .iter()
+                .map(|v| vector(v[0], v[1], v[2]))
+                .collect();
+            (SharedShape::convex_hull(&points)?, RPose::IDENTITY)
+        }
     })
+}
+
+/// The height of the lowest point of a URDF collision geometry placed at
+/// `at` (the geometry frame in some frame of reference): the bottom of its
+/// bounding box there, exact for every convex shape. `None` for a mesh that
+/// is not loaded.
+pub fn lowest_point(g: &Geometry, at: &RPose) -> Option<f64> {
+    let (shape, local) = collision_shape(g)?;
+    Some(f(shape.compute_aabb(&(*at * local)).mins.z))
 }
 
 /// The impulse joint for a URDF joint whose child link frame sits at the
 /// joint frame (URDF convention). The joint's free axis is its local x.
-fn joint_data(j: &urdf_rs::Joint) -> GenericJoint {
+fn joint_data(j: &urdf_rs::Joint, parent: Option<RPose>, child: Option<RPose>) -> GenericJoint {
     let locked = match j.joint_type {
         JointType::Fixed => JointAxesMask::LOCKED_FIXED_AXES,
         JointType::Continuous | JointType::Revolute => JointAxesMask::LOCKED_REVOLUTE_AXES,
@@ -101,10 +120,12 @@ fn joint_data(j: &urdf_rs::Joint) -> GenericJoint {
     } else {
         RPose::from_rotation(GenericJoint::complete_ang_frame(axis))
     };
+    // Links lumped into a body ([`super::lump`]) sit at an offset in its frame.
+    let frame1 = origin(&j.origin) * basis;
     let mut b = GenericJointBuilder::new(locked)
         .contacts_enabled(false)
-        .local_frame1(origin(&j.origin) * basis)
-        .local_frame2(basis);
+        .local_frame1(parent.map_or(frame1, |o| o * frame1))
+        .local_frame2(child.map_or(basis, |o| o * basis));
     let limits = [r(j.limit.lower), r(j.limit.upper)];
     match j.joint_type {
         JointType::Revolute => b = b.limits(JointAxis::AngX, limits),
@@ -154,14 +175,19 @@ fn initial_poses(robot: &Robot, root: RPose) -> Vec<RPose> {
 /// Handles of one robot in a [`SimWorld`].
 #[derive(Debug, Clone, Default)]
 pub struct RobotHandles {
-    /// Body of each URDF link, in URDF link order.
+    /// Body of each URDF link, in URDF link order (links lumped into one
+    /// body share its handle: [`super::lump`]).
     pub links: Vec<RigidBodyHandle>,
-    /// Joint handles by URDF joint name.
+    /// Each link's pose in its body's frame (`None`: the body's own link).
+    pub offsets: Vec<Option<RPose>>,
+    /// Joint handles by URDF joint name (lumped fixed joints have none).
     pub joints: HashMap<String, ImpulseJointHandle>,
     /// Link index by name.
     pub link_index: HashMap<String, usize>,
     /// Every collider of the robot (for collision groups).
     pub colliders: Vec<ColliderHandle>,
+    /// The colliders of each link's own `<collision>` elements, URDF order.
+    pub link_colliders: Vec<Vec<ColliderHandle>>,
 }
 
 impl RobotHandles {
@@ -170,9 +196,37 @@ impl RobotHandles {
         self.link_index.get(name).map(|&i| self.links[i])
     }
 
-    /// Body of a link the system needs; the error names the missing link.
+    /// Body of a link the system needs and whose body's pose it reads as
+    /// the link's pose; the error names the missing link, or the body it
+    /// was lumped into (the system then needs [`RobotHandles::require_frame`]).
     pub fn require_link(&self, name: &str) -> Result<RigidBodyHandle, String> {
-        self.link(name)
+        let i = *self
+            .link_index
+            .get(name)
+            .ok_or_else(|| format!("URDF has no link `{name}`"))?;
+        if self.offsets[i].is_some() {
+            return Err(format!(
+                "URDF link `{name}` is fixed to another link and lumped into its body: this model reads its pose, so give it the mass (an <inertial>) or attach it by a non-fixed joint"
+            ));
+        }
+        Ok(self.links[i])
+    }
+
+    /// Body of a named link and the link's pose in the body frame
+    /// (identity for a body's own link).
+    pub fn require_frame(&self, name: &str) -> Result<(RigidBodyHandle, RPose), String> {
+        let i = *self
+            .link_index
+            .get(name)
+            .ok_or_else(|| format!("URDF has no link `{name}`"))?;
+        Ok((self.links[i], self.offsets[i].unwrap_or(RPose::IDENTITY)))
+    }
+
+    /// The colliders of a named link's own `<collision>` elements.
+    pub fn colliders_of(&self, name: &str) -> Result<&[ColliderHandle], String> {
+        self.link_index
+            .get(name)
+            .map(|&i| self.link_colliders[i].as_slice())
             .ok_or_else(|| format!("URDF has no link `{name}`"))
     }
 
@@ -181,34 +235,75 @@ impl RobotHandles {
         self.joints
             .get(name)
             .copied()
-            .ok_or_else(|| format!("URDF has no joint `{name}`"))
+            .ok_or_else(|| format!("URDF has no joint `{name}` between two bodies"))
     }
 
     /// World pose of every link, in URDF order.
     pub fn link_poses(&self, bodies: &RigidBodySet) -> Vec<Pose> {
         self.links
             .iter()
-            .map(|h| to_pose(bodies[*h].position()))
+            .zip(&self.offsets)
+            .map(|(h, o)| match o {
+                None => to_pose(bodies[*h].position()),
+                Some(o) => to_pose(&(*bodies[*h].position() * *o)),
+            })
             .collect()
     }
 }
 
 /// Insert `robot` (validated by [`super::urdf::read`]) into `world` with its
 /// root link at `root`; every collider gets friction `mu` (combined with the
-/// other side by the minimum).
-pub fn insert_robot(world: &mut PhysicsWorld, robot: &Robot, root: RPose, mu: f64) -> RobotHandles {
+/// other side by the minimum). Fixed joints are lumped ([`super::lump`])
+/// except those named in `keep`.
+pub fn insert_robot(
+    world: &mut PhysicsWorld,
+    robot: &Robot,
+    root: RPose,
+    mu: f64,
+    keep: &[&str],
+) -> Result<RobotHandles, String> {
+    let lumping = super::lump::lump(robot, keep)?;
     let poses = initial_poses(robot, root);
-    let mut out = RobotHandles::default();
-    for (i, (link, pose)) in robot.links.iter().zip(poses).enumerate() {
-        let body = RigidBodyBuilder::dynamic()
-            .can_sleep(false)
-            .pose(pose)
-            .additional_mass_properties(mass_properties(&link.inertial));
-        let h = world.insert_body(body);
+    let n = robot.links.len();
+    let mut out = RobotHandles {
+        links: vec![RigidBodyHandle::invalid(); n],
+        offsets: lumping.offset.clone(),
+        link_colliders: vec![Vec::new(); n],
+        ..Default::default()
+    };
+    for (i, link) in robot.links.iter().enumerate() {
+        out.link_index.insert(link.name.clone(), i);
+    }
+    // Bodies are inserted at their first link in URDF order, each link's
+    // colliders right after: an unlumped robot gets the handles, and so the
+    // solver order, it always had.
+    for (i, link) in robot.links.iter().enumerate() {
+        let b = lumping.body[i];
+        if out.links[b] == RigidBodyHandle::invalid() {
+            // The body's inertia: its own link's, plus every lumped link's
+            // moved into its frame (parry adds them about the joint CoM).
+            let mut mass = mass_properties(&robot.links[b].inertial);
+            for k in (0..n).filter(|&k| lumping.body[k] == b && k != b) {
+                let l = &robot.links[k];
+                if !super::lump::is_frame(l) {
+                    let o = lumping.offset[k].expect("a lumped link has an offset");
+                    mass += mass_properties(&l.inertial).transform_by(&o);
+                }
+            }
+            let body = RigidBodyBuilder::dynamic()
+                .can_sleep(false)
+                .pose(poses[b])
+                .additional_mass_properties(mass);
+            out.links[b] = world.insert_body(body);
+        }
+        let h = out.links[b];
+        out.links[i] = h;
         for c in &link.collision {
             if let Some((shape, local)) = collision_shape(&c.geometry) {
+                let at = origin(&c.origin) * local;
+                let at = lumping.offset[i].map_or(at, |o| o * at);
                 let collider = ColliderBuilder::new(shape)
-                    .position(origin(&c.origin) * local)
+                    .position(at)
                     .density(0.0)
                     .friction(r(mu))
                     .friction_combine_rule(CoefficientCombineRule::Min);
@@ -216,18 +311,25 @@ pub fn insert_robot(world: &mut PhysicsWorld, robot: &Robot, root: RPose, mu: f6
                     .colliders
                     .insert_with_parent(collider, h, &mut world.bodies);
                 out.colliders.push(ch);
+                out.link_colliders[i].push(ch);
             }
         }
-        out.links.push(h);
-        out.link_index.insert(link.name.clone(), i);
     }
-    for j in &robot.joints {
-        let b1 = out.links[out.link_index[&j.parent.link]];
-        let b2 = out.links[out.link_index[&j.child.link]];
-        let h = world.impulse_joints.insert(b1, b2, joint_data(j), true);
+    for (k, j) in robot.joints.iter().enumerate() {
+        if !lumping.joint_kept[k] {
+            continue;
+        }
+        let (p, c) = (
+            out.link_index[&j.parent.link],
+            out.link_index[&j.child.link],
+        );
+        let data = joint_data(j, lumping.offset[p], lumping.offset[c]);
+        let h = world
+            .impulse_joints
+            .insert(out.links[p], out.links[c], data, true);
         out.joints.insert(j.name.clone(), h);
     }
-    out
+    Ok(out)
 }
 
 /// A Rapier world holding one URDF robot (more with [`SimWorld::add_robot`])
@@ -248,6 +350,8 @@ pub struct SimWorld {
     /// The robot was built into a batch's shared world, which the batch
     /// steps ([`SimWorld::step`] then does nothing).
     hosted: bool,
+    /// Fixed joints kept as joints (not lumped) in every robot of the world.
+    keep_fixed: Vec<String>,
 }
 
 /// Settings for [`SimWorld::new`].
@@ -258,12 +362,15 @@ pub struct WorldOptions<'a> {
     pub root_pose: RPose,
     /// Add a ground plane z = 0 with the settings' friction.
     pub ground: bool,
+    /// Fixed joints the system needs as joints: not lumped ([`super::lump`]).
+    pub keep_fixed: &'a [&'a str],
 }
 
 impl SimWorld {
-    /// Build the world; `robot` must come from [`super::urdf::read`]. The
-    /// directory is where meshes would be resolved (none are loaded today).
-    pub fn new(robot: &Robot, _urdf_dir: &Path, opts: &WorldOptions) -> SimWorld {
+    /// Build the world; `robot` must come from [`super::urdf::read`] (its
+    /// mesh file names resolved). The error is a lumping refusal
+    /// ([`super::lump::lump`]): a kept fixed joint whose child has no mass.
+    pub fn new(robot: &Robot, _urdf_dir: &Path, opts: &WorldOptions) -> Result<SimWorld, String> {
         let s = opts.settings;
         // Inside `batch::Host::build`: join the batch's world when there is one.
         let joined = super::batch::join(opts);
@@ -283,18 +390,20 @@ impl SimWorld {
             scaled.as_ref().unwrap_or(robot),
             opts.root_pose,
             s.friction,
-        );
+            opts.keep_fixed,
+        )?;
         if hosted {
             super::batch::keep_apart(&mut world, &robot, ground_collider, s.friction);
         }
-        SimWorld {
+        Ok(SimWorld {
             world,
             robot,
             ground,
             ground_collider,
             settings: s.clone(),
             hosted,
-        }
+            keep_fixed: opts.keep_fixed.iter().map(|k| k.to_string()).collect(),
+        })
     }
 
     /// An empty world with the settings' integration parameters and gravity,
@@ -341,7 +450,7 @@ impl SimWorld {
         urdf_dir: &Path,
         settings: &PhysicsSettings,
         root_pose: RPose,
-    ) -> SimWorld {
+    ) -> Result<SimWorld, String> {
         SimWorld::new(
             robot,
             urdf_dir,
@@ -349,16 +458,40 @@ impl SimWorld {
                 settings,
                 root_pose,
                 ground: true,
+                keep_fixed: &[],
             },
         )
     }
 
     /// Insert another robot (another URDF, or a second copy of the same one)
     /// with its root link at `root_pose`; its handles are its own.
-    pub fn add_robot(&mut self, robot: &Robot, _urdf_dir: &Path, root_pose: RPose) -> RobotHandles {
+    pub fn add_robot(
+        &mut self,
+        robot: &Robot,
+        _urdf_dir: &Path,
+        root_pose: RPose,
+    ) -> Result<RobotHandles, String> {
         let scaled = super::perturb::scaled_masses(robot, self.settings.mass_scale);
         let robot = scaled.as_ref().unwrap_or(robot);
-        insert_robot(&mut self.world, robot, root_pose, self.settings.friction)
+        let keep: Vec<&str> = self.keep_fixed.iter().map(String::as_str).collect();
+        insert_robot(
+            &mut self.world,
+            robot,
+            root_pose,
+            self.settings.friction,
+            &keep,
+        )
+    }
+
+    /// The colliders of a named link of the first robot (see [`RobotHandles::colliders_of`]).
+    pub fn colliders_of(&self, name: &str) -> Result<Vec<ColliderHandle>, String> {
+        self.robot.colliders_of(name).map(<[_]>::to_vec)
+    }
+
+    /// Body of a named link of the first robot and the link's pose in it
+    /// (see [`RobotHandles::require_frame`]).
+    pub fn require_frame(&self, name: &str) -> Result<(RigidBodyHandle, RPose), String> {
+        self.robot.require_frame(name)
     }
 
     /// Put `colliders` (e.g. the first robot's or [`RobotHandles::colliders`])
@@ -475,7 +608,10 @@ impl SimWorld {
                     r(k),
                     r(c),
                 )
-                .set_motor_max_force(d.axis, r(d.max_torque.unwrap_or(s.motor_max_torque)));
+                .set_motor_max_force(
+                    d.axis,
+                    r(d.max_torque.unwrap_or(s.motor_max_torque) * s.torque_scale),
+                );
         }
     }
 }
@@ -605,8 +741,11 @@ mod tests {
                 origin(&urdf_rs::Pose { xyz: urdf_rs::Vec3([0.0; 3]), rpy: urdf_rs::Vec3(root_rpy) }).rotation,
             );
             let settings = PhysicsSettings { gravity: [0.0; 3], ..Default::default() };
-            let opts = WorldOptions { settings: &settings, root_pose: root, ground: false };
-            let mut sw = SimWorld::new(&robot, Path::new("."), &opts);
+            // Every joint kept: each link is checked as a body of its own.
+            let names: Vec<String> = (0..joints.len()).map(|i| format!("j{i}")).collect();
+            let keep: Vec<&str> = names.iter().map(String::as_str).collect();
+            let opts = WorldOptions { settings: &settings, root_pose: root, ground: false, keep_fixed: &keep };
+            let mut sw = SimWorld::new(&robot, Path::new("."), &opts).unwrap();
             // A zero-length step applies the user changes (mass properties) and moves nothing.
             sw.world.integration_parameters.dt = 0.0;
             sw.world.step();
@@ -664,9 +803,10 @@ mod tests {
         let path = Path::new(env!("CARGO_MANIFEST_DIR")).join("models/rover.urdf");
         let robot = crate::physics::urdf::read(&path).unwrap();
         let settings = PhysicsSettings::default();
-        let mut sw = SimWorld::on_ground(&robot, Path::new("."), &settings, RPose::IDENTITY);
+        let mut sw =
+            SimWorld::on_ground(&robot, Path::new("."), &settings, RPose::IDENTITY).unwrap();
         let shift = RPose::from_parts(vector(2.0, -1.0, 0.0), Rotation::from_rotation_z(r(0.5)));
-        let b = sw.add_robot(&robot, Path::new("."), shift);
+        let b = sw.add_robot(&robot, Path::new("."), shift).unwrap();
         assert_eq!(b.links.len(), sw.robot.links.len());
         assert!(b.links.iter().all(|h| !sw.robot.links.contains(h)));
         assert!(b

@@ -145,16 +145,20 @@ impl ModelConfig {
     pub fn schema(kind: &str) -> Option<&'static Schema> {
         static CACHE: OnceLock<Vec<(&'static str, Schema)>> = OnceLock::new();
         by_kind(&CACHE, &Self::KINDS, kind, |k| {
-            Some(match k {
-                "rolling_disk" => Schema::of::<DiskModelConfig>(),
-                "space_robot" => Schema::of::<SpaceRobotConfig>(),
-                "rover" => Schema::of::<RoverConfig>(),
-                "rolling_sphere" => Schema::of::<SphereConfig>(),
-                "mobile_manipulator" => Schema::of::<MobileManipulatorConfig>(),
-                "diff_drive" => Schema::of::<DiffDriveConfig>(),
-                "car" => Schema::of::<CarConfig>(),
-                _ => return None,
-            })
+            let source = Schema::of::<super::UrdfSourceConfig>();
+            Some(
+                match k {
+                    "rolling_disk" => Schema::of::<DiskModelConfig>(),
+                    "space_robot" => Schema::of::<SpaceRobotConfig>(),
+                    "rover" => Schema::of::<RoverConfig>(),
+                    "rolling_sphere" => Schema::of::<SphereConfig>(),
+                    "mobile_manipulator" => Schema::of::<MobileManipulatorConfig>(),
+                    "diff_drive" => Schema::of::<DiffDriveConfig>(),
+                    "car" => Schema::of::<CarConfig>(),
+                    _ => return None,
+                }
+                .with_properties_of(&source),
+            )
         })
     }
 

@@ -109,7 +109,8 @@ impl SimConfig {
             relax_pass: self.solver_relax_pass,
             friction: self.friction * p.friction_scale,
             gravity: self.gravity,
-            motor_max_torque: self.motor_max_torque * p.torque_scale,
+            motor_max_torque: self.motor_max_torque,
+            torque_scale: p.torque_scale,
             motor_gain: self.motor_gain,
             motor_angle_gain: self.motor_angle_gain,
             mass_scale: p.mass_scale,
@@ -211,6 +212,9 @@ pub struct Scenario {
     pub model: ModelConfig,
     /// Resolved URDF path.
     pub urdf: PathBuf,
+    /// Where the URDF's meshes and xacro arguments come from (package
+    /// directories resolved against the scenario's directory).
+    pub urdf_source: crate::physics::urdf::Source,
     /// Start state, SI (angles in rad).
     pub start: Vec<f64>,
     /// Goal state, SI.
@@ -276,6 +280,41 @@ pub fn name_problem(name: &str) -> Option<String> {
         return Some("ends with a dot or a space".into());
     }
     None
+}
+
+/// `[model] packages` and `xacro_args`: where every model's robot
+/// description finds what it names. Read by the scenario layer (taken out
+/// of `[model]` before the model's own keys), shown with each model's keys.
+#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct UrdfSourceConfig {
+    /// ROS packages that `package://PKG/...` mesh URIs in the URDF name: package
+    /// name → directory, relative to the scenario file (searched before
+    /// `ROS_PACKAGE_PATH` and `AMENT_PREFIX_PATH`).
+    #[serde(default)]
+    pub packages: BTreeMap<String, PathBuf>,
+    /// Arguments for xacro (`name:=value`), when the URDF holds xacro markup
+    /// (the `xacro` command expands it: `pip install xacro`).
+    #[serde(default)]
+    pub xacro_args: BTreeMap<String, String>,
+}
+
+/// The keys of [`UrdfSourceConfig`], taken out of a `[model]` table.
+fn take_urdf_source(model: &mut Spanned<DeValue<'_>>) -> Result<UrdfSourceConfig, toml::de::Error> {
+    let span = model.span();
+    let DeValue::Table(t) = model.get_mut() else {
+        return Ok(UrdfSourceConfig::default());
+    };
+    let mut own = DeTable::new();
+    for k in ["packages", "xacro_args"] {
+        if let Some((key, v)) = t.remove_entry(k) {
+            own.insert(key, v);
+        }
+    }
+    UrdfSourceConfig::deserialize(ValueDeserializer::from(Spanned::new(
+        span,
+        DeValue::Table(own),
+    )))
 }
 
 /// Remove the tagged table `name` (`[model]`, `[planner]`) from the document:
@@ -527,8 +566,9 @@ impl Scenario {
         let bad = |message: String| keys.error(path, message);
         let serde = |e: toml::de::Error| keys.serde_error(path, &e);
         let mut root = root.into_inner();
-        let (model_kind, model) =
+        let (model_kind, mut model) =
             take_tagged(&keys, path, &mut root, "model", &ModelConfig::KINDS)?;
+        let urdf_source = take_urdf_source(&mut model).map_err(serde)?;
         let (planner_kind, planner) =
             take_tagged(&keys, path, &mut root, "planner", &PlannerConfig::KINDS)?;
         // Match model and planner before reading the planner's parameters: a
@@ -684,6 +724,14 @@ impl Scenario {
             expect_fails,
             model,
             urdf,
+            urdf_source: crate::physics::urdf::Source {
+                packages: urdf_source
+                    .packages
+                    .iter()
+                    .map(|(k, d)| (k.clone(), base.join(d)))
+                    .collect(),
+                xacro_args: urdf_source.xacro_args,
+            },
             start,
             goal,
             planner,

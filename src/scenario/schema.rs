@@ -158,6 +158,25 @@ impl Schema {
         }
     }
 
+    /// `self` with the properties (and definitions) of `other` added: keys
+    /// every table of a kind shares (a model's URDF source).
+    pub fn with_properties_of(mut self, other: &Schema) -> Schema {
+        for part in ["properties", "$defs"] {
+            let Some(add) = other.root.get(part).and_then(Value::as_object).cloned() else {
+                continue;
+            };
+            if let Some(root) = self.root.as_object_mut() {
+                let entry = root
+                    .entry(part)
+                    .or_insert_with(|| Value::Object(Map::new()));
+                if let Some(m) = entry.as_object_mut() {
+                    m.extend(add);
+                }
+            }
+        }
+        self
+    }
+
     /// The type's own doc comment.
     pub fn description(&self) -> String {
         doc(&self.root)

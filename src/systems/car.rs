@@ -188,6 +188,12 @@ impl System for Car {
             sim,
         )?))
     }
+    /// Its wheels can wear or differ from the URDF (`wheel_radius_scale`).
+    fn perturbable(&self, plan: &Plan) -> Vec<crate::physics::perturb::Dimension> {
+        let mut d = crate::physics::perturb::Dimension::common(plan);
+        d.push(crate::physics::perturb::Dimension::WheelRadiusScale);
+        d
+    }
     fn extra_metric_names(&self) -> Vec<String> {
         let mut out: Vec<String> = SLIP_METRICS.map(String::from).to_vec();
         out.push("steer_clipped_fraction".into());

@@ -40,6 +40,13 @@ pub struct DiffDriveConfig {
     /// The right wheel's continuous joint.
     #[serde(default = "default_right")]
     pub right_wheel_joint: String,
+    /// Several driven wheels on the left (a skid steer: every wheel of a
+    /// side gets the same ground speed), instead of `left_wheel_joint`.
+    #[serde(default)]
+    pub left_wheel_joints: Vec<String>,
+    /// Several driven wheels on the right, instead of `right_wheel_joint`.
+    #[serde(default)]
+    pub right_wheel_joints: Vec<String>,
     /// Caster links (made frictionless); may be empty.
     #[serde(default = "default_casters")]
     pub caster_links: Vec<String>,
@@ -77,13 +84,41 @@ struct DiffDrive {
     names: DiffDriveNames,
 }
 
+/// One side's wheel joints: the list key, or the single-joint key.
+fn side(
+    one: &str,
+    many: &[String],
+    default: &str,
+    (one_key, many_key): (&'static str, &'static str),
+) -> Result<(Vec<String>, &'static str), String> {
+    if many.is_empty() {
+        return Ok((vec![one.to_string()], one_key));
+    }
+    if one != default {
+        return Err(format!(
+            "key `model.{many_key}`: give either `{one_key}` or `{many_key}`, not both"
+        ));
+    }
+    Ok((many.to_vec(), many_key))
+}
+
 /// Build the differential-drive system.
 pub fn build(cfg: &DiffDriveConfig) -> Result<Box<dyn System>, String> {
-    let mut names = vec![
-        ("base_link", cfg.base_link.as_str()),
-        ("left_wheel_joint", cfg.left_wheel_joint.as_str()),
-        ("right_wheel_joint", cfg.right_wheel_joint.as_str()),
-    ];
+    let (left, lk) = side(
+        &cfg.left_wheel_joint,
+        &cfg.left_wheel_joints,
+        phys::LEFT_JOINT,
+        ("left_wheel_joint", "left_wheel_joints"),
+    )?;
+    let (right, rk) = side(
+        &cfg.right_wheel_joint,
+        &cfg.right_wheel_joints,
+        phys::RIGHT_JOINT,
+        ("right_wheel_joint", "right_wheel_joints"),
+    )?;
+    let mut names = vec![("base_link", cfg.base_link.as_str())];
+    names.extend(left.iter().map(|j| (lk, j.as_str())));
+    names.extend(right.iter().map(|j| (rk, j.as_str())));
     names.extend(
         cfg.caster_links
             .iter()
@@ -93,8 +128,8 @@ pub fn build(cfg: &DiffDriveConfig) -> Result<Box<dyn System>, String> {
     Ok(Box::new(DiffDrive {
         names: DiffDriveNames {
             base: cfg.base_link.clone(),
-            left: cfg.left_wheel_joint.clone(),
-            right: cfg.right_wheel_joint.clone(),
+            left,
+            right,
             casters: cfg.caster_links.clone(),
         },
     }))
@@ -128,20 +163,16 @@ impl System for DiffDrive {
     }
     fn urdf_names(&self) -> Vec<Named> {
         let n = &self.names;
-        let mut out = vec![
-            Named {
-                required: &REQUIRED[0],
-                name: n.base.clone(),
-            },
-            Named {
-                required: &REQUIRED[1],
-                name: n.left.clone(),
-            },
-            Named {
-                required: &REQUIRED[2],
-                name: n.right.clone(),
-            },
-        ];
+        let mut out = vec![Named {
+            required: &REQUIRED[0],
+            name: n.base.clone(),
+        }];
+        for (req, joints) in [(&REQUIRED[1], &n.left), (&REQUIRED[2], &n.right)] {
+            out.extend(joints.iter().map(|j| Named {
+                required: req,
+                name: j.clone(),
+            }));
+        }
         out.extend(n.casters.iter().map(|c| Named {
             required: &REQUIRED[3],
             name: c.clone(),
@@ -162,6 +193,12 @@ impl System for DiffDrive {
             start,
             sim,
         )?))
+    }
+    /// Its wheels can wear or differ from the URDF (`wheel_radius_scale`).
+    fn perturbable(&self, plan: &Plan) -> Vec<crate::physics::perturb::Dimension> {
+        let mut d = crate::physics::perturb::Dimension::common(plan);
+        d.push(crate::physics::perturb::Dimension::WheelRadiusScale);
+        d
     }
     fn extra_metric_names(&self) -> Vec<String> {
         SLIP_METRICS.map(String::from).to_vec()

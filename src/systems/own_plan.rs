@@ -137,6 +137,9 @@ impl System for OwnPlan {
     ) -> (Vec<(String, f64)>, Vec<Series>) {
         self.inner.analysis_with(goal, ideal, early, sim, cmp)
     }
+    fn perturbable(&self, plan: &Plan) -> Vec<crate::physics::perturb::Dimension> {
+        self.inner.perturbable(plan)
+    }
     fn metric_direction(&self, name: &str) -> Option<Direction> {
         self.inner.metric_direction(name)
     }

@@ -17,10 +17,12 @@
 //! build and not `Sync`); the run builds its own.
 
 pub mod urdf;
+pub mod xacro;
 
 use crate::compare::metric_spec;
 use crate::error::Error;
 use crate::model::{KinematicModel, State};
+use crate::physics::reading::UrdfReading;
 use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::PlanError;
@@ -50,6 +52,11 @@ pub struct Prepared {
     pub plan_wall_s: f64,
     /// Step budget the scenario was validated against (sweep variants too).
     pub max_steps: u64,
+    /// What the physics read from the URDF: bodies, wheels, drives,
+    /// geometry, and the warnings (defaults filled in, meshes left out).
+    pub reading: UrdfReading,
+    /// The warnings of loading the URDF alone (sweep variants reuse them).
+    urdf_warnings: Vec<String>,
 }
 
 impl Prepared {
@@ -61,15 +68,19 @@ impl Prepared {
 
     /// Like [`Prepared::new`] with a step budget other than [`DEFAULT_MAX_STEPS`].
     pub fn with_budget(scenario: Scenario, max_steps: u64) -> Result<Prepared, Error> {
-        let robot = urdf::load(&scenario.urdf)?;
-        Prepared::with_robot(scenario, robot, max_steps)
+        let loaded =
+            urdf::load_from(&scenario.urdf, &scenario.urdf_source).map_err(Error::several)?;
+        let mut prep = Prepared::with_robot(scenario, loaded.robot, loaded.warnings, max_steps)?;
+        prep.reading.notes = loaded.notes;
+        Ok(prep)
     }
 
-    /// Like [`Prepared::with_budget`] with the URDF already loaded (sweep
-    /// variants scale its masses).
-    pub fn with_robot(
+    /// Like [`Prepared::with_budget`] with the URDF already loaded, and the
+    /// warnings of its loading.
+    fn with_robot(
         mut scenario: Scenario,
         robot: urdf_rs::Robot,
+        load_warnings: Vec<String>,
         max_steps: u64,
     ) -> Result<Prepared, Error> {
         let system =
@@ -136,7 +147,11 @@ impl Prepared {
         }
         // The physics first: a URDF that disagrees with the model explains a
         // planner refusal better than the refusal does.
-        build_physics(&scenario, system.as_ref(), &robot)?;
+        let probe = build_physics(&scenario, system.as_ref(), &robot)?;
+        let mut reading = probe.reading();
+        drop(probe);
+        reading.bodies = bodies(&robot, system.as_ref());
+        reading.warnings.splice(0..0, load_warnings.iter().cloned());
         // The step budget, before anything integrates: what settling alone
         // and the planner's own integration imply, then the whole run.
         let budget = Budget {
@@ -175,6 +190,8 @@ impl Prepared {
             planned,
             plan_wall_s,
             max_steps,
+            reading,
+            urdf_warnings: load_warnings,
         };
         if let Some(sw) = &prep.scenario.sweep {
             // Variants differ only in friction, masses and σ: when variant 0
@@ -200,7 +217,14 @@ impl Prepared {
     /// A sweep variant of this scenario, validated and planned like the scenario.
     pub fn variant(&self, v: &Variant) -> Result<Prepared, Error> {
         let sc = self.scenario.variant(v)?;
-        Prepared::with_robot(sc, self.robot.clone(), self.max_steps)
+        let mut prep = Prepared::with_robot(
+            sc,
+            self.robot.clone(),
+            self.urdf_warnings.clone(),
+            self.max_steps,
+        )?;
+        prep.reading.notes = self.reading.notes.clone();
+        Ok(prep)
     }
 
     /// The kinematic model.
@@ -417,6 +441,25 @@ fn make_plan(sc: &Scenario, system: &dyn System) -> Result<Plan, Error> {
     Ok(plan)
 }
 
+/// The rigid bodies of `robot` as the system's physics loads them: fixed
+/// joints lumped, except those the system names (it needs them as joints).
+fn bodies(
+    robot: &urdf_rs::Robot,
+    system: &dyn System,
+) -> Vec<crate::physics::reading::BodyReading> {
+    use crate::physics::required::Element;
+    let names = system.urdf_names();
+    let keep: Vec<&str> = names
+        .iter()
+        .filter(|n| n.required.element == Element::Joint)
+        .map(|n| n.name.as_str())
+        .collect();
+    match crate::physics::lump::lump(robot, &keep) {
+        Ok(l) => UrdfReading::bodies_of(robot, &l),
+        Err(_) => Vec::new(),
+    }
+}
+
 fn build_physics(
     sc: &Scenario,
     system: &dyn System,
@@ -519,7 +562,7 @@ pub fn prepare_each(paths: &[PathBuf], call: &Call<'_>) -> (Vec<Prepared>, Vec<E
         }
         match Prepared::with_budget(sc, call.max_steps.unwrap_or(DEFAULT_MAX_STEPS)) {
             Ok(p) => preps.push(p),
-            Err(e) => errors.push(e),
+            Err(e) => errors.extend(e.into_list()),
         }
     }
     (preps, errors)

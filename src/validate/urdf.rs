@@ -33,24 +33,153 @@ impl Place {
     }
 }
 
-/// Read, parse and check a URDF.
+pub use crate::physics::urdf::Source;
+
+/// A URDF as the physics takes it: parsed, checked, its mesh file names
+/// resolved to files that load, with what the user should know.
+#[derive(Debug, Clone)]
+pub struct Loaded {
+    /// The robot (mesh `filename`s are the resolved paths; visuals whose
+    /// mesh is missing are dropped).
+    pub robot: Robot,
+    /// Visual meshes left out.
+    pub warnings: Vec<String>,
+    /// What was done to the file (xacro expanded).
+    pub notes: Vec<String>,
+}
+
+/// Read, parse and check a URDF with the default [`Source`]: the first problem.
 pub fn load(path: &Path) -> Result<Robot, Error> {
-    let text = read_text(path, "URDF", URDF_MAX_BYTES)?;
-    let to_error = |m: String| Error::Input {
-        path: path.into(),
-        line: line_of_message(&text, &m),
-        message: m,
+    load_from(path, &Source::default())
+        .map(|l| l.robot)
+        .map_err(|mut e| e.swap_remove(0))
+}
+
+/// Read, parse and check a URDF (expanding xacro, resolving meshes): every
+/// problem at once, one error per problem, each with the line of the
+/// element it names.
+pub fn load_from(path: &Path, source: &Source) -> Result<Loaded, Vec<Error>> {
+    let one = |line: Option<usize>, m: String| {
+        vec![Error::Input {
+            path: path.into(),
+            line,
+            message: m,
+        }]
     };
-    let robot = crate::physics::urdf::parse(path).map_err(to_error)?;
-    crate::physics::urdf::validate_tree(&robot).map_err(to_error)?;
+    let mut text = read_text(path, "URDF", URDF_MAX_BYTES).map_err(|e| vec![e])?;
+    let mut warnings = Vec::new();
+    let mut notes = Vec::new();
+    // Lines point into the file only when the file is what was parsed.
+    let mut lines = true;
+    use super::xacro::Markup;
+    let why = match super::xacro::markup(&text) {
+        Some(Markup::Needed(why)) => Some(why),
+        // Plain URDF under the namespace: expanded only where xacro is at hand.
+        Some(Markup::Namespace) if super::xacro::available() => Some("the xacro namespace"),
+        _ => None,
+    };
+    if let Some(why) = why {
+        text = super::xacro::expand(path, why, &source.xacro_args).map_err(|m| one(None, m))?;
+        notes.push(format!(
+            "expanded with xacro ({why}); lines in messages are those of the expansion"
+        ));
+        lines = false;
+    }
+    let line_of = |m: &str| lines.then(|| line_of_message(&text, m)).flatten();
+    let mut robot = crate::physics::urdf::parse_text(&text).map_err(|m| one(line_of(&m), m))?;
+    let mut errors: Vec<Error> = Vec::new();
+    let mut push = |line: Option<usize>, m: String| {
+        errors.push(Error::Input {
+            path: path.into(),
+            line,
+            message: m,
+        })
+    };
+    let structure = crate::physics::urdf::structure_problems(&robot);
+    if !structure.is_empty() {
+        for m in structure {
+            push(line_of(&m), m);
+        }
+        return Err(errors);
+    }
     // Numbers before the loader's own checks: their errors name the element.
-    check_numbers(&robot).map_err(|(place, m)| Error::Input {
-        path: path.into(),
-        line: locate(&text, &place),
-        message: m,
-    })?;
-    crate::physics::urdf::validate_loadable(&robot).map_err(to_error)?;
-    Ok(robot)
+    let numbers = number_problems(&robot);
+    let bad_numbers = !numbers.is_empty();
+    for (place, m) in numbers {
+        push(lines.then(|| locate(&text, &place)).flatten(), m);
+    }
+    if !bad_numbers {
+        // Masses are numbers now: which bodies lack one.
+        if let Err(m) = crate::physics::lump::lump(&robot, &[]) {
+            push(line_of(&m), m);
+        }
+        for m in crate::physics::urdf::loadable_problems(&robot) {
+            push(line_of(&m), m);
+        }
+    }
+    let dir = path.parent().unwrap_or(Path::new("."));
+    for (place, m, fatal) in resolve_meshes(&mut robot, dir, source) {
+        let line = lines.then(|| locate(&text, &place)).flatten();
+        if fatal {
+            push(line, m);
+        } else {
+            warnings.push(m);
+        }
+    }
+    if errors.is_empty() {
+        Ok(Loaded {
+            robot,
+            warnings,
+            notes,
+        })
+    } else {
+        Err(errors)
+    }
+}
+
+/// Resolve and load every mesh of `robot`, rewriting each `filename` to the
+/// file found. A collision mesh that cannot be had is a problem (`true`); a
+/// visual one is a warning (`false`) and the visual is dropped.
+fn resolve_meshes(
+    robot: &mut Robot,
+    urdf_dir: &Path,
+    source: &Source,
+) -> Vec<(Place, String, bool)> {
+    use crate::physics::mesh;
+    let search = mesh::Search::from_env(source.packages.clone());
+    let mut out = Vec::new();
+    for l in &mut robot.links {
+        let name = l.name.clone();
+        let fix = |g: &mut Geometry, tag: String, what: &str| -> Result<(), (Place, String)> {
+            let Geometry::Mesh { filename, scale } = g else {
+                return Ok(());
+            };
+            let at = Place::new("link", &name, &[&tag, "geometry", "mesh"]);
+            let file = search
+                .resolve(filename, urdf_dir)
+                .map_err(|m| (at.clone(), format!("URDF link `{name}` {what} mesh: {m}")))?;
+            mesh::load(&file, mesh::scale_of(scale))
+                .map_err(|m| (at.clone(), format!("URDF link `{name}` {what} mesh: {m}")))?;
+            *filename = file.to_string_lossy().into_owned();
+            Ok(())
+        };
+        for (k, c) in l.collision.iter_mut().enumerate() {
+            if let Err((place, m)) = fix(&mut c.geometry, format!("collision#{k}"), "collision") {
+                out.push((place, m, true));
+            }
+        }
+        let mut keep = Vec::new();
+        for (k, mut v) in std::mem::take(&mut l.visual).into_iter().enumerate() {
+            match fix(&mut v.geometry, format!("visual#{k}"), "visual") {
+                Ok(()) => keep.push(v),
+                Err((place, m)) => {
+                    out.push((place, format!("{m}: drawn without it"), false));
+                }
+            }
+        }
+        l.visual = keep;
+    }
+    out
 }
 
 /// A URDF error about the file at `path` (a message from physics setup that
@@ -81,16 +210,7 @@ fn check_pose(p: &Pose, place: &Place, what: &str) -> Result<(), (Place, String)
     Ok(())
 }
 
-/// The tag of a geometry (`box`, `cylinder`, ...).
-fn shape_tag(g: &Geometry) -> &'static str {
-    match g {
-        Geometry::Box { .. } => "box",
-        Geometry::Cylinder { .. } => "cylinder",
-        Geometry::Capsule { .. } => "capsule",
-        Geometry::Sphere { .. } => "sphere",
-        Geometry::Mesh { .. } => "mesh",
-    }
-}
+use crate::physics::urdf::shape_tag;
 
 fn check_geometry(g: &Geometry, place: &Place, what: &str) -> Result<(), (Place, String)> {
     let positive = |v: &[f64]| v.iter().all(|x| x.is_finite() && *x > 0.0);
@@ -114,113 +234,138 @@ fn check_geometry(g: &Geometry, place: &Place, what: &str) -> Result<(), (Place,
     }
 }
 
-/// Every number the physics uses, checked; the error says where.
+/// Every number the physics uses, checked; the first problem, saying where.
 pub fn check_numbers(robot: &Robot) -> Result<(), (Place, String)> {
+    match number_problems(robot).into_iter().next() {
+        Some(p) => Err(p),
+        None => Ok(()),
+    }
+}
+
+/// Every problem with the numbers the physics uses, each saying where.
+pub fn number_problems(robot: &Robot) -> Vec<(Place, String)> {
+    let mut out = Vec::new();
+    // Each check returns its first problem; `?` inside a closure per element
+    // keeps the checks as they read, and every element is still checked.
+    let mut each = |r: Result<(), (Place, String)>| {
+        if let Err(p) = r {
+            out.push(p);
+        }
+    };
     let colour_ok = |c: &urdf_rs::Color| c.rgba.0.iter().all(|x| (0.0..=1.0).contains(x));
     for m in &robot.materials {
         if let Some(c) = m.color.as_ref().filter(|c| !colour_ok(c)) {
-            return Err((
+            each(Err((
                 Place::new("material", &m.name, &["color"]),
                 format!(
                     "URDF material `{}` <color> rgba must be in [0, 1], got {:?}",
                     m.name, c.rgba.0
                 ),
-            ));
+            )));
         }
     }
     for l in &robot.links {
-        let n = &l.name;
-        let at = |inner: &[&str]| Place::new("link", n, inner);
-        let m = l.inertial.mass.value;
-        if !(m.is_finite() && m > 0.0) {
-            return Err((
-                at(&["inertial", "mass"]),
-                format!("URDF link `{n}` <mass> must be finite and > 0, got {m}"),
-            ));
-        }
-        let i = &l.inertial.inertia;
-        let t = Matrix3::new(
-            i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz,
-        );
-        if !t.iter().all(|x| x.is_finite()) || t.cholesky().is_none() {
-            return Err((
+        each((|| {
+            let n = &l.name;
+            let at = |inner: &[&str]| Place::new("link", n, inner);
+            let m = l.inertial.mass.value;
+            if !(m.is_finite() && m >= 0.0) {
+                return Err((
+                    at(&["inertial", "mass"]),
+                    format!("URDF link `{n}` <mass> must be finite and ≥ 0 (0: a frame), got {m}"),
+                ));
+            }
+            let i = &l.inertial.inertia;
+            let t = Matrix3::new(
+                i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz,
+            );
+            // A frame's inertia is ignored (it is lumped: crate::physics::lump).
+            let frame = m == 0.0;
+            if !frame && (!t.iter().all(|x| x.is_finite()) || t.cholesky().is_none()) {
+                return Err((
                 at(&["inertial", "inertia"]),
                 format!(
                     "URDF link `{n}` <inertia> must be finite and positive definite, got ixx {} ixy {} ixz {} iyy {} iyz {} izz {}",
                     i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz
                 ),
             ));
-        }
-        check_pose(
-            &l.inertial.origin,
-            &at(&["inertial", "origin"]),
-            &format!("URDF link `{n}` inertial"),
-        )?;
-        for (k, v) in l.visual.iter().enumerate() {
-            let tag = format!("visual#{k}");
-            let what = format!("URDF link `{n}` visual {}", k + 1);
-            check_pose(&v.origin, &at(&[&tag, "origin"]), &what)?;
-            let shape = shape_tag(&v.geometry);
-            check_geometry(&v.geometry, &at(&[&tag, "geometry", shape]), &what)?;
-            if let Some(c) = v.material.as_ref().and_then(|m| m.color.as_ref()) {
-                if !colour_ok(c) {
-                    return Err((
-                        at(&[&tag, "material"]),
-                        format!("{what} <color> rgba must be in [0, 1], got {:?}", c.rgba.0),
-                    ));
+            }
+            check_pose(
+                &l.inertial.origin,
+                &at(&["inertial", "origin"]),
+                &format!("URDF link `{n}` inertial"),
+            )?;
+            for (k, v) in l.visual.iter().enumerate() {
+                let tag = format!("visual#{k}");
+                let what = format!("URDF link `{n}` visual {}", k + 1);
+                check_pose(&v.origin, &at(&[&tag, "origin"]), &what)?;
+                let shape = shape_tag(&v.geometry);
+                check_geometry(&v.geometry, &at(&[&tag, "geometry", shape]), &what)?;
+                if let Some(c) = v.material.as_ref().and_then(|m| m.color.as_ref()) {
+                    if !colour_ok(c) {
+                        return Err((
+                            at(&[&tag, "material"]),
+                            format!("{what} <color> rgba must be in [0, 1], got {:?}", c.rgba.0),
+                        ));
+                    }
                 }
             }
-        }
-        for (k, c) in l.collision.iter().enumerate() {
-            let tag = format!("collision#{k}");
-            let what = format!("URDF link `{n}` collision {}", k + 1);
-            check_pose(&c.origin, &at(&[&tag, "origin"]), &what)?;
-            let shape = shape_tag(&c.geometry);
-            check_geometry(&c.geometry, &at(&[&tag, "geometry", shape]), &what)?;
-        }
+            for (k, c) in l.collision.iter().enumerate() {
+                let tag = format!("collision#{k}");
+                let what = format!("URDF link `{n}` collision {}", k + 1);
+                check_pose(&c.origin, &at(&[&tag, "origin"]), &what)?;
+                let shape = shape_tag(&c.geometry);
+                check_geometry(&c.geometry, &at(&[&tag, "geometry", shape]), &what)?;
+            }
+            Ok(())
+        })());
     }
     for j in &robot.joints {
-        let n = &j.name;
-        let at = |inner: &[&str]| Place::new("joint", n, inner);
-        check_pose(&j.origin, &at(&["origin"]), &format!("URDF joint `{n}`"))?;
-        let moves = !matches!(j.joint_type, JointType::Fixed | JointType::Floating);
-        let a = j.axis.xyz.0;
-        if moves && !(finite(&a) && a.iter().any(|x| *x != 0.0)) {
-            return Err((
-                at(&["axis"]),
-                format!("URDF joint `{n}` <axis> must be finite and non-zero, got {a:?}"),
-            ));
-        }
-        let lim = &j.limit;
-        if matches!(j.joint_type, JointType::Revolute | JointType::Prismatic) {
-            let vals = [lim.lower, lim.upper, lim.effort, lim.velocity];
-            if !finite(&vals) || lim.lower > lim.upper || lim.effort < 0.0 || lim.velocity < 0.0 {
+        each((|| {
+            let n = &j.name;
+            let at = |inner: &[&str]| Place::new("joint", n, inner);
+            check_pose(&j.origin, &at(&["origin"]), &format!("URDF joint `{n}`"))?;
+            let moves = !matches!(j.joint_type, JointType::Fixed | JointType::Floating);
+            let a = j.axis.xyz.0;
+            if moves && !(finite(&a) && a.iter().any(|x| *x != 0.0)) {
                 return Err((
+                    at(&["axis"]),
+                    format!("URDF joint `{n}` <axis> must be finite and non-zero, got {a:?}"),
+                ));
+            }
+            let lim = &j.limit;
+            if matches!(j.joint_type, JointType::Revolute | JointType::Prismatic) {
+                let vals = [lim.lower, lim.upper, lim.effort, lim.velocity];
+                if !finite(&vals) || lim.lower > lim.upper || lim.effort < 0.0 || lim.velocity < 0.0
+                {
+                    return Err((
                     at(&["limit"]),
                     format!(
                         "URDF joint `{n}` <limit> needs finite lower ≤ upper and effort, velocity ≥ 0, got lower {} upper {} effort {} velocity {}",
                         lim.lower, lim.upper, lim.effort, lim.velocity
                     ),
                 ));
+                }
             }
-        }
-        if let Some(d) = &j.dynamics {
-            if !(d.damping.is_finite()
-                && d.damping >= 0.0
-                && d.friction.is_finite()
-                && d.friction >= 0.0)
-            {
-                return Err((
+            if let Some(d) = &j.dynamics {
+                if !(d.damping.is_finite()
+                    && d.damping >= 0.0
+                    && d.friction.is_finite()
+                    && d.friction >= 0.0)
+                {
+                    return Err((
                     at(&["dynamics"]),
                     format!(
                         "URDF joint `{n}` <dynamics> needs finite damping, friction ≥ 0, got {} and {}",
                         d.damping, d.friction
                     ),
                 ));
+                }
             }
-        }
+            Ok(())
+        })());
     }
-    Ok(())
+    out
 }
 
 /// Byte offset of the first start tag `<tag` (not `<tagx`) in `text[from..to]`.
@@ -306,8 +451,13 @@ pub fn locate(text: &str, place: &Place) -> Option<usize> {
 /// `` joint `x` ``), if it is in the text.
 pub fn line_of_message(text: &str, message: &str) -> Option<usize> {
     let mut best: Option<(usize, usize)> = None;
-    for elem in ["link", "joint"] {
-        let pat = format!("{elem} `");
+    for (elem, word) in [
+        ("link", "link"),
+        ("link", "links"),
+        ("joint", "joint"),
+        ("joint", "joints"),
+    ] {
+        let pat = format!("{word} `");
         for (i, _) in message.match_indices(&pat) {
             let rest = &message[i + pat.len()..];
             let Some(name) = rest.split('`').next() else {

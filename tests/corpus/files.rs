@@ -56,7 +56,7 @@ pub fn cases(c: &mut Corpus) {
         &d,
         du,
         &[("<mass value=\"2.0\"/>", "<mass value=\"-2\"/>")],
-        Some("name=\"wheel\""),
+        Some("<mass value=\"-2\"/>"),
         "URDF link `wheel`",
     );
     c.urdf(
@@ -64,7 +64,7 @@ pub fn cases(c: &mut Corpus) {
         &d,
         du,
         &[("<mass value=\"2.0\"/>", "<mass value=\"nan\"/>")],
-        Some("name=\"wheel\""),
+        Some("<mass value=\"nan\"/>"),
         "URDF link `wheel`",
     );
     c.urdf(
@@ -120,6 +120,14 @@ pub fn cases(c: &mut Corpus) {
         &[("<link name=\"wheel\">", "<link name=\"yoke\">")],
         None,
         "URDF has duplicate",
+    );
+    // Every problem at once: the joint to the renamed link names a link
+    // that is no longer there.
+    let renamed = std::fs::read_to_string(model(du)).unwrap();
+    c.also(
+        "m.urdf",
+        Some(line_of(&renamed, "<joint name=\"wheel_joint\"")),
+        "URDF joint `wheel_joint`",
     );
     c.urdf(
         "urdf wheel missing",

@@ -87,6 +87,17 @@ impl Corpus {
 
     /// A scenario with its own URDF `m.urdf` (the shipped `urdf_file` edited
     /// by `edit`); the error is in `m.urdf` at the line containing `at`.
+    /// One more expected line for the last case (an input with several
+    /// problems reports each on its own line).
+    pub fn also(&mut self, file: &str, line: Option<usize>, key: &str) {
+        let last = self.0.last_mut().expect("a case to extend");
+        last.expect.push(Shape {
+            file: file.into(),
+            line,
+            key: Some(key.into()),
+        });
+    }
+
     pub fn urdf(
         &mut self,
         name: &str,

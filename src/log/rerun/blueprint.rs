@@ -66,19 +66,20 @@ fn link_reach(link: &crate::record::LinkVisual) -> f64 {
         .iter()
         .map(|v| {
             let o = v.origin.translation;
-            let r = match v.shape {
+            let r = match &v.shape {
                 Shape::Box { size } => {
                     0.5 * (size[0].powi(2) + size[1].powi(2) + size[2].powi(2)).sqrt()
                 }
                 Shape::Cylinder { radius, length } | Shape::Capsule { radius, length } => {
-                    radius.hypot(0.5 * length)
+                    radius.hypot(0.5 * *length)
                         + if matches!(v.shape, Shape::Capsule { .. }) {
-                            radius
+                            *radius
                         } else {
                             0.0
                         }
                 }
-                Shape::Sphere { radius } => radius,
+                Shape::Sphere { radius } => *radius,
+                Shape::Mesh { mesh, .. } => mesh.radius(),
             };
             (o[0] * o[0] + o[1] * o[1] + o[2] * o[2]).sqrt() + r
         })

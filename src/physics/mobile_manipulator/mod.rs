@@ -95,7 +95,7 @@ const WHEEL_JOINTS: [&str; 2] = ["left_wheel_joint", "right_wheel_joint"];
 const CASTERS: [&str; 2] = ["caster_front", "caster_rear"];
 
 /// The links and joints each mobile manipulator looks up in its URDF.
-pub const REQUIRED: [Required; 20] = [
+pub const REQUIRED: [Required; 23] = [
     Required::link(
         "base_link",
         "the platform (root link); origin at the drive-axle midpoint on the ground",
@@ -131,7 +131,24 @@ pub const REQUIRED: [Required; 20] = [
     Required::joint(ARM_JOINTS[3], "arm joint 4 (PUMA 560 DH table, axis z)"),
     Required::joint(ARM_JOINTS[4], "arm joint 5 (PUMA 560 DH table, axis z)"),
     Required::joint(ARM_JOINTS[5], "arm joint 6 (PUMA 560 DH table, axis z)"),
+    Required::joint(
+        KEPT_FIXED[0],
+        "link6 to tool, fixed: kept as a joint (not lumped), it is the compliant wrist",
+    ),
+    Required::joint(
+        KEPT_FIXED[1],
+        "base_link to caster_front, fixed: kept as a joint (the platform's bodies as tuned)",
+    ),
+    Required::joint(
+        KEPT_FIXED[2],
+        "base_link to caster_rear, fixed: kept as a joint (the platform's bodies as tuned)",
+    ),
 ];
+
+/// The fixed joints the physics keeps as joints: the wrist (made compliant,
+/// see `joints`) and the casters, whose bodies the seed-004 gains were
+/// tuned with.
+const KEPT_FIXED: [&str; 3] = ["tool_joint", "caster_front_joint", "caster_rear_joint"];
 
 /// An obstacle for the physics: a fixed convex collider.
 #[derive(Debug, Clone)]
@@ -289,10 +306,19 @@ impl MobileManipulatorPhysics {
             super::perturb::shrink_round_collisions(robot, &tyres, 1.0, Some(wear))
         });
         let robot = worn.as_ref().unwrap_or(robot);
-        let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root(0));
+        let mut sw = SimWorld::new(
+            robot,
+            urdf_dir,
+            &super::world::WorldOptions {
+                settings: sim,
+                root_pose: root(0),
+                ground: true,
+                keep_fixed: &KEPT_FIXED,
+            },
+        )?;
         let mut handles = vec![sw.robot.clone()];
         if k == 2 {
-            handles.push(sw.add_robot(robot, urdf_dir, root(1)));
+            handles.push(sw.add_robot(robot, urdf_dir, root(1))?);
         }
         let mut robots = Vec::with_capacity(k);
         for (r, h) in handles.iter().enumerate() {
@@ -396,11 +422,14 @@ impl MobileManipulatorPhysics {
             sim: sw,
             obstacles: obstacle_handles,
             gain: sim.motor_gain,
-            max_torque: sim.motor_max_torque,
+            max_torque: sim.motor_max_torque * sim.torque_scale,
             dt: sim.dt,
             last_u: Input::zeros(INPUTS * k),
             arm_servo: setup.arm,
-            arm_max_torque: setup.arm_max_torque.unwrap_or([sim.motor_max_torque; 6]),
+            arm_max_torque: setup
+                .arm_max_torque
+                .unwrap_or([sim.motor_max_torque; 6])
+                .map(|t| t * sim.torque_scale),
             wrist: setup.wrist,
         };
         if let ArmServo::Impedance { .. } = setup.arm {
@@ -578,8 +607,7 @@ fn place_robot(sw: &mut SimWorld, h: &RobotHandles, q: &[f64]) -> Result<RobotBo
     let tool_joint = h.require_joint("tool_joint")?;
     let mut rolling = Vec::new();
     for name in CASTERS {
-        let b = h.require_link(name)?;
-        for c in sw.world.bodies[b].colliders().to_vec() {
+        for c in h.colliders_of(name)?.to_vec() {
             if let Some(col) = sw.world.colliders.get_mut(c) {
                 // Casters roll freely: no friction.
                 col.set_friction(0.0);
@@ -587,8 +615,8 @@ fn place_robot(sw: &mut SimWorld, h: &RobotHandles, q: &[f64]) -> Result<RobotBo
             rolling.push(c);
         }
     }
-    for w in wheels {
-        rolling.extend(sw.world.bodies[w].colliders().iter().copied());
+    for w in WHEELS {
+        rolling.extend(h.colliders_of(w)?.iter().copied());
     }
     Ok(RobotBodies {
         base,

@@ -1,0 +1,198 @@
+//! Meshes named by URDF `<mesh filename=...>`: where they are found and
+//! what they hold.
+//!
+//! Robot descriptions name meshes as `package://PKG/path` (a ROS package),
+//! `file:///abs/path`, or a path relative to the URDF. A package is looked
+//! up in the scenario's `[model] packages` table (directories relative to
+//! the scenario), then `ROS_PACKAGE_PATH` (an entry is the package itself,
+//! or holds it), then `AMENT_PREFIX_PATH` (`PREFIX/share/PKG`). STL, OBJ and
+//! Collada files are read by `mesh-loader` (the loader urdf-viz uses); every
+//! submesh of a file is merged, and the URDF's `scale` applied.
+//!
+//! Loaded meshes are kept for the process (by path), so the validation pass,
+//! the physics (collision meshes become convex hulls) and the logs (visual
+//! meshes are drawn) read each file once.
+
+use std::collections::{BTreeMap, HashMap};
+use std::path::{Path, PathBuf};
+use std::sync::{Arc, Mutex, OnceLock};
+
+pub use crate::record::TriMesh;
+
+/// The file extensions read, lower case.
+pub const FORMATS: [&str; 3] = ["stl", "obj", "dae"];
+
+/// Where meshes are searched besides the URDF's directory: the scenario's
+/// `[model] packages` (package name → directory, absolute or relative to
+/// the current directory) and the environment's package paths.
+#[derive(Debug, Clone, Default)]
+pub struct Search {
+    /// Package directories by name, from the scenario.
+    pub packages: BTreeMap<String, PathBuf>,
+    /// `ROS_PACKAGE_PATH` entries.
+    pub ros_package_path: Vec<PathBuf>,
+    /// `AMENT_PREFIX_PATH` entries.
+    pub ament_prefix_path: Vec<PathBuf>,
+}
+
+impl Search {
+    /// The scenario's packages and the process environment's paths.
+    pub fn from_env(packages: BTreeMap<String, PathBuf>) -> Search {
+        let split = |var: &str| -> Vec<PathBuf> {
+            std::env::var_os(var)
+                .map(|v| {
+                    std::env::split_paths(&v)
+                        .filter(|p| !p.as_os_str().is_empty())
+                        .collect()
+                })
+                .unwrap_or_default()
+        };
+        Search {
+            packages,
+            ros_package_path: split("ROS_PACKAGE_PATH"),
+            ament_prefix_path: split("AMENT_PREFIX_PATH"),
+        }
+    }
+
+    /// The directory of package `pkg`: the scenario's entry, then a
+    /// `ROS_PACKAGE_PATH` entry that holds it or is it, then
+    /// `AMENT_PREFIX_PATH`'s `share/PKG`; the first that exists.
+    pub fn package(&self, pkg: &str) -> Option<PathBuf> {
+        let mut candidates: Vec<PathBuf> = self.packages.get(pkg).cloned().into_iter().collect();
+        for e in &self.ros_package_path {
+            candidates.push(e.join(pkg));
+            if e.file_name().is_some_and(|n| n == pkg) {
+                candidates.push(e.clone());
+            }
+        }
+        candidates.extend(
+            self.ament_prefix_path
+                .iter()
+                .map(|e| e.join("share").join(pkg)),
+        );
+        candidates.into_iter().find(|d| d.is_dir())
+    }
+
+    /// The file a URDF mesh `filename` names, for a URDF in `urdf_dir`; the
+    /// error says where it looked.
+    pub fn resolve(&self, filename: &str, urdf_dir: &Path) -> Result<PathBuf, String> {
+        if let Some(rest) = filename.strip_prefix("package://") {
+            let (pkg, rel) = rest.split_once('/').unwrap_or((rest, ""));
+            let dir = self.package(pkg).ok_or_else(|| {
+                let tried: Vec<&str> = [
+                    ("[model] packages", !self.packages.is_empty()),
+                    ("ROS_PACKAGE_PATH", !self.ros_package_path.is_empty()),
+                    ("AMENT_PREFIX_PATH", !self.ament_prefix_path.is_empty()),
+                ]
+                .iter()
+                .filter(|(_, set)| *set)
+                .map(|(name, _)| *name)
+                .collect();
+                let looked = if tried.is_empty() {
+                    "no [model] packages entry, ROS_PACKAGE_PATH or AMENT_PREFIX_PATH names it".to_string()
+                } else {
+                    format!("not found through {}", tried.join(", "))
+                };
+                format!(
+                    "package `{pkg}` of `{filename}`: {looked} (name its directory in [model] packages = {{ {pkg} = \"DIR\" }})"
+                )
+            })?;
+            let path = dir.join(rel);
+            return if path.is_file() {
+                Ok(path)
+            } else {
+                Err(format!(
+                    "`{filename}`: no file `{rel}` in package `{pkg}` ({})",
+                    dir.display()
+                ))
+            };
+        }
+        let path = match filename.strip_prefix("file://") {
+            Some(p) => PathBuf::from(p),
+            None => urdf_dir.join(filename),
+        };
+        if path.is_file() {
+            Ok(path)
+        } else {
+            Err(format!("`{filename}`: no such file ({})", path.display()))
+        }
+    }
+}
+
+type Cache = Mutex<HashMap<(PathBuf, [u64; 3]), Arc<TriMesh>>>;
+
+fn cache() -> &'static Cache {
+    static CACHE: OnceLock<Cache> = OnceLock::new();
+    CACHE.get_or_init(Default::default)
+}
+
+/// Load the mesh file at `path` with `scale` (every submesh merged). The
+/// error is one line: an unknown format, a file that does not parse, a
+/// mesh without triangles.
+pub fn load(path: &Path, scale: [f64; 3]) -> Result<Arc<TriMesh>, String> {
+    let key = (path.to_path_buf(), scale.map(f64::to_bits));
+    if let Some(m) = cache().lock().ok().and_then(|c| c.get(&key).cloned()) {
+        return Ok(m);
+    }
+    let ext = path
+        .extension()
+        .map(|e| e.to_string_lossy().to_lowercase())
+        .unwrap_or_default();
+    if !FORMATS.contains(&ext.as_str()) {
+        return Err(format!(
+            "{}: unknown mesh format `.{ext}` (read: STL, OBJ, Collada .dae)",
+            path.display()
+        ));
+    }
+    let scene = mesh_loader::Loader::default().load(path).map_err(|e| {
+        format!(
+            "{}: not a readable mesh: {}",
+            path.display(),
+            one_line(&e.to_string())
+        )
+    })?;
+    let mut out = TriMesh {
+        vertices: Vec::new(),
+        triangles: Vec::new(),
+    };
+    for m in &scene.meshes {
+        let base = out.vertices.len() as u32;
+        out.vertices.extend(
+            m.vertices
+                .iter()
+                .map(|v| [0, 1, 2].map(|k| f64::from(v[k]) * scale[k])),
+        );
+        out.triangles
+            .extend(m.faces.iter().map(|f| f.map(|i| base + i)));
+    }
+    if out.triangles.is_empty() {
+        return Err(format!("{}: the mesh has no triangles", path.display()));
+    }
+    let bad = out.vertices.iter().flatten().any(|x| !x.is_finite())
+        || out
+            .triangles
+            .iter()
+            .flatten()
+            .any(|&i| i as usize >= out.vertices.len());
+    if bad {
+        return Err(format!(
+            "{}: the mesh has non-finite vertices or out-of-range faces",
+            path.display()
+        ));
+    }
+    let m = Arc::new(out);
+    if let Ok(mut c) = cache().lock() {
+        c.insert(key, m.clone());
+    }
+    Ok(m)
+}
+
+/// A message on one line.
+fn one_line(s: &str) -> String {
+    s.split_whitespace().collect::<Vec<_>>().join(" ")
+}
+
+/// The URDF `scale` of a mesh (1, 1, 1 when absent).
+pub fn scale_of(scale: &Option<urdf_rs::Vec3>) -> [f64; 3] {
+    scale.as_ref().map_or([1.0; 3], |s| s.0)
+}
