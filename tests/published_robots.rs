@@ -528,6 +528,20 @@ fn the_summary_says_what_was_read_from_the_urdf() {
     assert!(r["warnings"]
         .to_string()
         .contains("gives no <limit effort>"));
+    // The report says the same.
+    let out = cli(dir.path(), &["report", dir.path().to_str().unwrap()]);
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
+    let html = std::fs::read_to_string(dir.path().join("pocket_bot_plan/report.html")).unwrap();
+    assert!(html.contains("Robot as read from the URDF"));
+    assert!(html.contains("gives no &lt;limit effort&gt;"));
+    assert!(
+        html.contains("caster_back_link, imu_link"),
+        "lumped links listed"
+    );
 }
 
 #[test]

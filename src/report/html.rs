@@ -302,6 +302,7 @@ pub fn scenario_page(l: &Loaded) -> Result<String, String> {
             b.push_str(&single_figures(summary, series)?);
             b.push_str("<h2>Metrics</h2>");
             b.push_str(&metrics_table(summary, &l.regression));
+            b.push_str(&super::robot::section(summary));
             if let Some(m) = &l.margins {
                 b.push_str(&super::margins::section(m)?);
             }

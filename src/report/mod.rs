@@ -17,6 +17,7 @@ mod html;
 mod margins;
 mod markup;
 mod plots;
+mod robot;
 
 use crate::error::Error;
 use rayon::prelude::*;
