@@ -18,6 +18,7 @@ use crate::planner::sphere_triangle::SphereTriangleParams;
 use crate::planner::stokes_disk::StokesDiskParams;
 use crate::planner::stokes_space::StokesSpaceParams;
 use crate::systems::car::CarConfig;
+use crate::systems::declared::DeclaredConfig;
 use crate::systems::diff_drive::DiffDriveConfig;
 use crate::systems::disk::DiskModelConfig;
 use crate::systems::mobile_manipulator::MobileManipulatorConfig;
@@ -246,6 +247,12 @@ registry! {
             planners: [],
             outside: |m| Some(systems::car::build(m)),
         }
+        /// A model declared in the scenario: q' = f(q, u), its drives and read-back.
+        "declared" => Declared(DeclaredConfig) {
+            required: [],
+            planners: [],
+            outside: |m| Some(systems::declared::build(m)),
+        }
     }
     planners {
         /// Seed 000 §4.2 Stokes planner for the rolling disk.
@@ -379,6 +386,8 @@ mod tests {
             .map(|k| {
                 let radius = if k.starts_with("rolling") {
                     "radius = 1.0\n"
+                } else if *k == "declared" {
+                    "states = [\"x\"]\ninputs = [\"v\"]\nkinematics = { x = \"v\" }\nread = { x = \"base.x\" }\n"
                 } else {
                     ""
                 };

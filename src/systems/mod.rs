@@ -36,6 +36,7 @@
 //!    `URDF` and names the link or joint (`` link `wheel` ``).
 
 pub mod car;
+pub mod declared;
 pub mod diff_drive;
 pub mod disk;
 pub mod mobile_manipulator;
