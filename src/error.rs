@@ -63,6 +63,109 @@ pub enum Error {
     },
 }
 
+/// What a refusal during setup (a system's parameters, its physics built
+/// from a URDF) is about, so the scenario layer can point at the line
+/// without reading the message.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub enum About {
+    /// A scenario key (`model.radius`, `start`, `sim.perturb.command_latency`).
+    Key(String),
+    /// A URDF element (`link` or `joint`, by name), or the URDF as a whole.
+    Urdf(Option<(&'static str, String)>),
+    /// Neither.
+    Nothing,
+}
+
+/// A refusal during setup: one line, and what it is about.
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct SetupError {
+    /// What the refusal points at.
+    pub about: About,
+    /// The message (without the `` key `k`: `` a key's refusal is shown with).
+    detail: String,
+}
+
+impl std::fmt::Display for SetupError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match &self.about {
+            About::Key(k) => write!(f, "key `{k}`: {}", self.detail),
+            _ => f.write_str(&self.detail),
+        }
+    }
+}
+
+impl std::error::Error for SetupError {}
+
+/// Messages of lower layers (a model's own checks) are about nothing in particular.
+impl From<String> for SetupError {
+    fn from(message: String) -> SetupError {
+        SetupError::other(message)
+    }
+}
+
+impl From<&str> for SetupError {
+    fn from(message: &str) -> SetupError {
+        SetupError::other(message)
+    }
+}
+
+impl SetupError {
+    /// A refusal about scenario key `key`: shown as "key `key`: message".
+    pub fn key(key: impl Into<String>, message: impl std::fmt::Display) -> SetupError {
+        SetupError {
+            about: About::Key(key.into()),
+            detail: message.to_string(),
+        }
+    }
+
+    /// A refusal about the URDF as a whole; the message starts with `URDF`.
+    pub fn urdf(message: impl Into<String>) -> SetupError {
+        SetupError {
+            about: About::Urdf(None),
+            detail: message.into(),
+        }
+    }
+
+    /// A refusal about URDF element `elem` (`link`, `joint`) named `name`.
+    pub fn urdf_at(
+        elem: &'static str,
+        name: impl Into<String>,
+        message: impl Into<String>,
+    ) -> SetupError {
+        SetupError {
+            about: About::Urdf(Some((elem, name.into()))),
+            detail: message.into(),
+        }
+    }
+
+    /// A refusal about nothing in particular.
+    pub fn other(message: impl Into<String>) -> SetupError {
+        SetupError {
+            about: About::Nothing,
+            detail: message.into(),
+        }
+    }
+
+    /// The same refusal about `key` instead (a URDF problem a scenario key
+    /// is responsible for: the key gains the line, the message is kept).
+    pub fn under_key(self, key: impl Into<String>) -> SetupError {
+        SetupError::key(key, self.to_string())
+    }
+
+    /// The message without the key (a key's refusal: what is wrong with it).
+    pub fn reason(&self) -> &str {
+        &self.detail
+    }
+
+    /// The key the refusal is about, if it is about one.
+    pub fn key_name(&self) -> Option<&str> {
+        match &self.about {
+            About::Key(k) => Some(k),
+            _ => None,
+        }
+    }
+}
+
 impl Error {
     /// Shorthand for an input error without a line.
     pub fn input(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {

@@ -346,7 +346,7 @@ pub fn states_of(kind: &str) -> Result<(Vec<(String, String)>, Vec<String>), Str
     let planner = PlannerConfig::parse("file", toml_table("path = \"plan.csv\"")?)
         .map_err(|e| e.to_string())?
         .ok_or("unknown planner `file`")?;
-    let system = model_system(&model, &planner)?;
+    let system = model_system(&model, &planner).map_err(|e| e.to_string())?;
     let chart = system.file_model();
     let angular = chart.angular_states();
     let position = chart.position_states();

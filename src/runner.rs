@@ -9,7 +9,7 @@ use crate::integrate::{simulate_until, IdealStop, Trajectory};
 use crate::log::unit::LogUnit;
 use crate::log::Keep;
 use crate::model::{KinematicModel, State};
-use crate::physics::{replay_perturbed, ReplayError, ReplayOptions};
+use crate::physics::{replay, ReplayError, ReplayObserver, ReplayOptions};
 use crate::plan::{ControlLaw, Plan};
 use crate::record::{RunRecord, Series, SimTrajectory};
 use crate::systems::{EarlyAnalysis, SimFollower};
@@ -310,17 +310,16 @@ fn run_plan(
                 fed = traj.t.len();
             }
         };
-        let sim = replay_perturbed(
+        let mut observer = Observer {
+            after_step: |out: &SimTrajectory| send(&out.traj),
+            bar: &bar,
+            cancel: &opts.cancel,
+        };
+        let sim = replay(
             sys.as_mut(),
             plan,
             &replay_options(prep, opts),
-            &sc.sim.perturb,
-            &mut |out| {
-                send(&out.traj);
-                false
-            },
-            &mut |f| bar.set(f),
-            &opts.cancel,
+            &mut observer,
         );
         bar.finish();
         let sim = sim.map_err(|e| replay_error(prep, e))?;
@@ -407,6 +406,27 @@ pub fn ideal_run(prep: &Prepared, plan: &Plan, cancel: &Cancel) -> Result<Trajec
     })
 }
 
+/// The runner's view of a replay: its progress bar, the follower fed each
+/// new sample, and the run's cancel token.
+struct Observer<'a, F: FnMut(&SimTrajectory)> {
+    after_step: F,
+    bar: &'a crate::progress::Delayed,
+    cancel: &'a Cancel,
+}
+
+impl<F: FnMut(&SimTrajectory)> ReplayObserver for Observer<'_, F> {
+    fn progress(&mut self, fraction: f64) {
+        self.bar.set(fraction);
+    }
+    fn after_step(&mut self, so_far: &SimTrajectory) -> bool {
+        (self.after_step)(so_far);
+        false
+    }
+    fn cancelled(&self) -> bool {
+        self.cancel.is_cancelled()
+    }
+}
+
 /// How [`run`] replays the plan on the physics.
 pub fn replay_options(prep: &Prepared, opts: &RunOptions) -> ReplayOptions {
     let sc = &prep.scenario;
@@ -416,6 +436,7 @@ pub fn replay_options(prep: &Prepared, opts: &RunOptions) -> ReplayOptions {
         // Only the 3D logs read link poses, at their own rate.
         link_pose_every: (opts.log_root.is_some() && opts.keep == Keep::All)
             .then(|| pose_stride(opts.pose_rate, sc.sim.dt)),
+        perturbation: sc.sim.perturb,
     }
 }
 

@@ -11,7 +11,7 @@ use anholonomy::integrate::simulate;
 use anholonomy::model::bicycle::{ackermann, rear_speeds, Bicycle};
 use anholonomy::model::State;
 use anholonomy::physics::car::{CarNames, CarPhysics};
-use anholonomy::physics::{replay, PhysicsSettings, PhysicsSystem};
+use anholonomy::physics::{replay, PhysicsSettings, PhysicsSystem, ReplayOptions};
 use anholonomy::record::SimTrajectory;
 use proptest::prelude::*;
 use std::f64::consts::PI;
@@ -124,7 +124,7 @@ fn follow(start: [f64; 4], l: &[(f64, f64)], text: &str) -> (f64, f64, f64, f64,
     let mut sys =
         CarPhysics::new(&robot(text), Path::new("."), &names(), &MODEL, &start, &sim).unwrap();
     let ideal = simulate(&MODEL, &plan, &State::from_column_slice(&start), sim.dt);
-    let out = replay(&mut sys, &plan, sim.dt, 0.0, &mut |_| {}).unwrap();
+    let out = replay(&mut sys, &plan, &ReplayOptions::new(sim.dt, 0.0), &mut ()).unwrap();
     let want = exact(start, l);
     let q = out.traj.last();
     let dev = ideal
@@ -191,7 +191,7 @@ fn ackermann_steering_and_differential_on_an_arc() {
         &sim,
     )
     .unwrap();
-    let out = replay(&mut sys, &plan, sim.dt, 0.0, &mut |_| {}).unwrap();
+    let out = replay(&mut sys, &plan, &ReplayOptions::new(sim.dt, 0.0), &mut ()).unwrap();
     let [dl, dr] = ackermann(phi, 0.32, 0.12);
     assert!(dl > dr + 0.05, "{dl} {dr}");
     let [vl, vr] = rear_speeds(1.0, phi, 0.32, 0.12);
@@ -275,6 +275,7 @@ fn urdf_that_does_not_fit_is_refused() {
         )
         .err()
         .unwrap()
+        .to_string()
     };
     let short = Bicycle {
         wheelbase: 0.3,
@@ -351,7 +352,7 @@ fn starts_steered() {
     assert!((at("steer_left_deg") - dl.to_degrees()).abs() < 1e-9);
     assert!((at("steer_right_deg") - dr.to_degrees()).abs() < 1e-9);
     let plan = legs::plan(&[], [0.4, 0.5], 0.5, sim.dt);
-    let out = replay(&mut sys, &plan, sim.dt, 1.0, &mut |_| {}).unwrap();
+    let out = replay(&mut sys, &plan, &ReplayOptions::new(sim.dt, 1.0), &mut ()).unwrap();
     let q = out.traj.last();
     assert!(
         (q[0] - 0.5).hypot(q[1] - 0.5) < 1e-3 && (q[3] - start[3]).abs() < 1e-3,

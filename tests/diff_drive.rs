@@ -10,7 +10,7 @@ use anholonomy::integrate::simulate;
 use anholonomy::model::unicycle::Unicycle;
 use anholonomy::model::State;
 use anholonomy::physics::diff_drive::{DiffDriveNames, DiffDrivePhysics};
-use anholonomy::physics::{replay, PhysicsSettings, PhysicsSystem};
+use anholonomy::physics::{replay, PhysicsSettings, PhysicsSystem, ReplayOptions};
 use anholonomy::record::SimTrajectory;
 use proptest::prelude::*;
 use std::f64::consts::PI;
@@ -117,7 +117,7 @@ fn follow(
     let plan = legs::plan(l, [0.4, 1.0], 0.5, sim.dt);
     let mut sys = DiffDrivePhysics::new(&robot(text), Path::new("."), names, &start, &sim).unwrap();
     let ideal = simulate(&Unicycle, &plan, &State::from_column_slice(&start), sim.dt);
-    let out = replay(&mut sys, &plan, sim.dt, 0.0, &mut |_| {}).unwrap();
+    let out = replay(&mut sys, &plan, &ReplayOptions::new(sim.dt, 0.0), &mut ()).unwrap();
     let want = exact(start, l);
     let q = out.traj.last();
     let dev = ideal
@@ -183,7 +183,7 @@ fn geometry_from_the_urdf_and_rest() {
     assert_eq!(g.effort, [Some(1.0), Some(1.0)]);
     assert_eq!(sys.state().as_slice(), &start);
     let plan = legs::plan(&[], [0.4, 1.0], 0.5, sim.dt);
-    let out = replay(&mut sys, &plan, sim.dt, 1.0, &mut |_| {}).unwrap();
+    let out = replay(&mut sys, &plan, &ReplayOptions::new(sim.dt, 1.0), &mut ()).unwrap();
     // Settling onto the caster pitches the body and rolls the held wheels a little.
     let q = out.traj.last();
     assert!((q[0] - 1.0).hypot(q[1] + 2.0) < 1e-3, "{q}");
@@ -261,6 +261,7 @@ fn urdf_that_does_not_fit_is_refused() {
         DiffDrivePhysics::new(&robot(&text), Path::new("."), names, &[0.0; 3], &sim)
             .err()
             .unwrap()
+            .to_string()
     };
     let swapped = DiffDriveNames {
         left: vec!["right_wheel_joint".into()],
@@ -315,7 +316,7 @@ fn hard_acceleration_spins_the_wheels() {
         &sim,
     )
     .unwrap();
-    let out = replay(&mut sys, &plan, sim.dt, 0.5, &mut |_| {}).unwrap();
+    let out = replay(&mut sys, &plan, &ReplayOptions::new(sim.dt, 0.5), &mut ()).unwrap();
     let (g, h) = (slip_max(&gentle, "_lon"), slip_max(&out, "_lon"));
     assert!(g < 0.01 && h > 0.05, "gentle {g} m/s, hard {h} m/s");
 }

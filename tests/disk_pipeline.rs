@@ -191,17 +191,16 @@ fn failure_messages_show_the_breach() {
 /// not touch the physics.
 #[test]
 fn thinned_link_poses_are_the_full_rate_ones() {
-    use anholonomy::physics::{replay_with, ReplayOptions};
+    use anholonomy::physics::{replay as physics_replay, ReplayOptions};
     let prep = prepared(&root().join("scenarios/disk_paper.toml"));
     let sim = &prep.scenario.sim;
     let replay = |every: Option<usize>| {
         let mut sys = prep.physics().unwrap();
         let opts = ReplayOptions {
-            dt: sim.dt,
-            settle: sim.settle,
             link_pose_every: every,
+            ..ReplayOptions::new(sim.dt, sim.settle)
         };
-        replay_with(sys.as_mut(), &prep.planned, &opts, &mut |_| {}).unwrap()
+        physics_replay(sys.as_mut(), &prep.planned, &opts, &mut ()).unwrap()
     };
     let (full, thin, none) = (replay(Some(1)), replay(Some(7)), replay(None));
     let n = full.traj.len();

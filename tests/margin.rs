@@ -5,7 +5,7 @@ mod common;
 use anholonomy::integrate::step_count;
 use anholonomy::model::{Input, State};
 use anholonomy::physics::perturb::Perturbation;
-use anholonomy::physics::{replay_perturbed, ReplayOptions};
+use anholonomy::physics::{replay, ReplayOptions};
 use anholonomy::plan::{ControlLaw, Plan};
 use anholonomy::runner::{run, RunOptions, RunOutcome};
 use common::*;
@@ -192,18 +192,10 @@ fn actuator_lag_matches_its_closed_form_step_response() {
         dt,
         settle: 0.0,
         link_pose_every: None,
+        perturbation: pert,
     };
     let mut sys = prep.physics().unwrap();
-    let sim = replay_perturbed(
-        sys.as_mut(),
-        &step,
-        &opts,
-        &pert,
-        &mut |_| false,
-        &mut |_| {},
-        &Default::default(),
-    )
-    .unwrap();
+    let sim = replay(sys.as_mut(), &step, &opts, &mut ()).unwrap();
     assert_eq!(sim.received.len(), sim.traj.t.len());
     for k in 0..600 {
         let (t0, t1) = (k as f64 * dt, (k + 1) as f64 * dt);
@@ -480,22 +472,11 @@ fn early_stop_families_hold_on_prefixes_of_real_runs() {
         let ctx = Ctx::new(&prep);
         let sc = &prep.scenario;
         let opts = ReplayOptions {
-            dt: sc.sim.dt,
-            settle: sc.sim.settle,
             link_pose_every: None,
+            ..ReplayOptions::new(sc.sim.dt, sc.sim.settle)
         };
         let mut sys = prep.physics().unwrap();
-        let nominal = Perturbation::default();
-        let sim = replay_perturbed(
-            sys.as_mut(),
-            &prep.planned,
-            &opts,
-            &nominal,
-            &mut |_| false,
-            &mut |_| {},
-            &Default::default(),
-        )
-        .unwrap();
+        let sim = replay(sys.as_mut(), &prep.planned, &opts, &mut ()).unwrap();
         let full = ctx.metrics(&ctx.ideal, &sim);
         let value =
             |m: &[(String, f64)], k: &str| m.iter().find(|(n, _)| n == k).map(|(_, v)| *v).unwrap();

@@ -244,7 +244,7 @@ fn documented_ranges_are_the_enforced_ones() {
                     } else {
                         anholonomy::scenario::build_system(&v.model, &v.planner)
                             .map(|_| ())
-                            .map_err(|m| v.error(m))
+                            .map_err(|e| v.setup_error(&e))
                     }
                 });
                 if let Err(e) = res {

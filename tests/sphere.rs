@@ -3,7 +3,7 @@
 //! reporting and input errors.
 
 mod common;
-use anholonomy::physics::replay;
+use anholonomy::physics::{replay, ReplayOptions};
 use anholonomy::record::SimTrajectory;
 use anholonomy::runner::Prepared;
 use anholonomy::scenario::Scenario;
@@ -16,7 +16,13 @@ fn replay_file(path: &Path) -> SimTrajectory {
     let plan = prep.plan().unwrap();
     let mut sys = prep.physics().unwrap();
     let sc = &prep.scenario;
-    replay(sys.as_mut(), &plan, sc.sim.dt, sc.sim.settle, &mut |_| {}).unwrap()
+    replay(
+        sys.as_mut(),
+        &plan,
+        &ReplayOptions::new(sc.sim.dt, sc.sim.settle),
+        &mut (),
+    )
+    .unwrap()
 }
 
 fn channel<'a>(sim: &'a SimTrajectory, name: &str) -> &'a [f64] {

@@ -538,8 +538,8 @@ fn cancelled_batched_replay_stops() {
                     dt: v.scenario.sim.dt,
                     settle: v.scenario.sim.settle,
                     link_pose_every: None,
+                    perturbation: v.scenario.sim.perturb,
                 },
-                perturb: &v.scenario.sim.perturb,
             })
             .collect();
         let cancel = anholonomy::cancel::Cancel::new();

@@ -108,6 +108,13 @@ pub struct Monitor<'a> {
     pub stopped: Option<Stopped>,
 }
 
+/// A margin level's replay stops when its verdict is known.
+impl crate::physics::ReplayObserver for Monitor<'_> {
+    fn after_step(&mut self, so_far: &SimTrajectory) -> bool {
+        self.check(so_far)
+    }
+}
+
 impl<'a> Monitor<'a> {
     /// A monitor for a run of at most `n_max` steps of `dt` (no checkpoints
     /// when no gate of the scenario can be judged early).

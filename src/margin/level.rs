@@ -9,7 +9,7 @@ use crate::compare::{compare, metric_spec};
 use crate::gate::Breach;
 use crate::integrate::{simulate, step_count, Trajectory};
 use crate::physics::perturb::{self, Perturbation};
-use crate::physics::{replay_perturbed, ReplayOptions};
+use crate::physics::{replay, ReplayOptions};
 use crate::record::SimTrajectory;
 use crate::validate::Prepared;
 use serde::Serialize;
@@ -167,18 +167,11 @@ fn run_inner(ctx: &Ctx<'_>, p: &Perturbation, seed: Option<u64>) -> Run {
         dt,
         settle: sc.sim.settle,
         link_pose_every: None,
+        perturbation: *p,
     };
     let n_max = step_count(prep.planned.duration + sc.sim.settle, dt) + perturb::extra_steps(p, dt);
     let mut monitor = Monitor::new(ctx, n_max, dt);
-    let sim = replay_perturbed(
-        sys.as_mut(),
-        &prep.planned,
-        &opts,
-        p,
-        &mut |s| monitor.check(s),
-        &mut |_| {},
-        &crate::cancel::Cancel::default(),
-    );
+    let sim = replay(sys.as_mut(), &prep.planned, &opts, &mut monitor);
     let sim = match sim {
         Ok(s) => s,
         Err(e) => return failed(e.to_string()),

@@ -7,6 +7,7 @@
 //! else of `crate::scenario`); this module picks the system for a pair.
 
 use super::schema::{by_kind, Schema};
+use crate::error::SetupError;
 use crate::physics::required::Required;
 use crate::planner::dilf::DilfParams;
 use crate::planner::endogenous::EndogenousParams;
@@ -174,7 +175,7 @@ macro_rules! registry {
         fn builtin_system(
             model: &ModelConfig,
             planner: &PlannerConfig,
-        ) -> Result<Box<dyn System>, String> {
+        ) -> Result<Box<dyn System>, SetupError> {
             match (model, planner) {
                 $(
                     $( (ModelConfig::$MVar($m), PlannerConfig::$PVm($p)) => $build, )*
@@ -193,7 +194,7 @@ macro_rules! registry {
 
 /// A model with planners of its own: plans from outside wrap its system
 /// built with its first planner ([`model_system`]), never this.
-fn own_planners<M>(_: &M) -> Option<Result<Box<dyn System>, String>> {
+fn own_planners<M>(_: &M) -> Option<Result<Box<dyn System>, SetupError>> {
     None
 }
 
@@ -305,7 +306,7 @@ impl PlannerConfig {
 pub fn build_system(
     model: &ModelConfig,
     planner: &PlannerConfig,
-) -> Result<Box<dyn System>, String> {
+) -> Result<Box<dyn System>, SetupError> {
     let source = match planner {
         PlannerConfig::File(p) => Source::File(p.clone()),
         PlannerConfig::External(p) => Source::External(p.clone()),
@@ -323,7 +324,7 @@ pub fn build_system(
 pub(crate) fn model_system(
     model: &ModelConfig,
     outside: &PlannerConfig,
-) -> Result<Box<dyn System>, String> {
+) -> Result<Box<dyn System>, SetupError> {
     let first = PAIRS
         .iter()
         .find(|(m, _)| *m == model.kind())
@@ -333,8 +334,8 @@ pub(crate) fn model_system(
     };
     let empty = Spanned::new(0..0, DeValue::Table(toml::de::DeTable::new()));
     let defaults = PlannerConfig::parse(kind, empty)
-        .map_err(|e| format!("planner `{kind}` has no defaults: {e}"))?
-        .ok_or_else(|| format!("unknown planner `{kind}` in PAIRS"))?;
+        .map_err(|e| SetupError::other(format!("planner `{kind}` has no defaults: {e}")))?
+        .ok_or_else(|| SetupError::other(format!("unknown planner `{kind}` in PAIRS")))?;
     builtin_system(model, &defaults)
 }
 
@@ -357,13 +358,16 @@ pub fn planners_for(model: &str) -> Vec<&'static str> {
 }
 
 /// The error for a planner that does not plan for the model.
-pub(crate) fn mismatch(model: &str, planner: &str) -> String {
+pub(crate) fn mismatch(model: &str, planner: &str) -> SetupError {
     let fits = planners_for(model);
     let fits = match fits.split_last() {
         Some((last, rest)) if !rest.is_empty() => format!("{} or {last}", rest.join(", ")),
         _ => fits.join(""),
     };
-    format!("key `planner.kind`: `{planner}` does not plan for model `{model}` (use {fits})")
+    SetupError::key(
+        "planner.kind",
+        format!("`{planner}` does not plan for model `{model}` (use {fits})"),
+    )
 }
 
 #[cfg(test)]
@@ -424,7 +428,7 @@ mod tests {
                     r.err()
                 );
                 if let Err(e) = r {
-                    assert!(e.starts_with("key `planner.kind`"), "{e}");
+                    assert!(e.to_string().starts_with("key `planner.kind`"), "{e}");
                 }
             }
         }

@@ -166,6 +166,26 @@ impl KeyIndex {
             .map(|e| e.path.clone())
     }
 
+    /// An input error about key `key` of this file, at its line:
+    /// "key `key`: message".
+    pub fn error_at(&self, path: &Path, key: &str, message: impl std::fmt::Display) -> Error {
+        Error::Input {
+            path: path.into(),
+            line: self.line_of(key),
+            message: format!("key `{key}`: {message}"),
+        }
+    }
+
+    /// A setup refusal about this file: at the line of the key it is about,
+    /// if it is about one.
+    pub fn setup_error(&self, path: &Path, e: &crate::error::SetupError) -> Error {
+        Error::Input {
+            path: path.into(),
+            line: e.key_name().and_then(|k| self.line_of(k)),
+            message: e.to_string(),
+        }
+    }
+
     /// An input error about this file; the line comes from the key the
     /// message names (see [`KeyIndex::key_of_message`]).
     pub fn error(&self, path: &Path, message: impl Into<String>) -> Error {

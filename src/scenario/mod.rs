@@ -377,10 +377,15 @@ impl Scenario {
         self.keys.error(&self.path, message)
     }
 
-    /// Like [`Scenario::error`] for messages from planners and physics: when
-    /// they mention a key of this file, the message is prefixed with it.
-    pub fn error_about(&self, message: &str) -> Error {
-        self.keys.error_about(&self.path, message)
+    /// An input error about `key`, at its line: "key `key`: message".
+    pub fn error_at(&self, key: &str, message: impl std::fmt::Display) -> Error {
+        self.keys.error_at(&self.path, key, message)
+    }
+
+    /// A setup refusal (a system's, its physics') about this scenario: at
+    /// the line of the key it is about.
+    pub fn setup_error(&self, e: &crate::error::SetupError) -> Error {
+        self.keys.setup_error(&self.path, e)
     }
 
     /// Whether `key` is written in the file.
@@ -574,7 +579,7 @@ impl Scenario {
         // Match model and planner before reading the planner's parameters: a
         // wrong `kind` explains the parameters the other planner lacks.
         if !config::plans_for(&model_kind, &planner_kind) {
-            return Err(bad(config::mismatch(&model_kind, &planner_kind)));
+            return Err(keys.setup_error(path, &config::mismatch(&model_kind, &planner_kind)));
         }
         let rest = Spanned::new(0..text.len(), DeValue::Table(root));
         let file = ScenarioFile::deserialize(ValueDeserializer::from(rest)).map_err(serde)?;
@@ -640,7 +645,7 @@ impl Scenario {
         };
         let base = path.parent().unwrap_or(Path::new("."));
         planner.set_base(base);
-        let system = build_system(&model, &planner).map_err(&bad)?;
+        let system = build_system(&model, &planner).map_err(|e| keys.setup_error(path, &e))?;
         // start/goal are written in the system's file chart (usually the model state).
         let chart = system.file_model();
         let (n_state, n_input) = (

@@ -125,7 +125,6 @@ pub fn run_group(
                 sys: m.sys.as_mut(),
                 plan: &m.prep.planned,
                 opts: runner::replay_options(&m.prep, &opts),
-                perturb: &m.prep.scenario.sim.perturb,
             })
             .collect();
         let sims = host.replay(&mut lanes, cancel);

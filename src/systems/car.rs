@@ -10,6 +10,7 @@
 use super::diff_drive::{check_names, no_planner};
 use super::wheeled::{slip_metrics, SLIP_METRICS};
 use super::System;
+use crate::error::SetupError;
 use crate::integrate::Trajectory;
 use crate::model::bicycle::Bicycle;
 use crate::model::{KinematicModel, State};
@@ -97,13 +98,13 @@ struct Car {
 }
 
 /// Build the car system.
-pub fn build(cfg: &CarConfig) -> Result<Box<dyn System>, String> {
+pub fn build(cfg: &CarConfig) -> Result<Box<dyn System>, SetupError> {
     // Written to also reject NaN (the scenario parser already rejects it).
     if cfg.wheelbase.is_nan() || cfg.wheelbase <= 0.0 {
-        return Err("key `model.wheelbase`: must be > 0".into());
+        return Err(SetupError::key("model.wheelbase", "must be > 0"));
     }
     if !(cfg.max_steer_deg > 0.0 && cfg.max_steer_deg < 90.0) {
-        return Err("key `model.max_steer_deg`: must be in (0, 90)".into());
+        return Err(SetupError::key("model.max_steer_deg", "must be in (0, 90)"));
     }
     check_names(&[
         ("base_link", &cfg.base_link),
@@ -178,7 +179,7 @@ impl System for Car {
         urdf_dir: &Path,
         start: &[f64],
         sim: &PhysicsSettings,
-    ) -> Result<Box<dyn PhysicsSystem>, String> {
+    ) -> Result<Box<dyn PhysicsSystem>, SetupError> {
         Ok(Box::new(CarPhysics::new(
             robot,
             urdf_dir,

@@ -7,6 +7,7 @@
 
 use super::diff_drive::no_planner;
 use super::System;
+use crate::error::SetupError;
 use crate::model::declared::{Declared, Expr};
 use crate::model::{KinematicModel, State};
 use crate::physics::declared::{DeclaredPhysics, Read, Rig};
@@ -79,7 +80,7 @@ fn is_name(s: &str) -> bool {
 
 /// Build the declared system: every name and expression checked, each
 /// error naming its `[model]` key.
-pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, String> {
+pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, SetupError> {
     let params: Vec<String> = cfg.params.keys().cloned().collect();
     let mut seen: BTreeMap<&str, &str> = BTreeMap::new();
     for (key, list) in [
@@ -88,30 +89,36 @@ pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, String> {
         ("params", &params),
     ] {
         if key != "params" && list.is_empty() {
-            return Err(format!("key `model.{key}`: at least one name"));
+            return Err(SetupError::key(format!("model.{key}"), "at least one name"));
         }
         for n in list {
             if !is_name(n) {
-                return Err(format!(
-                    "key `model.{key}`: `{n}` is not a name (letters, digits and _, not starting with a digit)"
+                return Err(SetupError::key(
+                    format!("model.{key}"),
+                    format!(
+                        "`{n}` is not a name (letters, digits and _, not starting with a digit)"
+                    ),
                 ));
             }
             if crate::model::declared::reserved(n) {
-                return Err(format!(
-                    "key `model.{key}`: `{n}` is a function of the expression language"
+                return Err(SetupError::key(
+                    format!("model.{key}"),
+                    format!("`{n}` is a function of the expression language"),
                 ));
             }
             if let Some(other) = seen.insert(n, key) {
-                return Err(format!(
-                    "key `model.{key}`: `{n}` is also one of `model.{other}`"
+                return Err(SetupError::key(
+                    format!("model.{key}"),
+                    format!("`{n}` is also one of `model.{other}`"),
                 ));
             }
         }
     }
     for (k, v) in &cfg.params {
         if !v.is_finite() {
-            return Err(format!(
-                "key `model.params.{k}`: must be a finite number, got {v}"
+            return Err(SetupError::key(
+                format!("model.params.{k}"),
+                format!("must be a finite number, got {v}"),
             ));
         }
     }
@@ -120,9 +127,9 @@ pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, String> {
         match cfg.states.iter().position(|s| s == a) {
             Some(i) => angles.push(i),
             None => {
-                return Err(format!(
-                    "key `model.angles`: `{a}` is not a state (states: {})",
-                    cfg.states.join(", ")
+                return Err(SetupError::key(
+                    "model.angles",
+                    format!("`{a}` is not a state (states: {})", cfg.states.join(", ")),
                 ))
             }
         }
@@ -130,18 +137,24 @@ pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, String> {
     // One equation and one read-back per state, and nothing else.
     for (table, map) in [("kinematics", &cfg.kinematics), ("read", &cfg.read)] {
         if let Some(s) = cfg.states.iter().find(|s| !map.contains_key(*s)) {
-            return Err(format!("key `model.{table}`: state `{s}` has no entry"));
+            return Err(SetupError::key(
+                format!("model.{table}"),
+                format!("state `{s}` has no entry"),
+            ));
         }
         if let Some(k) = map.keys().find(|k| !cfg.states.contains(k)) {
-            return Err(format!(
-                "key `model.{table}.{k}`: `{k}` is not a state (states: {})",
-                cfg.states.join(", ")
+            return Err(SetupError::key(
+                format!("model.{table}.{k}"),
+                format!("`{k}` is not a state (states: {})", cfg.states.join(", ")),
             ));
         }
     }
     for k in cfg.limits.keys() {
         if !cfg.inputs.contains(k) {
-            return Err(format!("key `model.limits.{k}`: `{k}` is not an input"));
+            return Err(SetupError::key(
+                format!("model.limits.{k}"),
+                format!("`{k}` is not an input"),
+            ));
         }
     }
     if let Some((k, v)) = cfg
@@ -149,11 +162,14 @@ pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, String> {
         .iter()
         .find(|(_, v)| !(**v > 0.0 && v.is_finite()))
     {
-        return Err(format!("key `model.limits.{k}`: must be > 0, got {v}"));
+        return Err(SetupError::key(
+            format!("model.limits.{k}"),
+            format!("must be > 0, got {v}"),
+        ));
     }
     let names = Declared::slot_names(&cfg.states, &cfg.inputs, &params);
     let expr = |table: &str, key: &str, text: &str| {
-        Expr::parse(text, &names).map_err(|e| format!("key `model.{table}.{key}`: {e}"))
+        Expr::parse(text, &names).map_err(|e| SetupError::key(format!("model.{table}.{key}"), e))
     };
     let f = cfg
         .states
@@ -163,12 +179,14 @@ pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, String> {
     let drives = |table: &str, map: &BTreeMap<String, String>| {
         map.iter()
             .map(|(j, t)| Ok((j.clone(), expr(table, j, t)?)))
-            .collect::<Result<Vec<_>, String>>()
+            .collect::<Result<Vec<_>, SetupError>>()
     };
     let reads = cfg
         .states
         .iter()
-        .map(|s| Read::parse(&cfg.read[s]).map_err(|e| format!("key `model.read.{s}`: {e}")))
+        .map(|s| {
+            Read::parse(&cfg.read[s]).map_err(|e| SetupError::key(format!("model.read.{s}"), e))
+        })
         .collect::<Result<Vec<_>, _>>()?;
     // The goal arrow: a yaw read of the first link that is read.
     let heading = reads.iter().position(
@@ -223,7 +241,7 @@ impl System for DeclaredSystem {
         urdf_dir: &Path,
         start: &[f64],
         sim: &PhysicsSettings,
-    ) -> Result<Box<dyn PhysicsSystem>, String> {
+    ) -> Result<Box<dyn PhysicsSystem>, SetupError> {
         Ok(Box::new(DeclaredPhysics::new(
             robot,
             urdf_dir,

@@ -9,6 +9,7 @@
 
 use super::wheeled::{slip_metrics, SLIP_METRICS};
 use super::System;
+use crate::error::SetupError;
 use crate::integrate::Trajectory;
 use crate::model::unicycle::Unicycle;
 use crate::model::{KinematicModel, State};
@@ -66,14 +67,15 @@ fn default_casters() -> Vec<String> {
 }
 
 /// Names given in `[model]`: none empty, none given twice.
-pub(crate) fn check_names(names: &[(&str, &str)]) -> Result<(), String> {
+pub(crate) fn check_names(names: &[(&str, &str)]) -> Result<(), SetupError> {
     for (i, (key, name)) in names.iter().enumerate() {
         if name.trim().is_empty() {
-            return Err(format!("key `model.{key}`: must not be empty"));
+            return Err(SetupError::key(format!("model.{key}"), "must not be empty"));
         }
         if let Some((other, _)) = names[..i].iter().find(|(_, n)| n == name) {
-            return Err(format!(
-                "key `model.{key}`: `{name}` is also `model.{other}` (each part needs its own name)"
+            return Err(SetupError::key(
+                format!("model.{key}"),
+                format!("`{name}` is also `model.{other}` (each part needs its own name)"),
             ));
         }
     }
@@ -90,20 +92,21 @@ fn side(
     many: &[String],
     default: &str,
     (one_key, many_key): (&'static str, &'static str),
-) -> Result<(Vec<String>, &'static str), String> {
+) -> Result<(Vec<String>, &'static str), SetupError> {
     if many.is_empty() {
         return Ok((vec![one.to_string()], one_key));
     }
     if one != default {
-        return Err(format!(
-            "key `model.{many_key}`: give either `{one_key}` or `{many_key}`, not both"
+        return Err(SetupError::key(
+            format!("model.{many_key}"),
+            format!("give either `{one_key}` or `{many_key}`, not both"),
         ));
     }
     Ok((many.to_vec(), many_key))
 }
 
 /// Build the differential-drive system.
-pub fn build(cfg: &DiffDriveConfig) -> Result<Box<dyn System>, String> {
+pub fn build(cfg: &DiffDriveConfig) -> Result<Box<dyn System>, SetupError> {
     let (left, lk) = side(
         &cfg.left_wheel_joint,
         &cfg.left_wheel_joints,
@@ -185,7 +188,7 @@ impl System for DiffDrive {
         urdf_dir: &Path,
         start: &[f64],
         sim: &PhysicsSettings,
-    ) -> Result<Box<dyn PhysicsSystem>, String> {
+    ) -> Result<Box<dyn PhysicsSystem>, SetupError> {
         Ok(Box::new(DiffDrivePhysics::new(
             robot,
             urdf_dir,

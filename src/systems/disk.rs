@@ -1,6 +1,7 @@
 //! The rolling disk: seed 000 §4.2 Stokes planner, `models/rolling_disk.urdf`.
 
 use super::System;
+use crate::error::SetupError;
 use crate::model::disk::RollingDisk;
 use crate::model::{KinematicModel, State};
 use crate::paper::{rows_from, same, PaperRow};
@@ -33,10 +34,13 @@ struct Disk {
 }
 
 /// Build the disk system.
-pub fn build(cfg: &DiskModelConfig, params: &StokesDiskParams) -> Result<Box<dyn System>, String> {
+pub fn build(
+    cfg: &DiskModelConfig,
+    params: &StokesDiskParams,
+) -> Result<Box<dyn System>, SetupError> {
     // Written to also reject NaN (the scenario parser already rejects it).
     if cfg.radius.is_nan() || cfg.radius <= 0.0 {
-        return Err("key `model.radius`: must be > 0".into());
+        return Err(SetupError::key("model.radius", "must be > 0"));
     }
     Ok(Box::new(Disk {
         model: RollingDisk { r: cfg.radius },
@@ -73,7 +77,7 @@ impl System for Disk {
         urdf_dir: &Path,
         start: &[f64],
         sim: &PhysicsSettings,
-    ) -> Result<Box<dyn PhysicsSystem>, String> {
+    ) -> Result<Box<dyn PhysicsSystem>, SetupError> {
         let p = DiskPhysics::new(robot, urdf_dir, self.model.r, start, sim)?;
         Ok(Box::new(p))
     }

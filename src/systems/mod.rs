@@ -14,9 +14,10 @@
 //!    with several planners defines an enum of them (e.g.
 //!    [`space_robot::SpacePlanner`]).
 //! 2. Write `pub fn build(cfg: &Config, planner: ...) -> Result<Box<dyn
-//!    System>, String>`: check the parameters that need no file (errors
-//!    start with `` key `model.<key>`: `` or `` key `planner.<key>`: ``, so
-//!    the scenario layer can add the line).
+//!    System>, SetupError>`: check the parameters that need no file; a
+//!    refusal says what it is about ([`crate::error::SetupError::key`] for
+//!    a `[model]` or `[planner]` key, `urdf_at` for a URDF element), so the
+//!    scenario layer points at the line.
 //! 3. Declare the URDF links and joints the physics looks up by name
 //!    (`REQUIRED` in the physics module, a [`crate::physics::required::Required`]
 //!    table; a `[model]` key may rename them) and return them, as named by
@@ -46,6 +47,7 @@ pub mod space_robot;
 pub mod sphere;
 pub mod wheeled;
 
+use crate::error::SetupError;
 use crate::integrate::Trajectory;
 use crate::metric::Direction;
 use crate::model::{KinematicModel, State};
@@ -134,7 +136,7 @@ pub trait System: Send + Sync {
         urdf_dir: &Path,
         start: &[f64],
         sim: &PhysicsSettings,
-    ) -> Result<Box<dyn PhysicsSystem>, String>;
+    ) -> Result<Box<dyn PhysicsSystem>, SetupError>;
     /// Goal heading as a world yaw (rad) for the 3D views, if the model has one.
     fn goal_heading(&self, _goal: &State) -> Option<f64> {
         None

@@ -5,6 +5,7 @@
 //! later gets both without code of its own.
 
 use super::{EarlyAnalysis, SimFollower, System};
+use crate::error::SetupError;
 use crate::integrate::Trajectory;
 use crate::metric::Direction;
 use crate::model::{KinematicModel, State};
@@ -30,7 +31,7 @@ pub enum Source {
 /// from `source`. Checks what needs no planning: the plan file exists, the
 /// law's numbers are in range and its program is executable; errors name
 /// the scenario key.
-pub fn wrap(inner: Box<dyn System>, source: Source) -> Result<Box<dyn System>, String> {
+pub fn wrap(inner: Box<dyn System>, source: Source) -> Result<Box<dyn System>, SetupError> {
     let program = match &source {
         Source::File(p) => {
             p.check()?;
@@ -72,9 +73,13 @@ impl System for OwnPlan {
             Source::External(p) => {
                 let program = match &self.program {
                     Some(prog) => prog.clone(),
-                    None => p.check().map_err(|reason| PlanError::InvalidParameter {
-                        name: "command".into(),
-                        reason,
+                    None => p.check().map_err(|e| PlanError::InvalidParameter {
+                        name: e
+                            .key_name()
+                            .and_then(|k| k.strip_prefix("planner."))
+                            .unwrap_or("command")
+                            .into(),
+                        reason: e.reason().into(),
                     })?,
                 };
                 Ok(external::plan(
@@ -97,7 +102,7 @@ impl System for OwnPlan {
         urdf_dir: &Path,
         start: &[f64],
         sim: &PhysicsSettings,
-    ) -> Result<Box<dyn PhysicsSystem>, String> {
+    ) -> Result<Box<dyn PhysicsSystem>, SetupError> {
         self.inner.physics(robot, urdf_dir, start, sim)
     }
     fn goal_heading(&self, goal: &State) -> Option<f64> {

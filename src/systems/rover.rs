@@ -9,6 +9,7 @@
 //! which is deterministic, but not on Rapier).
 
 use super::System;
+use crate::error::SetupError;
 use crate::integrate::{simulate, Trajectory};
 use crate::metric::Direction;
 use crate::model::rover::{RoverGeometry, SwitchingRover, SwitchingSignal};
@@ -88,12 +89,18 @@ struct Rover {
 }
 
 /// Build the rover system.
-pub fn build(cfg: &RoverConfig, params: &RoverPrimitiveParams) -> Result<Box<dyn System>, String> {
+pub fn build(
+    cfg: &RoverConfig,
+    params: &RoverPrimitiveParams,
+) -> Result<Box<dyn System>, SetupError> {
     cfg.geometry
         .validate()
-        .map_err(|e| format!("key `model.geometry`: {e}"))?;
+        .map_err(|e| SetupError::key("model.geometry", e))?;
     if !(cfg.envelope_tolerance.is_finite() && cfg.envelope_tolerance >= 0.0) {
-        return Err("key `model.envelope_tolerance`: must be finite and ≥ 0".into());
+        return Err(SetupError::key(
+            "model.envelope_tolerance",
+            "must be finite and ≥ 0",
+        ));
     }
     let params = params.clone();
     let horizon = if params.horizon.is_finite() {
@@ -106,7 +113,7 @@ pub fn build(cfg: &RoverConfig, params: &RoverPrimitiveParams) -> Result<Box<dyn
         SwitchingConfig::B => SwitchingSignal::FixedB,
         SwitchingConfig::Telegraph { seed, rate } => {
             SwitchingSignal::telegraph(seed, rate, horizon)
-                .map_err(|e| format!("key `model.switching`: {e}"))?
+                .map_err(|e| SetupError::key("model.switching", e))?
         }
     };
     Ok(Box::new(Rover {
@@ -236,7 +243,7 @@ impl System for Rover {
         urdf_dir: &Path,
         start: &[f64],
         sim: &PhysicsSettings,
-    ) -> Result<Box<dyn PhysicsSystem>, String> {
+    ) -> Result<Box<dyn PhysicsSystem>, SetupError> {
         Ok(Box::new(RoverPhysics::new(
             robot,
             urdf_dir,

@@ -20,6 +20,7 @@
 
 use super::System;
 use crate::compare::{coord_error, sample};
+use crate::error::SetupError;
 use crate::integrate::Trajectory;
 use crate::model::space_manipulator::SpaceManipulator;
 use crate::model::space_robot::{SpaceRobot, SpaceRobotModel};
@@ -79,16 +80,22 @@ const CHANNEL_METRICS: [(&str, &str); 6] = [
 ];
 
 /// Build the space-robot system.
-pub fn build(_cfg: &SpaceRobotConfig, planner: SpacePlanner) -> Result<Box<dyn System>, String> {
+pub fn build(
+    _cfg: &SpaceRobotConfig,
+    planner: SpacePlanner,
+) -> Result<Box<dyn System>, SetupError> {
     if let Planner::Endogenous(p) = &planner {
         if p.via_deg
             .iter()
             .any(|v| v.len() != 3 || v.iter().any(|x| !x.is_finite()))
         {
-            return Err("key `planner.via_deg`: each via point needs 3 finite angles (θ0, θ1, θ2) in degrees".into());
+            return Err(SetupError::key(
+                "planner.via_deg",
+                "each via point needs 3 finite angles (θ0, θ1, θ2) in degrees",
+            ));
         }
         if !(p.segment_time.is_finite() && p.segment_time > 0.0) {
-            return Err("key `planner.segment_time`: must be > 0".into());
+            return Err(SetupError::key("planner.segment_time", "must be > 0"));
         }
     }
     Ok(Box::new(Space {
@@ -163,7 +170,7 @@ impl System for Space {
         urdf_dir: &Path,
         start: &[f64],
         sim: &PhysicsSettings,
-    ) -> Result<Box<dyn PhysicsSystem>, String> {
+    ) -> Result<Box<dyn PhysicsSystem>, SetupError> {
         let p = SpaceRobotPhysics::new(robot, urdf_dir, &self.model.robot, start, sim)?;
         Ok(Box::new(p))
     }

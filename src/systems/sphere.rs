@@ -17,6 +17,7 @@
 
 use super::System;
 use crate::compare::sample;
+use crate::error::SetupError;
 use crate::integrate::Trajectory;
 use crate::model::rolling_sphere::{
     euler_state_to_quat_state, geodesic_angle, quat_of_state, quat_state_to_euler_state,
@@ -67,9 +68,9 @@ struct Sphere {
 }
 
 /// Build the sphere system.
-pub fn build(cfg: &SphereConfig, planner: SpherePlanner) -> Result<Box<dyn System>, String> {
+pub fn build(cfg: &SphereConfig, planner: SpherePlanner) -> Result<Box<dyn System>, SetupError> {
     if !(cfg.radius > 0.0 && cfg.radius.is_finite()) {
-        return Err("key `model.radius`: must be > 0".into());
+        return Err(SetupError::key("model.radius", "must be > 0"));
     }
     Ok(Box::new(Sphere {
         euler: RollingSphere { a: cfg.radius },
@@ -175,7 +176,7 @@ impl System for Sphere {
         urdf_dir: &Path,
         start: &[f64],
         sim: &PhysicsSettings,
-    ) -> Result<Box<dyn PhysicsSystem>, String> {
+    ) -> Result<Box<dyn PhysicsSystem>, SetupError> {
         Ok(Box::new(SpherePhysics::new(
             robot,
             urdf_dir,

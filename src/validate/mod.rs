@@ -83,8 +83,8 @@ impl Prepared {
         load_warnings: Vec<String>,
         max_steps: u64,
     ) -> Result<Prepared, Error> {
-        let system =
-            build_system(&scenario.model, &scenario.planner).map_err(|m| scenario.error(m))?;
+        let system = build_system(&scenario.model, &scenario.planner)
+            .map_err(|e| scenario.setup_error(&e))?;
         let known = metric_names(system.as_ref());
         let gates = scenario.thresholds.keys().map(|k| ("thresholds", k));
         for (table, k) in gates.chain(scenario.minimums.keys().map(|k| ("minimums", k))) {
@@ -266,7 +266,7 @@ impl Prepared {
         let dir = sc.urdf.parent().unwrap_or(Path::new("."));
         self.system
             .physics(&self.robot, dir, &sc.start, settings)
-            .map_err(|m| physics_error(sc, &m))
+            .map_err(|e| physics_error(sc, &e))
     }
 }
 
@@ -468,23 +468,19 @@ fn build_physics(
     // Every name the model looks up, in one message, before the physics
     // stops at the first one it misses.
     crate::physics::required::check(robot, &system.urdf_names())
-        .map_err(|m| physics_error(sc, &m))?;
+        .map_err(|e| physics_error(sc, &e))?;
     let dir = sc.urdf.parent().unwrap_or(Path::new("."));
     system
         .physics(robot, dir, &sc.start, &sc.sim.physics())
-        .map_err(|m| physics_error(sc, &m))
+        .map_err(|e| physics_error(sc, &e))
 }
 
-/// Physics setup refusals name a scenario key (`model.radius`, `sim.gravity`)
-/// or a URDF element (messages starting with `URDF`): attribute them to
-/// that file and line.
-fn physics_error(sc: &Scenario, message: &str) -> Error {
-    let names_key = crate::scenario::doc::named_key(message).is_some()
-        || crate::scenario::doc::dotted_key(message).is_some();
-    if !names_key && message.starts_with("URDF") {
-        urdf::error_in(&sc.urdf, message)
-    } else {
-        sc.error_about(message)
+/// A physics setup refusal at the file and line it is about: a scenario
+/// key's, or a URDF element's.
+fn physics_error(sc: &Scenario, e: &crate::error::SetupError) -> Error {
+    match &e.about {
+        crate::error::About::Urdf(_) => urdf::error_in(&sc.urdf, e),
+        _ => sc.setup_error(e),
     }
 }
 

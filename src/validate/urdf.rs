@@ -8,7 +8,7 @@
 //! Errors name the URDF file, the line of the element (located in the text:
 //! urdf-rs keeps no positions) and the link or joint.
 
-use crate::error::Error;
+use crate::error::{About, Error, SetupError};
 use crate::input::{read_text, URDF_MAX_BYTES};
 use nalgebra::Matrix3;
 use std::path::Path;
@@ -85,8 +85,9 @@ pub fn load_from(path: &Path, source: &Source) -> Result<Loaded, Vec<Error>> {
         ));
         lines = false;
     }
-    let line_of = |m: &str| lines.then(|| line_of_message(&text, m)).flatten();
-    let mut robot = crate::physics::urdf::parse_text(&text).map_err(|m| one(line_of(&m), m))?;
+    let line_of = |e: &SetupError| lines.then(|| line_of_error(&text, e)).flatten();
+    let mut robot =
+        crate::physics::urdf::parse_text(&text).map_err(|e| one(line_of(&e), e.to_string()))?;
     let mut errors: Vec<Error> = Vec::new();
     let mut push = |line: Option<usize>, m: String| {
         errors.push(Error::Input {
@@ -97,8 +98,8 @@ pub fn load_from(path: &Path, source: &Source) -> Result<Loaded, Vec<Error>> {
     };
     let structure = crate::physics::urdf::structure_problems(&robot);
     if !structure.is_empty() {
-        for m in structure {
-            push(line_of(&m), m);
+        for e in structure {
+            push(line_of(&e), e.to_string());
         }
         return Err(errors);
     }
@@ -110,11 +111,11 @@ pub fn load_from(path: &Path, source: &Source) -> Result<Loaded, Vec<Error>> {
     }
     if !bad_numbers {
         // Masses are numbers now: which bodies lack one.
-        if let Err(m) = crate::physics::lump::lump(&robot, &[]) {
-            push(line_of(&m), m);
+        if let Err(e) = crate::physics::lump::lump(&robot, &[]) {
+            push(line_of(&e), e.to_string());
         }
-        for m in crate::physics::urdf::loadable_problems(&robot) {
-            push(line_of(&m), m);
+        for e in crate::physics::urdf::loadable_problems(&robot) {
+            push(line_of(&e), e.to_string());
         }
     }
     let dir = path.parent().unwrap_or(Path::new("."));
@@ -182,14 +183,22 @@ fn resolve_meshes(
     out
 }
 
-/// A URDF error about the file at `path` (a message from physics setup that
-/// starts with `URDF`), with the line of the link or joint it names.
-pub fn error_in(path: &Path, message: &str) -> Error {
+/// A URDF refusal of the physics about the file at `path`, with the line of
+/// the element it is about.
+pub fn error_in(path: &Path, e: &SetupError) -> Error {
     let text = read_text(path, "URDF", URDF_MAX_BYTES).unwrap_or_default();
     Error::Input {
         path: path.into(),
-        line: line_of_message(&text, message),
-        message: message.to_string(),
+        line: line_of_error(&text, e),
+        message: e.to_string(),
+    }
+}
+
+/// The line of the URDF element a refusal is about, if it is in the text.
+pub fn line_of_error(text: &str, e: &SetupError) -> Option<usize> {
+    match &e.about {
+        About::Urdf(Some((elem, name))) => locate(text, &Place::new(elem, name, &[])),
+        _ => None,
     }
 }
 
@@ -447,33 +456,6 @@ pub fn locate(text: &str, place: &Place) -> Option<usize> {
     Some(text[..at].matches('\n').count() + 1)
 }
 
-/// Line of the first link or joint a message names (`` link `x` ``,
-/// `` joint `x` ``), if it is in the text.
-pub fn line_of_message(text: &str, message: &str) -> Option<usize> {
-    let mut best: Option<(usize, usize)> = None;
-    for (elem, word) in [
-        ("link", "link"),
-        ("link", "links"),
-        ("joint", "joint"),
-        ("joint", "joints"),
-    ] {
-        let pat = format!("{word} `");
-        for (i, _) in message.match_indices(&pat) {
-            let rest = &message[i + pat.len()..];
-            let Some(name) = rest.split('`').next() else {
-                continue;
-            };
-            let place = Place::new(elem, name, &[]);
-            if let Some(line) = locate(text, &place) {
-                if best.is_none_or(|(j, _)| i < j) {
-                    best = Some((i, line));
-                }
-            }
-        }
-    }
-    best.map(|(_, line)| line)
-}
-
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -513,10 +495,8 @@ mod tests {
         // Missing nested tag: the innermost one found.
         assert_eq!(at("joint", "j", &["limit"]), Some(17));
         assert_eq!(at("link", "ghost", &[]), None);
-        assert_eq!(
-            line_of_message(URDF, "URDF joint `j` names unknown link `ghost`"),
-            Some(17)
-        );
+        let e = SetupError::urdf_at("joint", "j", "URDF joint `j` names unknown link `ghost`");
+        assert_eq!(line_of_error(URDF, &e), Some(17));
     }
 
     #[test]

@@ -17,6 +17,7 @@
 pub mod process;
 pub mod protocol;
 
+use crate::error::SetupError;
 use crate::model::{Input, State};
 use crate::plan::{Command, Controller, LabelTable, OncePerSample, Plan, PolicyFactory};
 use process::{describe, Failure, LawProcess};
@@ -71,29 +72,34 @@ impl ExternalParams {
 
     /// Every check that needs no process: numbers, and that the program
     /// exists and is executable. Errors name the key.
-    pub fn check(&self) -> Result<PathBuf, String> {
+    pub fn check(&self) -> Result<PathBuf, SetupError> {
         for (key, v) in [("period", self.period), ("horizon", self.horizon)] {
             if !(v.is_finite() && v > 0.0) {
-                return Err(format!(
-                    "key `planner.{key}`: must be a number > 0 s, got {v}"
+                return Err(SetupError::key(
+                    format!("planner.{key}"),
+                    format!("must be a number > 0 s, got {v}"),
                 ));
             }
         }
         if !(self.timeout.is_finite() && self.timeout > 0.0 && self.timeout <= 3600.0) {
-            return Err(format!(
-                "key `planner.timeout`: must be in (0, 3600] s, got {}",
-                self.timeout
+            return Err(SetupError::key(
+                "planner.timeout",
+                format!("must be in (0, 3600] s, got {}", self.timeout),
             ));
         }
         let Some(program) = self.command.first() else {
-            return Err(
-                "key `planner.command`: must name a program, e.g. [\"python3\", \"law.py\"]".into(),
-            );
+            return Err(SetupError::key(
+                "planner.command",
+                "must name a program, e.g. [\"python3\", \"law.py\"]",
+            ));
         };
         if let Some(a) = self.command.iter().find(|a| a.contains('\0')) {
-            return Err(format!("key `planner.command`: {a:?} contains a NUL byte"));
+            return Err(SetupError::key(
+                "planner.command",
+                format!("{a:?} contains a NUL byte"),
+            ));
         }
-        resolve_program(program, &self.dir()).map_err(|m| format!("key `planner.command`: {m}"))
+        resolve_program(program, &self.dir()).map_err(|m| SetupError::key("planner.command", m))
     }
 }
 

@@ -24,6 +24,7 @@ pub mod csv;
 pub mod json;
 pub mod mcap;
 
+use crate::error::SetupError;
 use crate::model::Input;
 use crate::plan::{ControlLaw, Plan, Segment};
 use crate::planner::PlanError;
@@ -100,7 +101,7 @@ impl FilePlanParams {
     }
 
     /// The format from the extension; errors name `planner.path` or `planner.topic`.
-    pub fn format(&self) -> Result<Format, String> {
+    pub fn format(&self) -> Result<Format, SetupError> {
         let ext = self
             .path
             .extension()
@@ -110,34 +111,38 @@ impl FilePlanParams {
             Some("json") => Format::Json,
             Some("mcap") => Format::Mcap,
             other => {
-                return Err(format!(
-                    "key `planner.path`: {}: unknown plan file format{} (use a .csv, .json or .mcap file)",
-                    self.path.display(),
-                    other.map(|e| format!(" `.{e}`")).unwrap_or_default()
+                return Err(SetupError::key(
+                    "planner.path",
+                    format!(
+                        "{}: unknown plan file format{} (use a .csv, .json or .mcap file)",
+                        self.path.display(),
+                        other.map(|e| format!(" `.{e}`")).unwrap_or_default()
+                    ),
                 ))
             }
         };
         if self.topic.is_some() && format != Format::Mcap {
-            return Err(
-                "key `planner.topic`: only MCAP plan files have topics (drop it)".to_string(),
-            );
+            return Err(SetupError::key(
+                "planner.topic",
+                "only MCAP plan files have topics (drop it)",
+            ));
         }
         if let Some(t) = &self.topic {
             if t.is_empty() {
-                return Err("key `planner.topic`: must not be empty".to_string());
+                return Err(SetupError::key("planner.topic", "must not be empty"));
             }
         }
         Ok(format)
     }
 
     /// The checks that need no file: format, and that the file exists.
-    pub fn check(&self) -> Result<(), String> {
+    pub fn check(&self) -> Result<(), SetupError> {
         self.format()?;
         let f = self.file();
         if !f.exists() {
-            return Err(format!(
-                "key `planner.path`: file not found: {}",
-                f.display()
+            return Err(SetupError::key(
+                "planner.path",
+                format!("file not found: {}", f.display()),
             ));
         }
         Ok(())
@@ -273,9 +278,13 @@ impl<'a> Reader<'a> {
 /// Read and check the plan file of `params` for a model with `input_names`.
 pub fn read(params: &FilePlanParams, input_names: &[&str]) -> Result<Samples, PlanError> {
     let file = params.file();
-    let format = params.format().map_err(|m| PlanError::InvalidParameter {
-        name: "path".into(),
-        reason: m,
+    let format = params.format().map_err(|e| PlanError::InvalidParameter {
+        name: e
+            .key_name()
+            .and_then(|k| k.strip_prefix("planner."))
+            .unwrap_or("path")
+            .into(),
+        reason: e.reason().into(),
     })?;
     let reader = Reader::new(&file, input_names);
     match format {

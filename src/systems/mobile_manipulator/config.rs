@@ -2,6 +2,7 @@
 //! carried beam, the arm servos and the obstacles, as written in scenario
 //! files (validated where the system is built).
 
+use crate::error::SetupError;
 use crate::model::ellipsoid::Superellipsoid;
 use crate::physics::beam::BeamOptions;
 use crate::physics::mobile_manipulator::ArmServo;
@@ -156,7 +157,7 @@ fn default_beam_radius() -> f64 {
 
 impl BeamConfig {
     /// The beam (rest length filled in later) or the offending key.
-    pub(super) fn beam(&self) -> Result<crate::model::beam::Beam, String> {
+    pub(super) fn beam(&self) -> Result<crate::model::beam::Beam, SetupError> {
         use crate::model::beam::{Beam, Material, Section};
         let b = Beam {
             material: Material {
@@ -182,52 +183,61 @@ impl BeamConfig {
             ("max_moment", self.max_moment),
         ] {
             if let Some(v) = v.filter(|v| !pos(*v)) {
-                return Err(format!("key `model.beam.{key}`: must be > 0, got {v}"));
+                return Err(SetupError::key(
+                    format!("model.beam.{key}"),
+                    format!("must be > 0, got {v}"),
+                ));
             }
         }
         match self.bound {
             BoundKind::Printed => {
                 if self.max_deformation.is_none() {
-                    return Err(
-                        "key `model.beam.max_deformation`: required with bound = \"printed\" (q_F of Eq. 5)"
-                            .into(),
-                    );
+                    return Err(SetupError::key(
+                        "model.beam.max_deformation",
+                        "required with bound = \"printed\" (q_F of Eq. 5)",
+                    ));
                 }
                 for (key, v) in [
                     ("max_force", self.max_force),
                     ("max_moment", self.max_moment),
                 ] {
                     if v.is_some() {
-                        return Err(format!(
-                            "key `model.beam.{key}`: belongs to bound = \"wrench\" (this beam's bound is \"printed\")"
+                        return Err(SetupError::key(
+                            format!("model.beam.{key}"),
+                            "belongs to bound = \"wrench\" (this beam's bound is \"printed\")",
                         ));
                     }
                 }
             }
             BoundKind::Wrench => {
                 if self.max_deformation.is_some() {
-                    return Err(
-                        "key `model.beam.max_deformation`: q_F belongs to bound = \"printed\" (this beam's bound is \"wrench\": max_force, max_moment)"
-                            .into(),
-                    );
+                    return Err(SetupError::key(
+                        "model.beam.max_deformation",
+                        "q_F belongs to bound = \"printed\" (this beam's bound is \"wrench\": max_force, max_moment)",
+                    ));
                 }
             }
         }
         if let Some(e) = self.max_stretch.filter(|e| !pos(*e)) {
-            return Err(format!(
-                "key `model.beam.max_stretch`: must be > 0, got {e}"
+            return Err(SetupError::key(
+                "model.beam.max_stretch",
+                format!("must be > 0, got {e}"),
             ));
         }
         if let Some(l) = self.length.filter(|l| !pos(*l)) {
-            return Err(format!("key `model.beam.length`: must be > 0, got {l}"));
+            return Err(SetupError::key(
+                "model.beam.length",
+                format!("must be > 0, got {l}"),
+            ));
         }
         if !(1..=64).contains(&self.segments) {
-            return Err("key `model.beam.segments`: must be in 1..=64".into());
+            return Err(SetupError::key("model.beam.segments", "must be in 1..=64"));
         }
         let n = self.physics_segments;
         if !((2..=40).contains(&n) && n.is_multiple_of(2)) {
-            return Err(format!(
-                "key `model.beam.physics_segments`: must be even and in 2..=40, got {n}"
+            return Err(SetupError::key(
+                "model.beam.physics_segments",
+                format!("must be even and in 2..=40, got {n}"),
             ));
         }
         Ok(b)
@@ -307,7 +317,7 @@ fn default_wrist_travel() -> [f64; 6] {
 
 impl WristConfig {
     /// The model's wrist, or the offending key.
-    pub fn wrist(&self) -> Result<crate::model::mobile_manipulator::Wrist, String> {
+    pub fn wrist(&self) -> Result<crate::model::mobile_manipulator::Wrist, SetupError> {
         use crate::model::mobile_manipulator::{CompliantWrist, Wrist};
         match *self {
             WristConfig::Rigid => Ok(Wrist::Rigid),
@@ -322,7 +332,7 @@ impl WristConfig {
                     travel,
                 };
                 w.validate()
-                    .map_err(|(field, m)| format!("key `model.wrist.{field}`: {m}"))?;
+                    .map_err(|(field, m)| SetupError::key(format!("model.wrist.{field}"), m))?;
                 Ok(Wrist::Compliant(w))
             }
         }
@@ -419,14 +429,15 @@ impl ArmServoConfig {
     }
 
     /// The physics' servo, or the offending key.
-    pub fn servo(&self) -> Result<ArmServo, String> {
+    pub fn servo(&self) -> Result<ArmServo, SetupError> {
         if let Some(a) = self
             .armature()
             .iter()
             .find(|a| !(a.is_finite() && **a >= 0.0))
         {
-            return Err(format!(
-                "key `model.arm_servo.armature`: every joint's armature must be ≥ 0 kg m², got {a}"
+            return Err(SetupError::key(
+                "model.arm_servo.armature",
+                format!("every joint's armature must be ≥ 0 kg m², got {a}"),
             ));
         }
         let limits = match *self {
@@ -438,8 +449,9 @@ impl ArmServoConfig {
             .flatten()
             .find(|t| !(t.is_finite() && **t > 0.0))
         {
-            return Err(format!(
-                "key `model.arm_servo.max_torque`: every joint's limit must be > 0 N m, got {t}"
+            return Err(SetupError::key(
+                "model.arm_servo.max_torque",
+                format!("every joint's limit must be > 0 N m, got {t}"),
             ));
         }
         match *self {
@@ -448,13 +460,15 @@ impl ArmServoConfig {
                 stiffness, damping, ..
             } => {
                 if let Some(k) = stiffness.iter().find(|k| !(k.is_finite() && **k > 0.0)) {
-                    return Err(format!(
-                        "key `model.arm_servo.stiffness`: every joint's stiffness must be > 0 N m/rad, got {k}"
+                    return Err(SetupError::key(
+                        "model.arm_servo.stiffness",
+                        format!("every joint's stiffness must be > 0 N m/rad, got {k}"),
                     ));
                 }
                 if let Some(d) = damping.iter().find(|d| !(d.is_finite() && **d >= 0.0)) {
-                    return Err(format!(
-                        "key `model.arm_servo.damping`: every joint's damping must be ≥ 0 N m s/rad, got {d}"
+                    return Err(SetupError::key(
+                        "model.arm_servo.damping",
+                        format!("every joint's damping must be ≥ 0 N m s/rad, got {d}"),
                     ));
                 }
                 Ok(ArmServo::Impedance { stiffness, damping })

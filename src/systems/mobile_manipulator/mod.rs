@@ -34,6 +34,7 @@ pub use config::{
 };
 
 use super::{EarlyAnalysis, SimFollower, System};
+use crate::error::SetupError;
 use crate::integrate::Trajectory;
 use crate::model::ellipsoid::Superellipsoid;
 use crate::model::mobile_manipulator::{self as mm, MobileManipulator, Wrist};
@@ -73,7 +74,7 @@ struct Dilf {
 pub fn build(
     cfg: &MobileManipulatorConfig,
     params: &DilfParams,
-) -> Result<Box<dyn System>, String> {
+) -> Result<Box<dyn System>, SetupError> {
     Ok(Box::new(dilf(cfg, params)?))
 }
 
@@ -84,20 +85,31 @@ pub fn task_scene(
     params: &DilfParams,
     start: &[f64],
     goal: &State,
-) -> Result<Scene, String> {
+) -> Result<Scene, SetupError> {
     dilf(cfg, params)?.scene(start, goal)
 }
 
-fn dilf(cfg: &MobileManipulatorConfig, params: &DilfParams) -> Result<Dilf, String> {
+fn dilf(cfg: &MobileManipulatorConfig, params: &DilfParams) -> Result<Dilf, SetupError> {
     match (cfg.robots, &cfg.beam) {
         (1, None) | (2, Some(_)) => {}
         (1, Some(_)) => {
-            return Err("key `model.beam`: one robot cannot carry a beam (robots = 2)".into())
+            return Err(SetupError::key(
+                "model.beam",
+                "one robot cannot carry a beam (robots = 2)",
+            ))
         }
         (2, None) => {
-            return Err("key `model.robots`: two robots carry a beam: add [model.beam]".into())
+            return Err(SetupError::key(
+                "model.robots",
+                "two robots carry a beam: add [model.beam]",
+            ))
         }
-        (n, _) => return Err(format!("key `model.robots`: {n} robots (1 or 2)")),
+        (n, _) => {
+            return Err(SetupError::key(
+                "model.robots",
+                format!("{n} robots (1 or 2)"),
+            ))
+        }
     }
     if let Some(b) = &cfg.beam {
         b.beam()?;
@@ -105,9 +117,10 @@ fn dilf(cfg: &MobileManipulatorConfig, params: &DilfParams) -> Result<Dilf, Stri
     let arm = cfg.arm_servo.servo()?;
     let wrist = cfg.wrist.wrist()?;
     if cfg.robots == 1 && wrist != Wrist::Rigid {
-        return Err(
-            "key `model.wrist`: a compliant wrist holds the carried beam (robots = 2)".into(),
-        );
+        return Err(SetupError::key(
+            "model.wrist",
+            "a compliant wrist holds the carried beam (robots = 2)",
+        ));
     }
     let mut obstacles = Vec::new();
     for (i, o) in cfg.obstacles.iter().enumerate() {
@@ -122,18 +135,21 @@ fn dilf(cfg: &MobileManipulatorConfig, params: &DilfParams) -> Result<Dilf, Stri
             } else {
                 field
             };
-            format!("key `model.obstacles[{i}].{field}`: {e}")
+            SetupError::key(format!("model.obstacles[{i}].{field}"), e)
         })?;
         if o.name.is_empty() || cfg.obstacles[..i].iter().any(|p| p.name == o.name) {
-            return Err(format!(
-                "key `model.obstacles[{i}].name`: `{}` is empty or not unique",
-                o.name
+            return Err(SetupError::key(
+                format!("model.obstacles[{i}].name"),
+                format!("`{}` is empty or not unique", o.name),
             ));
         }
         obstacles.push((o.name.clone(), shape));
     }
     if let Err(crate::planner::PlanError::InvalidParameter { name, reason }) = params.validate() {
-        return Err(format!("key `planner.{name}`: {reason}"));
+        return Err(SetupError::key(
+            format!("planner.{name}"),
+            format!("{reason}"),
+        ));
     }
     let params = params.clone();
     Ok(Dilf {
@@ -151,7 +167,7 @@ fn dilf(cfg: &MobileManipulatorConfig, params: &DilfParams) -> Result<Dilf, Stri
 
 impl Dilf {
     /// The scene for a task; `start` fixes the beam's grasps (it is straight there).
-    fn scene(&self, start: &[f64], goal: &State) -> Result<Scene, String> {
+    fn scene(&self, start: &[f64], goal: &State) -> Result<Scene, SetupError> {
         let scene = self.scene_without_beam(goal)?;
         let Some(b) = &self.beam else {
             return Ok(scene);
@@ -164,14 +180,14 @@ impl Dilf {
                     } else {
                         "start"
                     };
-                    format!("key `{key}`: {e}")
+                    SetupError::key(key, e)
                 })?
                 .with_grasps(b.bound(), self.wrist)
-                .map_err(|e| format!("key `model.beam`: {e}"))?;
+                .map_err(|e| SetupError::key("model.beam", e))?;
         Ok(scene.with_object(carried.with_max_stretch(b.max_stretch)))
     }
 
-    fn scene_without_beam(&self, goal: &State) -> Result<Scene, String> {
+    fn scene_without_beam(&self, goal: &State) -> Result<Scene, SetupError> {
         let p = &self.params;
         Scene::new(
             self.model.robots,
@@ -193,6 +209,7 @@ impl Dilf {
                 field_power: p.field_power,
             },
         )
+        .map_err(SetupError::from)
     }
 
     /// The beam as the physics holds it: the scene's grasps and FE beam.
@@ -404,21 +421,12 @@ impl System for Dilf {
         vec![1.0; 8 * self.model.robots]
     }
     fn plan(&self, start: &State, goal: &State, _limits: &Limits) -> Result<Plan, PlanError> {
-        let scene = self.scene(start.as_slice(), goal).map_err(|reason| {
-            match reason
-                .strip_prefix("key `")
-                .and_then(|r| r.split_once("`: "))
-            {
-                Some((key, why)) => PlanError::InvalidParameter {
-                    name: key.into(),
-                    reason: why.into(),
-                },
-                None => PlanError::InvalidParameter {
-                    name: "planner".into(),
-                    reason,
-                },
-            }
-        })?;
+        let scene =
+            self.scene(start.as_slice(), goal)
+                .map_err(|e| PlanError::InvalidParameter {
+                    name: e.key_name().unwrap_or("planner").into(),
+                    reason: e.reason().into(),
+                })?;
         dilf::plan(Arc::new(scene), start, &self.params)
     }
     fn urdf_names(&self) -> Vec<crate::physics::required::Named> {
@@ -430,14 +438,14 @@ impl System for Dilf {
         urdf_dir: &Path,
         start: &[f64],
         sim: &PhysicsSettings,
-    ) -> Result<Box<dyn PhysicsSystem>, String> {
+    ) -> Result<Box<dyn PhysicsSystem>, SetupError> {
         // The model's own check first, naming the key: a start inside an
         // obstacle is bad input, not a physics failure.
         let scene = self.scene(start, &State::from_vec(start.to_vec()))?;
         if let Err(crate::planner::PlanError::InvalidParameter { name, reason }) =
             dilf::check_configuration(&scene, start, "start")
         {
-            return Err(format!("key `{name}`: {reason}"));
+            return Err(SetupError::key(format!("{name}"), format!("{reason}")));
         }
         let obstacles: Vec<ObstacleShape> = self
             .obstacles

@@ -3,8 +3,8 @@
 //! against f32 Rapier (used to measure f32 against f64, docs/src/research/space-robot.md).
 #![allow(clippy::unnecessary_cast)] // the casts are no-ops in f64 builds only
 
-use super::rapier::math::{Matrix, Pose as RPose, Real, Rotation, Vector};
 use crate::model::spatial::Pose as SPose;
+use crate::physics::rapier::math::{Matrix, Pose as RPose, Real, Rotation, Vector};
 use crate::record::Pose;
 
 /// Engine scalar → f64.

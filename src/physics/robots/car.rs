@@ -14,7 +14,7 @@
 //! command; drive torque limits; steering that stops at the joints' limits.
 //! The front wheels roll freely (no drive, no bearing friction).
 //!
-//! Geometry from the URDF (see [`super::wheeled`]): wheel radii, the
+//! Geometry from the URDF (see [`crate::physics::wheeled`]): wheel radii, the
 //! wheelbase (front steering pivots to rear axle, checked against
 //! `model.wheelbase`), both tracks, the reference point (rear-axle
 //! midpoint). Each front wheel's centre must sit on its steering axis (no
@@ -37,16 +37,17 @@
 //! speeds relative to the body (`rim_speed_rear_left`,
 //! `rim_speed_rear_right`, m/s).
 
-use super::diff_drive::effort;
-use super::rapier::prelude::*;
-use super::reading::UrdfReading;
-use super::real::{f, vector};
-use super::required::Required;
-use super::urdf::{Drive, SimWorld};
-use super::wheeled::{self, Wheel};
-use super::{angles, PhysicsSettings, PhysicsSystem};
+use crate::error::SetupError;
 use crate::model::bicycle::{ackermann, bicycle_angle, rear_speeds, Bicycle};
 use crate::model::{Input, State};
+use crate::physics::diff_drive::effort;
+use crate::physics::rapier::prelude::*;
+use crate::physics::reading::UrdfReading;
+use crate::physics::real::{f, vector};
+use crate::physics::required::Required;
+use crate::physics::urdf::{Drive, SimWorld};
+use crate::physics::wheeled::{self, Wheel};
+use crate::physics::{angles, PhysicsSettings, PhysicsSystem};
 use crate::record::Pose;
 use std::path::Path;
 
@@ -146,18 +147,18 @@ pub struct CarGeometry {
 }
 
 /// Left and right on one axle: same x, left at larger y.
-fn axle(l: &Wheel, r: &Wheel, base: &str) -> Result<(), String> {
+fn axle(l: &Wheel, r: &Wheel, base: &str) -> Result<(), SetupError> {
     if !wheeled::same_position(l.center[0], r.center[0]) {
-        return Err(format!(
+        return Err(SetupError::urdf_at("joint", l.joint.to_string(), format!(
             "URDF joints `{}` and `{}` must put both wheels on one axle: their centres sit at x = {:.4} and {:.4} m in `{base}`",
             l.joint, r.joint, l.center[0], r.center[0]
-        ));
+        )));
     }
     if l.center[1] <= r.center[1] {
-        return Err(format!(
+        return Err(SetupError::urdf_at("joint", l.joint.to_string(), format!(
             "URDF joint `{}` puts its wheel at y = {:.4} m in `{base}`, not left of `{}`'s ({:.4} m): left and right swapped?",
             l.joint, l.center[1], r.joint, r.center[1]
-        ));
+        )));
     }
     Ok(())
 }
@@ -165,7 +166,11 @@ fn axle(l: &Wheel, r: &Wheel, base: &str) -> Result<(), String> {
 impl CarGeometry {
     /// Read and check the URDF against the bicycle `model`: errors name the
     /// joint or link at fault, or the `[model]` key that disagrees.
-    pub fn read(robot: &urdf_rs::Robot, names: &CarNames, model: &Bicycle) -> Result<Self, String> {
+    pub fn read(
+        robot: &urdf_rs::Robot,
+        names: &CarNames,
+        model: &Bicycle,
+    ) -> Result<Self, SetupError> {
         let frames = wheeled::link_frames(robot);
         let base = names.base.as_str();
         let body = frames[base];
@@ -181,8 +186,10 @@ impl CarGeometry {
         for (sj, fj) in names.steer.iter().zip(&names.front) {
             let s = wheeled::joint(robot, sj)?;
             if s.joint_type != urdf_rs::JointType::Revolute {
-                return Err(format!(
-                    "URDF joint `{sj}` must be revolute (steering stops at its limits)"
+                return Err(SetupError::urdf_at(
+                    "joint",
+                    sj.to_string(),
+                    format!("URDF joint `{sj}` must be revolute (steering stops at its limits)"),
                 ));
             }
             wheeled::rigidly_on(robot, &s.parent.link, base, &format!("joint `{sj}`"))?;
@@ -191,11 +198,15 @@ impl CarGeometry {
             let a = s.axis.xyz.0;
             let up = in_body.rotation * vector(a[0], a[1], a[2]).normalize_or_zero();
             if f(up.x).abs() > 1e-3 || f(up.y).abs() > 1e-3 {
-                return Err(format!(
+                return Err(SetupError::urdf_at(
+                    "joint",
+                    sj.to_string(),
+                    format!(
                     "URDF joint `{sj}` axis must be vertical in `{base}`, is ({:.4}, {:.4}, {:.4})",
                     f(up.x),
                     f(up.y),
                     f(up.z)
+                ),
                 ));
             }
             let w = wheeled::wheel(robot, &frames, base, fj)?;
@@ -204,9 +215,9 @@ impl CarGeometry {
             let pivot = [f(in_body.translation.x), f(in_body.translation.y)];
             let off = (w.center[0] - pivot[0]).hypot(w.center[1] - pivot[1]);
             if off > 1e-4 {
-                return Err(format!(
+                return Err(SetupError::urdf_at("joint", fj.to_string(), format!(
                     "URDF joint `{fj}` must put the wheel's centre on the steering axis of `{sj}` (it is {off:.4} m off)"
-                ));
+                )));
             }
             steer.push(Steering {
                 joint: sj.clone(),
@@ -226,10 +237,10 @@ impl CarGeometry {
         let ground = wheeled::contact_plane(&[&rl, &rr, &fl, &fr])?;
         let wheelbase = 0.5 * (pivots[0][0] + pivots[1][0]) - rl.center[0];
         if (wheelbase - model.wheelbase).abs() > 1e-4 {
-            return Err(format!(
+            return Err(SetupError::key("model.wheelbase", format!(
                 "URDF wheelbase {wheelbase:.4} m (rear axle to the steering pivots) differs from model.wheelbase {} m",
                 model.wheelbase
-            ));
+            )));
         }
         let front_half_track = 0.5 * (pivots[0][1] - pivots[1][1]);
         // Each joint must reach its wheel's Ackermann angles at ±max_steer.
@@ -242,13 +253,13 @@ impl CarGeometry {
                 (s.sign * lo).max(s.sign * hi),
             );
             if s.limits[0] > a + 1e-9 || s.limits[1] < b - 1e-9 {
-                return Err(format!(
+                return Err(SetupError::key("model.max_steer_deg", format!(
                     "URDF joint `{}` limits [{:.4}, {:.4}] rad do not reach its Ackermann angles [{a:.4}, {b:.4}] rad at model.max_steer_deg = {}",
                     s.joint,
                     s.limits[0],
                     s.limits[1],
                     model.max_steer.to_degrees()
-                ));
+                )));
             }
         }
         Ok(CarGeometry {
@@ -298,13 +309,16 @@ impl CarPhysics {
         model: &Bicycle,
         start: &[f64],
         sim: &PhysicsSettings,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, SetupError> {
         let geom = CarGeometry::read(robot, names, model)?;
         if start[3].abs() > model.max_steer + 1e-12 {
-            return Err(format!(
-                "key `start`: steering angle {:.3}° is beyond model.max_steer_deg = {}",
-                start[3].to_degrees(),
-                model.max_steer.to_degrees()
+            return Err(SetupError::key(
+                "start",
+                format!(
+                    "steering angle {:.3}° is beyond model.max_steer_deg = {}",
+                    start[3].to_degrees(),
+                    model.max_steer.to_degrees()
+                ),
             ));
         }
         let frames = wheeled::link_frames(robot);
@@ -315,7 +329,12 @@ impl CarPhysics {
         let wear = (1.0 - sim.wheel_radius_scale) * all[0].radius;
         let links: Vec<&str> = all.iter().map(|w| w.link.as_str()).collect();
         let worn = (sim.wheel_radius_scale != 1.0).then(|| {
-            super::perturb::shrink_round_collisions(robot, &links, sim.wheel_radius_scale, None)
+            crate::physics::perturb::shrink_round_collisions(
+                robot,
+                &links,
+                sim.wheel_radius_scale,
+                None,
+            )
         });
         let root = wheeled::root_pose(
             &frames,
@@ -348,13 +367,13 @@ impl CarPhysics {
                 continue;
             }
             let pivot = sw.world.bodies[knuckles[i]].translation();
-            let rot = Rotation::from_rotation_z(super::real::r(delta0[i]));
+            let rot = Rotation::from_rotation_z(crate::physics::real::r(delta0[i]));
             for h in [knuckles[i], wheels[2 + i]] {
                 let b = &mut sw.world.bodies[h];
                 let p = *b.position();
                 let t = pivot + rot * (p.translation - pivot);
                 b.set_position(
-                    super::rapier::math::Pose::from_parts(t, rot * p.rotation),
+                    crate::physics::rapier::math::Pose::from_parts(t, rot * p.rotation),
                     true,
                 );
             }

@@ -2,15 +2,16 @@
 //! flange and gripper (a spring–damper per axis, settled at rest before the
 //! replay) and each joint's armature, the motor rotor's reflected inertia.
 
-use super::super::rapier::prelude::*;
-use super::super::real::{self as rl, f, vector};
 use super::{CarriedBeam, RobotBodies, GRASP_OFFSET};
+use crate::error::SetupError;
 use crate::model::mobile_manipulator::CompliantWrist;
+use crate::physics::rapier::prelude::*;
+use crate::physics::real::{self as rl, f, vector};
 
 /// The grasp frame on the flange and on the gripper: the tool frame
 /// moved to the grasp point (the URDF's `tool_joint` has the identity origin).
-pub(super) fn grasp_frame() -> super::super::rapier::math::Pose {
-    super::super::rapier::math::Pose::from_translation(vector(0.0, 0.0, GRASP_OFFSET))
+pub(super) fn grasp_frame() -> crate::physics::rapier::math::Pose {
+    crate::physics::rapier::math::Pose::from_translation(vector(0.0, 0.0, GRASP_OFFSET))
 }
 
 /// Channels of compliant wrists (after the pair's): each wrist's deflection,
@@ -61,7 +62,7 @@ pub(super) fn settle_wrists(
     w: &CompliantWrist,
     spec: &CarriedBeam,
     (m, com): (f64, [f64; 3]),
-) -> Result<(), String> {
+) -> Result<(), SetupError> {
     use crate::model::beam::{FeBeam, GraspStatics};
     use crate::model::spatial::{self, Pose as SPose};
     let fe = FeBeam::new(&spec.beam)?;
@@ -115,7 +116,7 @@ pub(super) fn add_armature(
     world: &mut PhysicsWorld,
     r: &RobotBodies,
     armature: &[f64; 6],
-) -> Result<(), String> {
+) -> Result<(), SetupError> {
     for (body, a) in r.arm.iter().zip(armature) {
         add_rotor_inertia(&mut world.bodies[*body], *a)?;
     }
@@ -124,13 +125,17 @@ pub(super) fn add_armature(
 
 /// Add `a` kg m² about the body frame's z axis to a body whose inertial is
 /// its additional mass properties (as every URDF link's here).
-pub(super) fn add_rotor_inertia(b: &mut RigidBody, a: f64) -> Result<(), String> {
+pub(super) fn add_rotor_inertia(b: &mut RigidBody, a: f64) -> Result<(), SetupError> {
     if a == 0.0 {
         return Ok(());
     }
     let link = match b.mass_properties().additional_local_mprops.as_deref() {
         Some(RigidBodyAdditionalMassProps::MassProps(p)) => *p,
-        _ => return Err("mobile manipulator physics: an arm link has no URDF inertial".into()),
+        _ => {
+            return Err(SetupError::other(format!(
+                "mobile manipulator physics: an arm link has no URDF inertial"
+            )))
+        }
     };
     // Massless, about an axis through the link origin along z: the sum's
     // centre of mass stays the link's.

@@ -1,7 +1,7 @@
 //! Rigid-body free-floating space robot: `models/space_robot.urdf` in Rapier.
 //!
 //! Design (measured choices, see the scenarios and `tests/space_robot.rs`):
-//! * **Impulse joints** ([`super::world`]): every joint impulse acts equally
+//! * **Impulse joints** ([`crate::physics::world`]): every joint impulse acts equally
 //!   and oppositely on two bodies, so the solver conserves the system's
 //!   linear and angular momentum. Multibody joints drifted ~0.3 % in base
 //!   attitude and injected momentum in an earlier prototype (not re-measured
@@ -13,7 +13,7 @@
 //! * No ground, **gravity must be zero**, bodies never sleep. Nothing holds
 //!   the vehicle: θ0 changes only because the joint drives exchange angular
 //!   momentum between the bodies.
-//! * Joints θ1, θ2 have servo drives ([`super::world::Drive`]) for the model
+//! * Joints θ1, θ2 have servo drives ([`crate::physics::world::Drive`]) for the model
 //!   inputs θ1', θ2'.
 //! * **All robot self-contacts are disabled**: the loader already skips the
 //!   jointed pairs (vehicle/link 1, link 1/link 2: its joints have contacts
@@ -33,13 +33,14 @@
 //! out-of-plane excursion (|z| of a body CoM, m, plus tilt of a body's z axis,
 //! rad) and the number of active contact pairs.
 
-use super::rapier::prelude::*;
-use super::real::{arr, quat, r, vector};
-use super::required::Required;
-use super::urdf::{Drive, SimWorld, WorldOptions};
-use super::{angles, PhysicsSettings, PhysicsSystem};
+use crate::error::SetupError;
 use crate::model::space_robot::SpaceRobot;
 use crate::model::{Input, State};
+use crate::physics::rapier::prelude::*;
+use crate::physics::real::{arr, quat, r, vector};
+use crate::physics::required::Required;
+use crate::physics::urdf::{Drive, SimWorld, WorldOptions};
+use crate::physics::{angles, PhysicsSettings, PhysicsSystem};
 use crate::record::Pose;
 
 use std::path::Path;
@@ -73,18 +74,19 @@ pub const CHANNELS: [&str; 6] = [
 ];
 
 /// Angle about z of a rotation (exact for rotations about z).
-fn angle_z(q: &super::rapier::math::Rotation) -> f64 {
+fn angle_z(q: &crate::physics::rapier::math::Rotation) -> f64 {
     angles::about_axis(q, 2)
 }
 
 /// Checks the URDF against the model's geometry and mass table (1e-6 relative).
-pub fn check_urdf(robot: &urdf_rs::Robot, model: &SpaceRobot) -> Result<(), String> {
+pub fn check_urdf(robot: &urdf_rs::Robot, model: &SpaceRobot) -> Result<(), SetupError> {
     let link = |name: &str| {
-        robot
-            .links
-            .iter()
-            .find(|l| l.name == name)
-            .ok_or_else(|| format!("URDF has no link `{name}` (needs {})", LINKS.join(", ")))
+        robot.links.iter().find(|l| l.name == name).ok_or_else(|| {
+            SetupError::urdf(format!(
+                "URDF has no link `{name}` (needs {})",
+                LINKS.join(", ")
+            ))
+        })
     };
     let close = |a: f64, b: f64| (a - b).abs() <= 1e-6 * (1.0 + b.abs());
     let expect = [
@@ -96,30 +98,50 @@ pub fn check_urdf(robot: &urdf_rs::Robot, model: &SpaceRobot) -> Result<(), Stri
         let l = link(name)?;
         let i = &l.inertial;
         if !close(i.mass.value, m) {
-            return Err(format!(
-                "URDF link `{name}` mass {} differs from the model's {m} kg",
-                i.mass.value
+            return Err(SetupError::urdf_at(
+                "link",
+                name.to_string(),
+                format!(
+                    "URDF link `{name}` mass {} differs from the model's {m} kg",
+                    i.mass.value
+                ),
             ));
         }
         if !close(i.inertia.izz, izz) {
-            return Err(format!(
-                "URDF link `{name}` izz {} differs from the model's {izz} kg m²",
-                i.inertia.izz
+            return Err(SetupError::urdf_at(
+                "link",
+                name.to_string(),
+                format!(
+                    "URDF link `{name}` izz {} differs from the model's {izz} kg m²",
+                    i.inertia.izz
+                ),
             ));
         }
         let o = &i.origin;
         if !close(o.xyz[0], com_x) || o.xyz[1].abs() > 1e-9 || o.xyz[2].abs() > 1e-9 {
-            return Err(format!(
-                "URDF link `{name}` CoM {:?} must be at ({com_x}, 0, 0) for the planar model",
-                o.xyz.0
+            return Err(SetupError::urdf_at(
+                "link",
+                name.to_string(),
+                format!(
+                    "URDF link `{name}` CoM {:?} must be at ({com_x}, 0, 0) for the planar model",
+                    o.xyz.0
+                ),
             ));
         }
         if o.rpy.0.iter().any(|a| a.abs() > 1e-9) {
-            return Err(format!("URDF link `{name}` inertial must not be rotated"));
+            return Err(SetupError::urdf_at(
+                "link",
+                name.to_string(),
+                format!("URDF link `{name}` inertial must not be rotated"),
+            ));
         }
         let t = &i.inertia;
         if t.ixy.abs() > 1e-12 || t.ixz.abs() > 1e-12 || t.iyz.abs() > 1e-12 {
-            return Err(format!("URDF link `{name}` inertia must be diagonal"));
+            return Err(SetupError::urdf_at(
+                "link",
+                name.to_string(),
+                format!("URDF link `{name}` inertia must be diagonal"),
+            ));
         }
     }
     let expect = [
@@ -131,34 +153,51 @@ pub fn check_urdf(robot: &urdf_rs::Robot, model: &SpaceRobot) -> Result<(), Stri
             .joints
             .iter()
             .find(|j| j.name == name)
-            .ok_or_else(|| format!("URDF has no joint `{name}` (needs {})", JOINTS.join(", ")))?;
+            .ok_or_else(|| {
+                SetupError::urdf(format!(
+                    "URDF has no joint `{name}` (needs {})",
+                    JOINTS.join(", ")
+                ))
+            })?;
         if j.parent.link != parent || j.child.link != child {
-            return Err(format!(
-                "URDF joint `{name}` must connect `{parent}` to `{child}`"
+            return Err(SetupError::urdf_at(
+                "joint",
+                name.to_string(),
+                format!("URDF joint `{name}` must connect `{parent}` to `{child}`"),
             ));
         }
         if !matches!(
             j.joint_type,
             urdf_rs::JointType::Continuous | urdf_rs::JointType::Revolute
         ) {
-            return Err(format!(
-                "URDF joint `{name}` must be continuous (or revolute)"
+            return Err(SetupError::urdf_at(
+                "joint",
+                name.to_string(),
+                format!("URDF joint `{name}` must be continuous (or revolute)"),
             ));
         }
         let a = j.axis.xyz.0;
         if a[0].abs() > 1e-9 || a[1].abs() > 1e-9 || a[2] <= 0.0 {
-            return Err(format!(
-                "URDF joint `{name}` axis must be +z (planar model)"
+            return Err(SetupError::urdf_at(
+                "joint",
+                name.to_string(),
+                format!("URDF joint `{name}` axis must be +z (planar model)"),
             ));
         }
         let o = &j.origin;
         if !close(o.xyz[0], x) || o.xyz[1].abs() > 1e-9 || o.xyz[2].abs() > 1e-9 {
-            return Err(format!(
-                "URDF joint `{name}` must sit at ({x}, 0, 0) in `{parent}`"
+            return Err(SetupError::urdf_at(
+                "joint",
+                name.to_string(),
+                format!("URDF joint `{name}` must sit at ({x}, 0, 0) in `{parent}`"),
             ));
         }
         if o.rpy.0.iter().any(|a| a.abs() > 1e-9) {
-            return Err(format!("URDF joint `{name}` origin must not be rotated"));
+            return Err(SetupError::urdf_at(
+                "joint",
+                name.to_string(),
+                format!("URDF joint `{name}` origin must not be rotated"),
+            ));
         }
     }
     if robot.links.len() != 3 || robot.joints.len() != 2 {
@@ -189,7 +228,7 @@ pub struct SpaceRobotPhysics {
     channels: [f64; CHANNELS.len()],
 }
 
-fn rot(angle: f64) -> super::rapier::math::Rotation {
+fn rot(angle: f64) -> crate::physics::rapier::math::Rotation {
     Rotation::from_rotation_z(r(angle))
 }
 
@@ -202,7 +241,7 @@ fn cross(a: [f64; 3], b: [f64; 3]) -> [f64; 3] {
 }
 
 /// Rotate `v` by the quaternion `q` (f64).
-fn rotate(q: &super::rapier::math::Rotation, v: [f64; 3]) -> [f64; 3] {
+fn rotate(q: &crate::physics::rapier::math::Rotation, v: [f64; 3]) -> [f64; 3] {
     let [x, y, z, w] = quat(q);
     let u = [x, y, z];
     let t = cross(u, v).map(|c| 2.0 * c);
@@ -214,7 +253,7 @@ fn rotate(q: &super::rapier::math::Rotation, v: [f64; 3]) -> [f64; 3] {
     ]
 }
 
-fn conj(q: &super::rapier::math::Rotation) -> super::rapier::math::Rotation {
+fn conj(q: &crate::physics::rapier::math::Rotation) -> crate::physics::rapier::math::Rotation {
     q.inverse()
 }
 
@@ -226,18 +265,19 @@ impl SpaceRobotPhysics {
         model: &SpaceRobot,
         start: &[f64],
         sim: &PhysicsSettings,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, SetupError> {
         check_urdf(robot, model)?;
         if sim.gravity.iter().any(|g| *g != 0.0) {
-            return Err("scenario key `sim.gravity` must be [0, 0, 0]: the space robot floats free (no ground, no gravity)".into());
+            return Err(SetupError::key("sim.gravity", format!("scenario key `sim.gravity` must be [0, 0, 0]: the space robot floats free (no ground, no gravity)")));
         }
         if start.len() != 3 {
-            return Err("start needs (θ0, θ1, θ2)".into());
+            return Err(SetupError::other(format!("start needs (θ0, θ1, θ2)")));
         }
         let poses = model.body_poses(&State::from_column_slice(start));
         // Vehicle frame = vehicle CoM (joint 1).
         let p0 = poses[0].position;
-        let root = super::rapier::math::Pose::from_parts(vector(p0.x, p0.y, 0.0), rot(start[0]));
+        let root =
+            crate::physics::rapier::math::Pose::from_parts(vector(p0.x, p0.y, 0.0), rot(start[0]));
         let mut sw = SimWorld::new(
             robot,
             urdf_dir,
@@ -259,10 +299,10 @@ impl SpaceRobotPhysics {
         // Place the links at the start joint angles: link frames sit at the joints.
         let phi1 = start[0] + start[1];
         let joint1 = sw.world.bodies[bodies[0]].position().translation;
-        let frame1 = super::rapier::math::Pose::from_parts(joint1, rot(phi1));
+        let frame1 = crate::physics::rapier::math::Pose::from_parts(joint1, rot(phi1));
         let l1 = model.l1;
         let joint2 = vector(p0.x + l1 * phi1.cos(), p0.y + l1 * phi1.sin(), 0.0);
-        let frame2 = super::rapier::math::Pose::from_parts(joint2, rot(phi1 + start[2]));
+        let frame2 = crate::physics::rapier::math::Pose::from_parts(joint2, rot(phi1 + start[2]));
         for (h, pose) in [(bodies[1], frame1), (bodies[2], frame2)] {
             if let Some(b) = sw.world.bodies.get_mut(h) {
                 b.set_position(pose, true);
@@ -292,7 +332,7 @@ impl SpaceRobotPhysics {
                 .links
                 .iter()
                 .find(|l| l.name == *name)
-                .ok_or_else(|| format!("URDF has no link `{name}`"))?;
+                .ok_or_else(|| SetupError::urdf(format!("URDF has no link `{name}`")))?;
             let t = &l.inertial.inertia;
             mass[i] = l.inertial.mass.value;
             local_com[i] = l.inertial.origin.xyz.0;

@@ -1,8 +1,8 @@
 //! Angle read-back shared by the physics systems: Rapier quaternions to
 //! model angles, and continuous unwrapping across steps.
 
-use super::rapier::math::Rotation;
-use super::real::quat;
+use crate::physics::rapier::math::Rotation;
+use crate::physics::real::quat;
 
 pub use crate::compare::wrap_angle as wrap;
 

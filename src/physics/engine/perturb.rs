@@ -19,7 +19,7 @@
 //! Which dimensions reach which system is declared by the system
 //! ([`crate::systems::System::perturbable`], default [`Dimension::common`]).
 //! [`Reality`] applies the command and observation perturbations inside the
-//! replay loop; the world ones are [`super::PhysicsSettings`] fields.
+//! replay loop; the world ones are [`crate::physics::PhysicsSettings`] fields.
 //!
 //! Exact definitions (tests check them):
 //! * Latency L = (n + f)·dt, 0 ≤ f < 1: the replay applies a command c_k

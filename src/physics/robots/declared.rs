@@ -18,17 +18,18 @@
 //! * Links in `frictionless` have frictionless collisions (ideal casters);
 //!   cylinder collisions of the children of continuous joints (wheels) touch
 //!   the ground through a ball of their radius, as the built-in wheeled
-//!   models' do ([`super::wheeled::roll_on_balls`]).
+//!   models' do ([`crate::physics::wheeled::roll_on_balls`]).
 
-use super::angles;
-use super::rapier::math::Pose as RPose;
-use super::rapier::prelude::*;
-use super::reading::UrdfReading;
-use super::real::{f, r, vector};
-use super::urdf::{Drive, SimWorld};
-use super::{PhysicsSettings, PhysicsSystem};
+use crate::error::SetupError;
 use crate::model::declared::{Declared, Expr};
 use crate::model::{Input, KinematicModel, State};
+use crate::physics::angles;
+use crate::physics::rapier::math::Pose as RPose;
+use crate::physics::rapier::prelude::*;
+use crate::physics::reading::UrdfReading;
+use crate::physics::real::{f, r, vector};
+use crate::physics::urdf::{Drive, SimWorld};
+use crate::physics::{PhysicsSettings, PhysicsSystem};
 use crate::record::Pose;
 use std::path::Path;
 use urdf_rs::{JointType, Robot};
@@ -61,12 +62,14 @@ pub enum LinkCoord {
 
 impl Read {
     /// `LINK.x|y|z|roll|pitch|yaw` or `JOINT.position`.
-    pub fn parse(s: &str) -> Result<Read, String> {
+    pub fn parse(s: &str) -> Result<Read, SetupError> {
         let (name, what) = s.rsplit_once('.').ok_or_else(|| {
             format!("`{s}`: expected LINK.x|y|z|roll|pitch|yaw or JOINT.position")
         })?;
         if name.is_empty() {
-            return Err(format!("`{s}`: no link or joint name before `.{what}`"));
+            return Err(SetupError::other(format!(
+                "`{s}`: no link or joint name before `.{what}`"
+            )));
         }
         let coord = match what {
             "x" => LinkCoord::X,
@@ -77,9 +80,9 @@ impl Read {
             "yaw" => LinkCoord::Yaw,
             "position" => return Ok(Read::Joint(name.to_string())),
             _ => {
-                return Err(format!(
+                return Err(SetupError::other(format!(
                     "`{s}`: `.{what}` is not a coordinate (LINK.x|y|z|roll|pitch|yaw or JOINT.position)"
-                ))
+                )))
             }
         };
         Ok(Read::Link(name.to_string(), coord))
@@ -155,21 +158,20 @@ impl DeclaredPhysics {
         model: &Declared,
         start: &[f64],
         sim: &PhysicsSettings,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, SetupError> {
         // Every name against the URDF first, each error with its key.
         for (s, rd) in rig.states.iter().zip(&rig.reads) {
-            let key = format!("key `model.read.{s}`");
+            let key = format!("model.read.{s}");
             match rd {
                 Read::Link(l, _) if !robot.links.iter().any(|x| x.name == *l) => {
-                    return Err(format!("{key}: URDF has no link `{l}`"))
+                    return Err(SetupError::key(&key, format!("URDF has no link `{l}`")))
                 }
                 Read::Joint(j) => match joint(robot, j) {
-                    None => return Err(format!("{key}: URDF has no joint `{j}`")),
+                    None => return Err(SetupError::key(&key, format!("URDF has no joint `{j}`"))),
                     Some(x) if matches!(x.joint_type, JointType::Fixed | JointType::Floating | JointType::Planar | JointType::Spherical) => {
-                        return Err(format!(
-                            "{key}: joint `{j}` is {:?}: only revolute, continuous and prismatic joints have one position",
+                        return Err(SetupError::key(&key, format!("joint `{j}` is {:?}: only revolute, continuous and prismatic joints have one position",
                             x.joint_type
-                        ))
+                        )))
                     }
                     _ => {}
                 },
@@ -178,14 +180,13 @@ impl DeclaredPhysics {
         }
         for (table, list) in [("drive", &rig.drives), ("drive_position", &rig.positions)] {
             for (j, _) in list {
-                let key = format!("key `model.{table}.{j}`");
+                let key = format!("model.{table}.{j}");
                 match joint(robot, j) {
-                    None => return Err(format!("{key}: URDF has no joint `{j}`")),
+                    None => return Err(SetupError::key(&key, format!("URDF has no joint `{j}`"))),
                     Some(x) if !matches!(x.joint_type, JointType::Revolute | JointType::Continuous | JointType::Prismatic) => {
-                        return Err(format!(
-                            "{key}: joint `{j}` is {}: a drive needs a revolute, continuous or prismatic joint",
+                        return Err(SetupError::key(&key, format!("joint `{j}` is {}: a drive needs a revolute, continuous or prismatic joint",
                             format!("{:?}", x.joint_type).to_lowercase()
-                        ))
+                        )))
                     }
                     _ => {}
                 }
@@ -193,7 +194,10 @@ impl DeclaredPhysics {
         }
         for l in &rig.frictionless {
             if !robot.links.iter().any(|x| x.name == *l) {
-                return Err(format!("key `model.frictionless`: URDF has no link `{l}`"));
+                return Err(SetupError::key(
+                    "model.frictionless",
+                    format!("URDF has no link `{l}`"),
+                ));
             }
         }
         // Wheels: the children of continuous joints with round collisions.
@@ -202,15 +206,20 @@ impl DeclaredPhysics {
             .iter()
             .filter(|j| j.joint_type == JointType::Continuous)
             .map(|j| j.child.link.as_str())
-            .filter(|l| super::urdf::collision_radius(robot, l).is_some())
+            .filter(|l| crate::physics::urdf::collision_radius(robot, l).is_some())
             .collect();
         let worn = (sim.wheel_radius_scale != 1.0).then(|| {
-            super::perturb::shrink_round_collisions(robot, &wheels, sim.wheel_radius_scale, None)
+            crate::physics::perturb::shrink_round_collisions(
+                robot,
+                &wheels,
+                sim.wheel_radius_scale,
+                None,
+            )
         });
         let robot = worn.as_ref().unwrap_or(robot);
         let root = place_root(robot, rig, start)?;
         let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root)?;
-        super::wheeled::roll_links_on_balls(&mut sw, &wheels)?;
+        crate::physics::wheeled::roll_links_on_balls(&mut sw, &wheels)?;
         for l in &rig.frictionless {
             for h in sw.colliders_of(l)? {
                 if let Some(c) = sw.world.colliders.get_mut(h) {
@@ -222,30 +231,29 @@ impl DeclaredPhysics {
         let root_body = sw.robot.link(root_link(robot));
         let mut sources = Vec::new();
         for ((s, rd), &v) in rig.states.iter().zip(&rig.reads).zip(start) {
-            let key = format!("key `model.read.{s}`");
+            let key = format!("model.read.{s}");
             sources.push(match rd {
                 Read::Link(l, c) => {
-                    let (body, off) = sw.require_frame(l).map_err(|e| format!("{key}: {e}"))?;
+                    let (body, off) = sw.require_frame(l).map_err(|e| e.under_key(&key))?;
                     if *c == LinkCoord::Yaw && root_body != Some(body) {
                         let j = joint_above(robot, l).ok_or_else(|| {
-                            format!("{key}: link `{l}` is not on the root body, nor one joint below it: the start cannot place it")
+                            SetupError::key(&key, format!("link `{l}` is not on the root body, nor one joint below it: the start cannot place it"))
                         })?;
-                        let h = sw.require_joint(&j).map_err(|e| format!("{key}: {e}"))?;
+                        let h = sw.require_joint(&j).map_err(|e| e.under_key(&key))?;
                         // Yaw now (joint at zero) → the joint angle that gives `v`.
                         let now = link_yaw(&sw, body, off);
                         let at = sw.joint_position(h).unwrap_or(0.0);
                         let sign = joint_yaw_sign(&sw, h);
                         if sign == 0.0 {
-                            return Err(format!(
-                                "{key}: joint `{j}` above link `{l}` is not vertical: the start cannot set its yaw"
-                            ));
+                            return Err(SetupError::key(&key, format!("joint `{j}` above link `{l}` is not vertical: the start cannot set its yaw"
+                            )));
                         }
                         sw.set_joint_position(h, at + sign * angles::wrap(v - now))?;
                     }
                     Source::Link(body, off, *c)
                 }
                 Read::Joint(j) => {
-                    let h = sw.require_joint(j).map_err(|e| format!("{key}: {e}"))?;
+                    let h = sw.require_joint(j).map_err(|e| e.under_key(&key))?;
                     sw.set_joint_position(h, v)?;
                     Source::Joint(h)
                 }
@@ -257,7 +265,7 @@ impl DeclaredPhysics {
             let uj = joint(robot, j).expect("checked");
             let h = sw.require_joint(j)?;
             let mut d = sw.drive_for(h, axis_of(uj), sw.joint_position(h).unwrap_or(0.0));
-            d.max_torque = super::diff_drive::effort(robot, j);
+            d.max_torque = crate::physics::diff_drive::effort(robot, j);
             reading.drive(j, d.max_torque, sim.motor_max_torque);
             drives.push((d, e.clone()));
         }
@@ -266,7 +274,7 @@ impl DeclaredPhysics {
             let uj = joint(robot, j).expect("checked");
             let h = sw.require_joint(j)?;
             let mut d = sw.drive_for(h, axis_of(uj), sw.joint_position(h).unwrap_or(0.0));
-            d.max_torque = super::diff_drive::effort(robot, j);
+            d.max_torque = crate::physics::diff_drive::effort(robot, j);
             reading.drive(j, d.max_torque, sim.motor_max_torque);
             positions.push((d, e.clone()));
         }
@@ -306,7 +314,7 @@ impl DeclaredPhysics {
                     LinkCoord::Z => f(p.translation.z),
                     LinkCoord::Yaw => angles::yaw(&p.rotation),
                     LinkCoord::Roll | LinkCoord::Pitch => {
-                        let [x, y, z, w] = super::real::quat(&p.rotation);
+                        let [x, y, z, w] = crate::physics::real::quat(&p.rotation);
                         if *c == LinkCoord::Roll {
                             (2.0 * (w * x + y * z)).atan2(1.0 - 2.0 * (x * x + y * y))
                         } else {
@@ -381,10 +389,10 @@ fn joint_yaw_sign(sw: &SimWorld, h: ImpulseJointHandle) -> f64 {
 /// The root link's world pose that puts the root body's read links at the
 /// start's x, y and yaw, and the lowest collision of the robot (all joints
 /// at zero) on the ground.
-fn place_root(robot: &Robot, rig: &Rig, start: &[f64]) -> Result<RPose, String> {
-    let frames = super::wheeled::link_frames(robot);
+fn place_root(robot: &Robot, rig: &Rig, start: &[f64]) -> Result<RPose, SetupError> {
+    let frames = crate::physics::wheeled::link_frames(robot);
     let root = root_link(robot);
-    let on_root = |l: &str| super::wheeled::rigidly_on(robot, l, root, "").is_ok();
+    let on_root = |l: &str| crate::physics::wheeled::rigidly_on(robot, l, root, "").is_ok();
     let mut yaw = None;
     for (rd, &v) in rig.reads.iter().zip(start) {
         if let Read::Link(l, LinkCoord::Yaw) = rd {
@@ -409,8 +417,8 @@ fn place_root(robot: &Robot, rig: &Rig, start: &[f64]) -> Result<RPose, String> 
     let mut low = f64::INFINITY;
     for l in &robot.links {
         for c in &l.collision {
-            let at = turned * frames[&l.name] * super::world::origin(&c.origin);
-            if let Some(z) = super::world::lowest_point(&c.geometry, &at) {
+            let at = turned * frames[&l.name] * crate::physics::world::origin(&c.origin);
+            if let Some(z) = crate::physics::world::lowest_point(&c.geometry, &at) {
                 low = low.min(z);
             }
         }

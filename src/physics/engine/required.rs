@@ -8,6 +8,7 @@
 //! Each physics module exports its table (`REQUIRED`); its system turns it
 //! into the names the scenario configures (`System::urdf_names`).
 
+use crate::error::SetupError;
 use serde::Serialize;
 use urdf_rs::Robot;
 
@@ -108,7 +109,7 @@ fn list(names: &[&str]) -> String {
 /// ones in one line (`` URDF lacks joints `a`, `b` and link `c` ``: joints
 /// first, each group in declaration order, "and" only between the groups
 /// when there are two) and the `[model]` keys that rename them, if any.
-pub fn check(robot: &Robot, names: &[Named]) -> Result<(), String> {
+pub fn check(robot: &Robot, names: &[Named]) -> Result<(), SetupError> {
     let has = |n: &Named| match n.required.element {
         Element::Link => robot.links.iter().any(|l| l.name == n.name),
         Element::Joint => robot.joints.iter().any(|j| j.name == n.name),
@@ -156,7 +157,10 @@ pub fn check(robot: &Robot, names: &[Named]) -> Result<(), String> {
     } else {
         format!(" (or name them in [model] with {})", keys.join(", "))
     };
-    Err(format!("URDF lacks {}{hint}", parts.join(" and ")))
+    Err(SetupError::urdf(format!(
+        "URDF lacks {}{hint}",
+        parts.join(" and ")
+    )))
 }
 
 #[cfg(test)]
@@ -187,14 +191,18 @@ mod tests {
     fn every_missing_name_in_one_message() {
         let names = defaults(&TABLE);
         check(&robot(&["base", "wheel"], &["a", "b"]), &names).unwrap();
-        let e = check(&robot(&["base"], &[]), &names).unwrap_err();
+        let e = check(&robot(&["base"], &[]), &names)
+            .unwrap_err()
+            .to_string();
         assert_eq!(
             e,
             "URDF lacks joints `a`, `b` and link `wheel` (or name them in [model] with a_joint)"
         );
-        let e = check(&robot(&[], &["a"]), &names).unwrap_err();
+        let e = check(&robot(&[], &["a"]), &names).unwrap_err().to_string();
         assert_eq!(e, "URDF lacks joint `b` and links `base`, `wheel`");
-        let e = check(&robot(&["wheel"], &["a", "b"]), &names).unwrap_err();
+        let e = check(&robot(&["wheel"], &["a", "b"]), &names)
+            .unwrap_err()
+            .to_string();
         assert_eq!(e, "URDF lacks link `base`");
         // Three of a kind: commas, then "and".
         let three = [
@@ -203,7 +211,9 @@ mod tests {
             Required::link("r", ""),
         ];
         let three: &'static [Required] = Box::leak(Box::new(three));
-        let e = check(&robot(&[], &[]), &defaults(three)).unwrap_err();
+        let e = check(&robot(&[], &[]), &defaults(three))
+            .unwrap_err()
+            .to_string();
         assert_eq!(e, "URDF lacks links `p`, `q` and `r`");
     }
 }

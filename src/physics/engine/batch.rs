@@ -25,131 +25,25 @@
 //! which it would not if their contacts went there. Robots that finish early are disabled, which removes their bodies
 //! from the solver.
 //!
-//! **Building.** A system builds its own [`SimWorld`](super::world::SimWorld) in its constructor;
+//! **Building.** A system builds its own [`SimWorld`](crate::physics::world::SimWorld) in its constructor;
 //! [`Host::build`] runs that constructor with the batch's world parked in a
-//! thread-local slot, and [`SimWorld::new`](super::world::SimWorld::new) inserts the robot there instead
+//! thread-local slot, and [`SimWorld::new`](crate::physics::world::SimWorld::new) inserts the robot there instead
 //! of into a fresh world. Between calls the shared world is lent to one
-//! system at a time (its [`SimWorld::world`](super::world::SimWorld::world) box is swapped in and out), so
+//! system at a time (its [`SimWorld::world`](crate::physics::world::SimWorld::world) box is swapped in and out), so
 //! the systems' own code runs unchanged.
 
-use super::perturb::Perturbation;
-use super::rapier::math::Vector;
-use super::rapier::prelude::*;
-use super::world::WorldOptions;
-use super::{PhysicsSettings, PhysicsSystem, Replay, ReplayError, ReplayOptions};
 use crate::cancel::Cancel;
+use crate::physics::engine::shared_world::{ClearSlot, Shared, Slot, WorldKey, MAX_ROBOTS, SLOT};
+use crate::physics::rapier::math::Vector;
+use crate::physics::rapier::prelude::*;
+use crate::physics::{PhysicsSystem, Replay, ReplayError, ReplayOptions};
 use crate::plan::Plan;
 use crate::record::SimTrajectory;
-use std::cell::RefCell;
-
-/// Most robots in one batch world: collision groups are 32 bits, one is the
-/// ground's.
-pub const MAX_ROBOTS: usize = 31;
 
 /// Contacts per colour below Rapier's parallel threshold (32 chunks of 4).
 const CONTACTS_PER_COLOR: usize = 124;
 /// Joints per colour below Rapier's parallel threshold (64).
 const JOINTS_PER_COLOR: usize = 63;
-
-/// What must agree for two robots to share a world.
-#[derive(Debug, Clone, PartialEq)]
-struct WorldKey {
-    dt: f64,
-    solver_iterations: usize,
-    pgs_iterations: usize,
-    relax_pass: bool,
-    gravity: [f64; 3],
-    ground: bool,
-}
-
-impl WorldKey {
-    fn of(opts: &WorldOptions) -> WorldKey {
-        let s: &PhysicsSettings = opts.settings;
-        WorldKey {
-            dt: s.dt,
-            solver_iterations: s.solver_iterations,
-            pgs_iterations: s.pgs_iterations,
-            relax_pass: s.relax_pass.unwrap_or(opts.ground),
-            gravity: s.gravity,
-            ground: opts.ground,
-        }
-    }
-}
-
-/// The shared world between builds, with its ground.
-type Shared = (Box<PhysicsWorld>, RigidBodyHandle, Option<ColliderHandle>);
-
-/// The thread-local slot [`SimWorld::new`](super::world::SimWorld::new) looks in while [`Host::build`] runs.
-struct Slot {
-    key: Option<WorldKey>,
-    world: Option<Shared>,
-    /// Collision group index of the next robot.
-    group: usize,
-    /// Set by [`join`]: the robot joined (a fresh world when `world` was None).
-    joined: bool,
-}
-
-thread_local! {
-    static SLOT: RefCell<Option<Slot>> = const { RefCell::new(None) };
-}
-
-/// Empties this thread's slot when dropped.
-struct ClearSlot;
-
-impl Drop for ClearSlot {
-    fn drop(&mut self) {
-        SLOT.with(|s| s.borrow_mut().take());
-    }
-}
-
-/// For [`SimWorld::new`](super::world::SimWorld::new): `None` outside a batch build (or when the robot
-/// cannot join this batch: other world settings, or no collision group
-/// left), then it builds a world of its own; `Some(None)` for the batch's
-/// first robot (a fresh world that becomes the shared one); `Some(Some(w))`
-/// to insert the robot into the shared world.
-pub(super) fn join(opts: &WorldOptions) -> Option<Option<Shared>> {
-    SLOT.with(|slot| {
-        let mut slot = slot.borrow_mut();
-        let slot = slot.as_mut()?;
-        let key = WorldKey::of(opts);
-        if slot.joined || slot.group >= MAX_ROBOTS || slot.key.as_ref().is_some_and(|k| *k != key) {
-            return None;
-        }
-        slot.key = Some(key);
-        slot.joined = true;
-        Some(slot.world.take())
-    })
-}
-
-/// For [`SimWorld::new`](super::world::SimWorld::new) after inserting a joining robot: its own collision
-/// group (the ground stays in group 1 and meets everyone), and ground
-/// friction at least the robot's (contacts take the smaller coefficient, so
-/// each robot keeps its own).
-pub(super) fn keep_apart(
-    world: &mut PhysicsWorld,
-    robot: &super::world::RobotHandles,
-    ground: Option<ColliderHandle>,
-    friction: f64,
-) {
-    let group = SLOT.with(|slot| slot.borrow().as_ref().map_or(0, |s| s.group));
-    let bit = Group::from_bits_truncate(1 << (group + 1));
-    let mine = InteractionGroups::new(bit, bit | Group::GROUP_1, InteractionTestMode::And);
-    for c in &robot.colliders {
-        if let Some(c) = world.colliders.get_mut(*c) {
-            c.set_collision_groups(mine);
-        }
-    }
-    if let Some(g) = ground.and_then(|g| world.colliders.get_mut(g)) {
-        g.set_collision_groups(InteractionGroups::new(
-            Group::GROUP_1,
-            Group::ALL,
-            InteractionTestMode::And,
-        ));
-        if g.friction() < friction {
-            g.set_friction(friction);
-        }
-    }
-}
 
 /// How many robots like `sys` can share a world with unchanged results
 /// (see the module docs); `None` when the system cannot share one.
@@ -185,11 +79,9 @@ pub struct Lane<'a> {
     pub sys: &'a mut dyn PhysicsSystem,
     /// Its plan.
     pub plan: &'a Plan,
-    /// Its replay options (the step must be the world's).
+    /// Its replay options (the step must be the world's), with its command
+    /// and observation perturbations (the world ones are in the system already).
     pub opts: ReplayOptions,
-    /// Its command and observation perturbations (the world ones are in
-    /// the system already).
-    pub perturb: &'a Perturbation,
 }
 
 /// A built system: in the batch's world, or alone (it could not join).
@@ -302,7 +194,7 @@ impl Host {
         let mut runs: Vec<Option<Replay>> = Vec::with_capacity(lanes.len());
         for (i, l) in lanes.iter_mut().enumerate() {
             let start = lend(&mut world, &mut *l.sys, |s| {
-                Replay::start(s, l.plan, &l.opts, l.perturb)
+                Replay::start(s, l.plan, &l.opts)
             });
             match start {
                 Ok(run) => runs.push(Some(run)),
@@ -366,7 +258,7 @@ impl Host {
     }
 }
 
-/// Run `f` on `sys` with the shared world swapped into its [`SimWorld`](super::world::SimWorld).
+/// Run `f` on `sys` with the shared world swapped into its [`SimWorld`](crate::physics::world::SimWorld).
 fn lend<T>(
     world: &mut Box<PhysicsWorld>,
     sys: &mut dyn PhysicsSystem,
@@ -402,13 +294,7 @@ mod tests {
     /// never step.
     #[test]
     fn a_panicking_constructor_leaves_no_slot_behind() {
-        let settings = PhysicsSettings::default();
-        let opts = WorldOptions {
-            settings: &settings,
-            root_pose: super::super::rapier::math::Pose::identity(),
-            ground: true,
-            keep_fixed: &[],
-        };
+        let settings = crate::physics::PhysicsSettings::default();
         let mut host = Host::new();
         let caught = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
             let _ = host.build(|| -> Result<Box<dyn PhysicsSystem>, ()> {
@@ -416,6 +302,7 @@ mod tests {
             });
         }));
         assert!(caught.is_err());
-        assert!(join(&opts).is_none(), "a slot outlived the build");
+        let joined = crate::physics::engine::shared_world::join(&settings, true);
+        assert!(joined.is_none(), "a slot outlived the build");
     }
 }

@@ -17,12 +17,13 @@
 //! (dynamics, the compliance of the fixed joints, large rotations of the
 //! chain) and not by where the robots went.
 
-use super::super::beam::{Attachment, BeamOptions, PhysicsBeam};
-use super::super::rapier::prelude::*;
-use super::super::real::{f, from_spatial, to_pose, to_spatial};
+use crate::error::SetupError;
 use crate::model::beam::se3_log;
 use crate::model::beam::{Beam, FeBeam};
 use crate::model::spatial::{self, Pose as SPose};
+use crate::physics::beam::{Attachment, BeamOptions, PhysicsBeam};
+use crate::physics::rapier::prelude::*;
+use crate::physics::real::{f, from_spatial, to_pose, to_spatial};
 use crate::record::{LinkVisual, Pose, Shape, Visual};
 
 /// The beam as the physics needs it (plain data, from the planner's grasp).
@@ -102,7 +103,7 @@ impl Held {
         spec: &CarriedBeam,
         tools: [RigidBodyHandle; 2],
         groups: InteractionGroups,
-    ) -> Result<Held, String> {
+    ) -> Result<Held, SetupError> {
         let fe = FeBeam::new(&spec.beam)?;
         // Start in the FE model's equilibrium under gravity (not straight),
         // so the replay does not begin with the rod dropping into its sag.

@@ -1,7 +1,7 @@
 //! A Rapier world built from URDF robots: the loader (links → dynamic bodies
 //! with the URDF inertials, `<collision>` → colliders, joints → impulse joints
 //! with their limits), an optional ground half-space, and the handles the
-//! systems use. Robots come from [`super::urdf::read`], which has rejected
+//! systems use. Robots come from [`crate::physics::urdf::read`], which has rejected
 //! everything this loader cannot represent.
 //!
 //! Impulse joints (not multibody joints): every joint impulse acts equally and
@@ -9,12 +9,13 @@
 //! momentum (the space robot relies on it). Bodies never sleep. Colliders
 //! carry no mass (density 0): mass properties come from `<inertial>` only.
 
-use super::rapier::glamx::EulerRot;
-use super::rapier::math::{Matrix, Pose as RPose};
-use super::rapier::na::Unit;
-use super::rapier::prelude::*;
-use super::real::{f, r, to_pose, vector};
-use super::settings::PhysicsSettings;
+use crate::error::SetupError;
+use crate::physics::rapier::glamx::EulerRot;
+use crate::physics::rapier::math::{Matrix, Pose as RPose};
+use crate::physics::rapier::na::Unit;
+use crate::physics::rapier::prelude::*;
+use crate::physics::real::{f, r, to_pose, vector};
+use crate::physics::settings::PhysicsSettings;
 use crate::record::Pose;
 use std::collections::HashMap;
 use std::path::Path;
@@ -81,7 +82,11 @@ fn collision_shape(g: &Geometry) -> Option<(SharedShape, RPose)> {
         ),
         Geometry::Sphere { radius } => (SharedShape::ball(r(*radius)), RPose::IDENTITY),
         Geometry::Mesh { filename, scale } => {
-            let m = super::mesh::load(Path::new(filename), super::mesh::scale_of(scale)).ok()?;
+            let m = crate::physics::mesh::load(
+                Path::new(filename),
+                crate::physics::mesh::scale_of(scale),
+            )
+            .ok()?;
             let points: Vec<Vector> = m
                 .vertices
                 .iter()
@@ -120,7 +125,7 @@ fn joint_data(j: &urdf_rs::Joint, parent: Option<RPose>, child: Option<RPose>) -
     } else {
         RPose::from_rotation(GenericJoint::complete_ang_frame(axis))
     };
-    // Links lumped into a body ([`super::lump`]) sit at an offset in its frame.
+    // Links lumped into a body ([`crate::physics::lump`]) sit at an offset in its frame.
     let frame1 = origin(&j.origin) * basis;
     let mut b = GenericJointBuilder::new(locked)
         .contacts_enabled(false)
@@ -172,11 +177,16 @@ fn initial_poses(robot: &Robot, root: RPose) -> Vec<RPose> {
     pose.into_iter().map(|p| p.unwrap_or(root)).collect()
 }
 
+/// The refusal for a link the URDF lacks.
+fn no_link(name: &str) -> SetupError {
+    SetupError::urdf(format!("URDF has no link `{name}`"))
+}
+
 /// Handles of one robot in a [`SimWorld`].
 #[derive(Debug, Clone, Default)]
 pub struct RobotHandles {
     /// Body of each URDF link, in URDF link order (links lumped into one
-    /// body share its handle: [`super::lump`]).
+    /// body share its handle: [`crate::physics::lump`]).
     pub links: Vec<RigidBodyHandle>,
     /// Each link's pose in its body's frame (`None`: the body's own link).
     pub offsets: Vec<Option<RPose>>,
@@ -199,14 +209,13 @@ impl RobotHandles {
     /// Body of a link the system needs and whose body's pose it reads as
     /// the link's pose; the error names the missing link, or the body it
     /// was lumped into (the system then needs [`RobotHandles::require_frame`]).
-    pub fn require_link(&self, name: &str) -> Result<RigidBodyHandle, String> {
-        let i = *self
-            .link_index
-            .get(name)
-            .ok_or_else(|| format!("URDF has no link `{name}`"))?;
+    pub fn require_link(&self, name: &str) -> Result<RigidBodyHandle, SetupError> {
+        let i = *self.link_index.get(name).ok_or_else(|| no_link(name))?;
         if self.offsets[i].is_some() {
-            return Err(format!(
-                "URDF link `{name}` is fixed to another link and lumped into its body: this model reads its pose, so give it the mass (an <inertial>) or attach it by a non-fixed joint"
+            return Err(SetupError::urdf_at(
+                "link",
+                name,
+                format!("URDF link `{name}` is fixed to another link and lumped into its body: this model reads its pose, so give it the mass (an <inertial>) or attach it by a non-fixed joint"),
             ));
         }
         Ok(self.links[i])
@@ -214,28 +223,24 @@ impl RobotHandles {
 
     /// Body of a named link and the link's pose in the body frame
     /// (identity for a body's own link).
-    pub fn require_frame(&self, name: &str) -> Result<(RigidBodyHandle, RPose), String> {
-        let i = *self
-            .link_index
-            .get(name)
-            .ok_or_else(|| format!("URDF has no link `{name}`"))?;
+    pub fn require_frame(&self, name: &str) -> Result<(RigidBodyHandle, RPose), SetupError> {
+        let i = *self.link_index.get(name).ok_or_else(|| no_link(name))?;
         Ok((self.links[i], self.offsets[i].unwrap_or(RPose::IDENTITY)))
     }
 
     /// The colliders of a named link's own `<collision>` elements.
-    pub fn colliders_of(&self, name: &str) -> Result<&[ColliderHandle], String> {
+    pub fn colliders_of(&self, name: &str) -> Result<&[ColliderHandle], SetupError> {
         self.link_index
             .get(name)
             .map(|&i| self.link_colliders[i].as_slice())
-            .ok_or_else(|| format!("URDF has no link `{name}`"))
+            .ok_or_else(|| no_link(name))
     }
 
     /// Handle of a joint the system needs; the error names the missing joint.
-    pub fn require_joint(&self, name: &str) -> Result<ImpulseJointHandle, String> {
-        self.joints
-            .get(name)
-            .copied()
-            .ok_or_else(|| format!("URDF has no joint `{name}` between two bodies"))
+    pub fn require_joint(&self, name: &str) -> Result<ImpulseJointHandle, SetupError> {
+        self.joints.get(name).copied().ok_or_else(|| {
+            SetupError::urdf(format!("URDF has no joint `{name}` between two bodies"))
+        })
     }
 
     /// World pose of every link, in URDF order.
@@ -251,9 +256,9 @@ impl RobotHandles {
     }
 }
 
-/// Insert `robot` (validated by [`super::urdf::read`]) into `world` with its
+/// Insert `robot` (validated by [`crate::physics::urdf::read`]) into `world` with its
 /// root link at `root`; every collider gets friction `mu` (combined with the
-/// other side by the minimum). Fixed joints are lumped ([`super::lump`])
+/// other side by the minimum). Fixed joints are lumped ([`crate::physics::lump`])
 /// except those named in `keep`.
 pub fn insert_robot(
     world: &mut PhysicsWorld,
@@ -261,8 +266,8 @@ pub fn insert_robot(
     root: RPose,
     mu: f64,
     keep: &[&str],
-) -> Result<RobotHandles, String> {
-    let lumping = super::lump::lump(robot, keep)?;
+) -> Result<RobotHandles, SetupError> {
+    let lumping = crate::physics::lump::lump(robot, keep)?;
     let poses = initial_poses(robot, root);
     let n = robot.links.len();
     let mut out = RobotHandles {
@@ -285,7 +290,7 @@ pub fn insert_robot(
             let mut mass = mass_properties(&robot.links[b].inertial);
             for k in (0..n).filter(|&k| lumping.body[k] == b && k != b) {
                 let l = &robot.links[k];
-                if !super::lump::is_frame(l) {
+                if !crate::physics::lump::is_frame(l) {
                     let o = lumping.offset[k].expect("a lumped link has an offset");
                     mass += mass_properties(&l.inertial).transform_by(&o);
                 }
@@ -336,7 +341,7 @@ pub fn insert_robot(
 /// and optionally a ground plane.
 pub struct SimWorld {
     /// The physics world (boxed: a batched sweep swaps one shared world in
-    /// and out of its systems, see [`super::batch`]).
+    /// and out of its systems, see [`crate::physics::batch`]).
     pub world: Box<PhysicsWorld>,
     /// Handles of the first robot (links, joints, colliders).
     pub robot: RobotHandles,
@@ -362,18 +367,22 @@ pub struct WorldOptions<'a> {
     pub root_pose: RPose,
     /// Add a ground plane z = 0 with the settings' friction.
     pub ground: bool,
-    /// Fixed joints the system needs as joints: not lumped ([`super::lump`]).
+    /// Fixed joints the system needs as joints: not lumped ([`crate::physics::lump`]).
     pub keep_fixed: &'a [&'a str],
 }
 
 impl SimWorld {
-    /// Build the world; `robot` must come from [`super::urdf::read`] (its
+    /// Build the world; `robot` must come from [`crate::physics::urdf::read`] (its
     /// mesh file names resolved). The error is a lumping refusal
-    /// ([`super::lump::lump`]): a kept fixed joint whose child has no mass.
-    pub fn new(robot: &Robot, _urdf_dir: &Path, opts: &WorldOptions) -> Result<SimWorld, String> {
+    /// ([`crate::physics::lump::lump`]): a kept fixed joint whose child has no mass.
+    pub fn new(
+        robot: &Robot,
+        _urdf_dir: &Path,
+        opts: &WorldOptions,
+    ) -> Result<SimWorld, SetupError> {
         let s = opts.settings;
         // Inside `batch::Host::build`: join the batch's world when there is one.
-        let joined = super::batch::join(opts);
+        let joined = super::shared_world::join(opts.settings, opts.ground);
         let hosted = joined.is_some();
         let (mut world, ground, ground_collider) = match joined {
             Some(Some(shared)) => shared,
@@ -384,7 +393,7 @@ impl SimWorld {
         };
         // Heavier links than the model believes (`mass_scale`): the URDF's own
         // numbers scaled, so a sweep variant and a margin level agree exactly.
-        let scaled = super::perturb::scaled_masses(robot, s.mass_scale);
+        let scaled = crate::physics::perturb::scaled_masses(robot, s.mass_scale);
         let robot = insert_robot(
             &mut world,
             scaled.as_ref().unwrap_or(robot),
@@ -393,7 +402,12 @@ impl SimWorld {
             opts.keep_fixed,
         )?;
         if hosted {
-            super::batch::keep_apart(&mut world, &robot, ground_collider, s.friction);
+            super::shared_world::keep_apart(
+                &mut world,
+                &robot.colliders,
+                ground_collider,
+                s.friction,
+            );
         }
         Ok(SimWorld {
             world,
@@ -450,7 +464,7 @@ impl SimWorld {
         urdf_dir: &Path,
         settings: &PhysicsSettings,
         root_pose: RPose,
-    ) -> Result<SimWorld, String> {
+    ) -> Result<SimWorld, SetupError> {
         SimWorld::new(
             robot,
             urdf_dir,
@@ -470,8 +484,8 @@ impl SimWorld {
         robot: &Robot,
         _urdf_dir: &Path,
         root_pose: RPose,
-    ) -> Result<RobotHandles, String> {
-        let scaled = super::perturb::scaled_masses(robot, self.settings.mass_scale);
+    ) -> Result<RobotHandles, SetupError> {
+        let scaled = crate::physics::perturb::scaled_masses(robot, self.settings.mass_scale);
         let robot = scaled.as_ref().unwrap_or(robot);
         let keep: Vec<&str> = self.keep_fixed.iter().map(String::as_str).collect();
         insert_robot(
@@ -484,13 +498,13 @@ impl SimWorld {
     }
 
     /// The colliders of a named link of the first robot (see [`RobotHandles::colliders_of`]).
-    pub fn colliders_of(&self, name: &str) -> Result<Vec<ColliderHandle>, String> {
+    pub fn colliders_of(&self, name: &str) -> Result<Vec<ColliderHandle>, SetupError> {
         self.robot.colliders_of(name).map(<[_]>::to_vec)
     }
 
     /// Body of a named link of the first robot and the link's pose in it
     /// (see [`RobotHandles::require_frame`]).
-    pub fn require_frame(&self, name: &str) -> Result<(RigidBodyHandle, RPose), String> {
+    pub fn require_frame(&self, name: &str) -> Result<(RigidBodyHandle, RPose), SetupError> {
         self.robot.require_frame(name)
     }
 
@@ -515,12 +529,12 @@ impl SimWorld {
     }
 
     /// Body of a link of the first robot the system needs (see [`RobotHandles::require_link`]).
-    pub fn require_link(&self, name: &str) -> Result<RigidBodyHandle, String> {
+    pub fn require_link(&self, name: &str) -> Result<RigidBodyHandle, SetupError> {
         self.robot.require_link(name)
     }
 
     /// Handle of a joint of the first robot (see [`RobotHandles::require_joint`]).
-    pub fn require_joint(&self, name: &str) -> Result<ImpulseJointHandle, String> {
+    pub fn require_joint(&self, name: &str) -> Result<ImpulseJointHandle, SetupError> {
         self.robot.require_joint(name)
     }
 
@@ -556,7 +570,7 @@ impl SimWorld {
         let f2 = *b.get(j.body2())?.position() * j.data.local_frame2;
         let rel = f1.inverse() * f2;
         Some(if j.data.locked_axes.contains(JointAxesMask::LIN_X) {
-            super::angles::about_axis(&rel.rotation, 0)
+            crate::physics::angles::about_axis(&rel.rotation, 0)
         } else {
             f(rel.translation.x)
         })
@@ -569,15 +583,15 @@ impl SimWorld {
         &mut self,
         joint: ImpulseJointHandle,
         value: f64,
-    ) -> Result<(), String> {
+    ) -> Result<(), SetupError> {
         let now = self
             .joint_position(joint)
-            .ok_or("set_joint_position: no such joint")?;
+            .ok_or_else(|| SetupError::other("set_joint_position: no such joint"))?;
         let j = self
             .world
             .impulse_joints
             .get(joint)
-            .ok_or("set_joint_position: no such joint")?;
+            .ok_or_else(|| SetupError::other("set_joint_position: no such joint"))?;
         let frame = *self.world.bodies[j.body1()].position() * j.data.local_frame1;
         let axis = frame.rotation * Vector::X;
         let slider = !j.data.locked_axes.contains(JointAxesMask::LIN_X);
@@ -894,6 +908,7 @@ mod tests {
         assert!(b
             .require_joint("no_such_joint")
             .unwrap_err()
+            .to_string()
             .contains("no_such_joint"));
         let groups =
             InteractionGroups::new(Group::GROUP_2, Group::GROUP_1, InteractionTestMode::And);

@@ -18,13 +18,14 @@
 //! applied input (`envelope_distance`, `sigma_estimate`: 0 = model a, 1 =
 //! model b, NaN when the models coincide, i.e. ψ = 0 or u1 = 0).
 
-use super::rapier::prelude::*;
-use super::real::{f, r as real, vector};
-use super::required::Required;
-use super::urdf::{Drive, SimWorld};
-use super::{angles, PhysicsSettings, PhysicsSystem};
+use crate::error::SetupError;
 use crate::model::rover::{envelope, RoverGeometry};
 use crate::model::{Input, State};
+use crate::physics::rapier::prelude::*;
+use crate::physics::real::{f, r as real, vector};
+use crate::physics::required::Required;
+use crate::physics::urdf::{Drive, SimWorld};
+use crate::physics::{angles, PhysicsSettings, PhysicsSystem};
 use crate::record::Pose;
 
 use std::path::Path;
@@ -109,32 +110,35 @@ impl RoverPhysics {
         geom: RoverGeometry,
         start: &[f64],
         sim: &PhysicsSettings,
-    ) -> Result<Self, String> {
-        let rho = super::urdf::round_collision(robot, WHEELS[0], "the front wheel")?;
+    ) -> Result<Self, SetupError> {
+        let rho = crate::physics::urdf::round_collision(robot, WHEELS[0], "the front wheel")?;
         if (rho - geom.wheel_radius).abs() > 1e-6 {
-            return Err(format!(
-                "URDF front wheel radius {rho} m differs from model.geometry.wheel_radius {} m",
-                geom.wheel_radius
+            return Err(SetupError::key(
+                "model.geometry",
+                format!(
+                    "URDF front wheel radius {rho} m differs from model.geometry.wheel_radius {} m",
+                    geom.wheel_radius
+                ),
             ));
         }
         let l = joint_x(robot, STEER_JOINT)
-            .ok_or_else(|| format!("URDF has no joint `{STEER_JOINT}`"))?;
+            .ok_or_else(|| SetupError::urdf(format!("URDF has no joint `{STEER_JOINT}`")))?;
         let r = joint_x(robot, BACK_JOINT)
-            .ok_or_else(|| format!("URDF has no joint `{BACK_JOINT}`"))?;
+            .ok_or_else(|| SetupError::urdf(format!("URDF has no joint `{BACK_JOINT}`")))?;
         if (l - geom.l).abs() > 1e-6 || (-r - geom.r).abs() > 1e-6 {
-            return Err(format!(
+            return Err(SetupError::key("model.geometry", format!(
                 "URDF axle positions (l = {l} m, r = {} m) differ from model.geometry (l = {}, r = {})",
                 -r, geom.l, geom.r
-            ));
+            )));
         }
         // Worn wheels (`wheel_radius_scale`): all five, the chassis lower by
         // as much; the drive still converts u1 with the model's radius.
         let s = sim.wheel_radius_scale;
-        let worn =
-            (s != 1.0).then(|| super::perturb::shrink_round_collisions(robot, &WHEELS, s, None));
+        let worn = (s != 1.0)
+            .then(|| crate::physics::perturb::shrink_round_collisions(robot, &WHEELS, s, None));
         let robot = worn.as_ref().unwrap_or(robot);
         let rim = rho * s;
-        let root = super::rapier::math::Pose::from_parts(
+        let root = crate::physics::rapier::math::Pose::from_parts(
             vector(start[0], start[1], rim),
             Rotation::from_rotation_z(real(start[2])),
         );
@@ -159,7 +163,7 @@ impl RoverPhysics {
                 let p = *b.position();
                 let t = axis_pt + rot * (p.translation - axis_pt);
                 b.set_position(
-                    super::rapier::math::Pose::from_parts(t, rot * p.rotation),
+                    crate::physics::rapier::math::Pose::from_parts(t, rot * p.rotation),
                     true,
                 );
             }

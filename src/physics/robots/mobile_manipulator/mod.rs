@@ -13,7 +13,7 @@
 //! other robot's colliders, never their own robot's.
 //!
 //! Two robots may carry a beam ([`CarriedBeam`], see [`carried`]): a
-//! [`PhysicsBeam`](super::beam::PhysicsBeam) fixed to both tools at the planner's grasp offsets. The
+//! [`PhysicsBeam`](crate::physics::beam::PhysicsBeam) fixed to both tools at the planner's grasp offsets. The
 //! beam meets the ground, the obstacles and both platforms (the platform
 //! boxes); arms, columns and grippers pass it (the planner's
 //! `Carried::held` pairs, and the gripper holds it).
@@ -41,15 +41,9 @@ pub use carried::{link_visuals, robot_link_name, CarriedBeam};
 pub use joints::WRIST_CHANNELS;
 pub use urdf::urdf;
 
+use crate::error::SetupError;
 use joints::{add_armature, compliant_wrist_joint, grasp_frame, settle_wrists};
 
-use super::rapier::parry::bounding_volume::Aabb;
-use super::rapier::prelude::*;
-use super::real::{self as rl, f, vector};
-use super::required::Required;
-use super::settings::PhysicsSettings;
-use super::urdf::{RobotHandles, SimWorld};
-use super::{angles, PhysicsSystem};
 use crate::model::ellipsoid::Superellipsoid;
 use crate::model::mobile_manipulator::{
     self as mm, CompliantWrist, Link, Wrist, DOF, GRASP_OFFSET, HALF_TRACK, INPUTS, MOUNT,
@@ -57,6 +51,13 @@ use crate::model::mobile_manipulator::{
 };
 use crate::model::puma560;
 use crate::model::{Input, State};
+use crate::physics::rapier::parry::bounding_volume::Aabb;
+use crate::physics::rapier::prelude::*;
+use crate::physics::real::{self as rl, f, vector};
+use crate::physics::required::Required;
+use crate::physics::settings::PhysicsSettings;
+use crate::physics::urdf::{RobotHandles, SimWorld};
+use crate::physics::{angles, PhysicsSystem};
 use crate::record::Pose;
 use std::path::Path;
 
@@ -249,13 +250,13 @@ pub struct Setup<'a> {
 }
 
 /// Check the URDF's arm joints against the DH table the planner uses.
-fn check_urdf(robot: &urdf_rs::Robot) -> Result<(), String> {
+fn check_urdf(robot: &urdf_rs::Robot) -> Result<(), SetupError> {
     for (i, name) in ARM_JOINTS.iter().enumerate() {
         let j = robot
             .joints
             .iter()
             .find(|j| j.name == *name)
-            .ok_or_else(|| format!("URDF has no joint `{name}`"))?;
+            .ok_or_else(|| SetupError::urdf(format!("URDF has no joint `{name}`")))?;
         let (xyz, rpy) = if i == 0 {
             (MOUNT, [0.0; 3])
         } else {
@@ -266,9 +267,9 @@ fn check_urdf(robot: &urdf_rs::Robot) -> Result<(), String> {
             (j.origin.xyz[k] - xyz[k]).abs() > 1e-9 || (j.origin.rpy[k] - rpy[k]).abs() > 1e-9
         }) || j.axis.xyz.0 != [0.0, 0.0, 1.0];
         if bad {
-            return Err(format!(
+            return Err(SetupError::urdf_at("joint", name.to_string(), format!(
                 "URDF joint `{name}` differs from the PUMA 560 model (origin {xyz:?} rpy {rpy:?}, axis z expected)"
-            ));
+            )));
         }
     }
     Ok(())
@@ -282,18 +283,20 @@ impl MobileManipulatorPhysics {
         urdf_dir: &Path,
         sim: &PhysicsSettings,
         setup: &Setup,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, SetupError> {
         check_urdf(robot)?;
         let start = setup.start;
         let k = start.len() / DOF;
         if !(1..=2).contains(&k) || start.len() != k * DOF {
-            return Err(format!(
+            return Err(SetupError::other(format!(
                 "mobile manipulator physics: {} start coordinates (9 per robot, one or two robots)",
                 start.len()
-            ));
+            )));
         }
         if setup.beam.is_some() != (k == 2) {
-            return Err("mobile manipulator physics: a beam needs exactly two robots".into());
+            return Err(SetupError::other(format!(
+                "mobile manipulator physics: a beam needs exactly two robots"
+            )));
         }
         let root =
             |r: usize| rl::from_spatial(&mm::frames::<f64>(&start[DOF * r..DOF * (r + 1)]).base);
@@ -303,13 +306,13 @@ impl MobileManipulatorPhysics {
         let wear = (1.0 - sim.wheel_radius_scale) * WHEEL_RADIUS;
         let worn = (wear != 0.0).then(|| {
             let tyres = ["left_wheel", "right_wheel", "caster_front", "caster_rear"];
-            super::perturb::shrink_round_collisions(robot, &tyres, 1.0, Some(wear))
+            crate::physics::perturb::shrink_round_collisions(robot, &tyres, 1.0, Some(wear))
         });
         let robot = worn.as_ref().unwrap_or(robot);
         let mut sw = SimWorld::new(
             robot,
             urdf_dir,
-            &super::world::WorldOptions {
+            &crate::physics::world::WorldOptions {
                 settings: sim,
                 root_pose: root(0),
                 ground: true,
@@ -386,7 +389,7 @@ impl MobileManipulatorPhysics {
             let (v, _) = o.shape.mesh(16, 32);
             let pts: Vec<Vector> = v.iter().map(|p| vector(p[0], p[1], p[2])).collect();
             let builder = ColliderBuilder::convex_hull(&pts)
-                .ok_or_else(|| format!("obstacle `{}`: no convex hull", o.name))?
+                .ok_or_else(|| SetupError::other(format!("obstacle `{}`: no convex hull", o.name)))?
                 .collision_groups(InteractionGroups::new(
                     OBSTACLE,
                     ROBOT[0] | ROBOT[1] | BEAM,
@@ -570,7 +573,7 @@ fn least_distance(
                 continue;
             }
             let (x, y) = (&cs[*ca], &cs[*cb]);
-            if let Ok(d) = super::rapier::parry::query::distance(
+            if let Ok(d) = crate::physics::rapier::parry::query::distance(
                 x.position(),
                 x.shape(),
                 y.position(),
@@ -585,7 +588,7 @@ fn least_distance(
 
 /// Look up one robot's bodies and joints, put its arm at the start angles
 /// (the URDF loads at q = 0) and free its casters.
-fn place_robot(sw: &mut SimWorld, h: &RobotHandles, q: &[f64]) -> Result<RobotBodies, String> {
+fn place_robot(sw: &mut SimWorld, h: &RobotHandles, q: &[f64]) -> Result<RobotBodies, SetupError> {
     let frames = mm::frames::<f64>(q);
     let base = h.require_link("base_link")?;
     let wheels = [h.require_link(WHEELS[0])?, h.require_link(WHEELS[1])?];

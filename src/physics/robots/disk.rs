@@ -6,12 +6,13 @@
 //! yaw from +x towards +y: yaw = π/2 − α). Translation is free:
 //! the disk moves only through wheel–ground friction.
 
-use super::rapier::prelude::*;
-use super::real::{f, r, vector};
-use super::required::Required;
-use super::urdf::{Drive, SimWorld};
-use super::{angles, PhysicsSettings, PhysicsSystem};
+use crate::error::SetupError;
 use crate::model::{Input, State};
+use crate::physics::rapier::prelude::*;
+use crate::physics::real::{f, r, vector};
+use crate::physics::required::Required;
+use crate::physics::urdf::{Drive, SimWorld};
+use crate::physics::{angles, PhysicsSettings, PhysicsSystem};
 use crate::record::Pose;
 use std::f64::consts::FRAC_PI_2;
 use std::path::Path;
@@ -53,7 +54,10 @@ pub struct DiskPhysics {
 }
 
 /// Wheel angle about the axle (yoke +y) relative to the yoke, in (−π, π].
-fn wheel_angle(yoke: &super::rapier::math::Rotation, wheel: &super::rapier::math::Rotation) -> f64 {
+fn wheel_angle(
+    yoke: &crate::physics::rapier::math::Rotation,
+    wheel: &crate::physics::rapier::math::Rotation,
+) -> f64 {
     angles::about_axis(&(yoke.inverse() * *wheel), 1)
 }
 
@@ -65,16 +69,16 @@ impl DiskPhysics {
         radius: f64,
         start: &[f64],
         sim: &PhysicsSettings,
-    ) -> Result<Self, String> {
-        super::urdf::require_radius(robot, WHEEL, "the wheel", radius)?;
+    ) -> Result<Self, SetupError> {
+        crate::physics::urdf::require_radius(robot, WHEEL, "the wheel", radius)?;
         // A worn wheel (`wheel_radius_scale`): the model keeps `radius`.
         let s = sim.wheel_radius_scale;
-        let worn =
-            (s != 1.0).then(|| super::perturb::shrink_round_collisions(robot, &[WHEEL], s, None));
+        let worn = (s != 1.0)
+            .then(|| crate::physics::perturb::shrink_round_collisions(robot, &[WHEEL], s, None));
         let robot = worn.as_ref().unwrap_or(robot);
         let radius = radius * s;
         let yaw0 = FRAC_PI_2 - start[3];
-        let root = super::rapier::math::Pose::from_parts(
+        let root = crate::physics::rapier::math::Pose::from_parts(
             vector(start[0], start[1], radius),
             Rotation::from_rotation_z(r(yaw0)),
         );
@@ -84,8 +88,8 @@ impl DiskPhysics {
         let wheel_joint = sw.require_joint(WHEEL_JOINT)?;
         // Balance controller: roll and pitch locked, yaw servoed, translation free.
         let balance = GenericJointBuilder::new(JointAxesMask::ANG_X | JointAxesMask::ANG_Y)
-            .local_frame1(super::rapier::math::Pose::IDENTITY)
-            .local_frame2(super::rapier::math::Pose::IDENTITY)
+            .local_frame1(crate::physics::rapier::math::Pose::IDENTITY)
+            .local_frame2(crate::physics::rapier::math::Pose::IDENTITY)
             .build();
         let balance = sw
             .world

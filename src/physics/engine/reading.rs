@@ -3,7 +3,7 @@
 //! it derived, and the defaults it had to fill in. `plan` prints it,
 //! `summary.json` carries it (`model.read_from_urdf`), the report shows it.
 
-use super::lump::Lumping;
+use crate::physics::lump::Lumping;
 use serde::Serialize;
 use urdf_rs::Robot;
 

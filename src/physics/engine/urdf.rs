@@ -1,13 +1,14 @@
 //! URDF files: reading and validation, visual geometry for the logs. The
-//! loader into a Rapier world is [`super::world`] (re-exported here).
+//! loader into a Rapier world is [`crate::physics::world`] (re-exported here).
 
+use crate::error::SetupError;
 use crate::record::{LinkVisual, Pose, Shape, Visual};
 use nalgebra::UnitQuaternion;
 use std::collections::{HashMap, HashSet};
 use std::path::Path;
 use urdf_rs::{Geometry, JointType, Robot};
 
-pub use super::world::{Drive, RobotHandles, SimWorld, WorldOptions};
+pub use crate::physics::world::{Drive, RobotHandles, SimWorld, WorldOptions};
 
 /// Where a scenario's robot description finds what it names: mesh
 /// packages (`[model] packages`) and xacro arguments (`[model] xacro_args`).
@@ -21,13 +22,13 @@ pub struct Source {
 
 /// Read and validate a URDF file. Errors are one-line, user-facing strings.
 ///
-/// The loader ([`super::world`]) indexes links by name and places them from
+/// The loader ([`crate::physics::world`]) indexes links by name and places them from
 /// the root down, so everything it cannot represent is rejected here:
 /// dangling joint references, a graph that is not one tree, a body that
-/// moves without mass ([`super::lump`]), a non-finite or negative inertia,
+/// moves without mass ([`crate::physics::lump`]), a non-finite or negative inertia,
 /// and moving joints without an axis. Meshes are not resolved here (the
 /// validation pass does it, `crate::validate::urdf`).
-pub fn read(path: &Path) -> Result<Robot, String> {
+pub fn read(path: &Path) -> Result<Robot, SetupError> {
     let robot = parse(path)?;
     validate(&robot)?;
     Ok(robot)
@@ -35,26 +36,31 @@ pub fn read(path: &Path) -> Result<Robot, String> {
 
 /// Read and parse a URDF file without [`validate`] (the validation pass checks
 /// numbers first, to name the element and line).
-pub fn parse(path: &Path) -> Result<Robot, String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("cannot read URDF: {e}"))?;
+pub fn parse(path: &Path) -> Result<Robot, SetupError> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| SetupError::urdf(format!("cannot read URDF: {e}")))?;
     parse_text(&text)
 }
 
 /// Parse URDF text.
-pub fn parse_text(text: &str) -> Result<Robot, String> {
-    urdf_rs::read_from_string(text)
-        .map_err(|e| format!("URDF does not parse: {}", e.to_string().replace('\n', " ")))
+pub fn parse_text(text: &str) -> Result<Robot, SetupError> {
+    urdf_rs::read_from_string(text).map_err(|e| {
+        SetupError::urdf(format!(
+            "URDF does not parse: {}",
+            e.to_string().replace('\n', " ")
+        ))
+    })
 }
 
 /// The checks of [`read`] on an already parsed robot.
-pub fn validate(robot: &Robot) -> Result<(), String> {
+pub fn validate(robot: &Robot) -> Result<(), SetupError> {
     validate_tree(robot)?;
     validate_loadable(robot)
 }
 
 /// One tree of uniquely named links with finite, non-negative masses, where
 /// every body that moves has mass: the first problem.
-pub fn validate_tree(robot: &Robot) -> Result<(), String> {
+pub fn validate_tree(robot: &Robot) -> Result<(), SetupError> {
     match tree_problems(robot).into_iter().next() {
         Some(p) => Err(p),
         None => Ok(()),
@@ -63,7 +69,7 @@ pub fn validate_tree(robot: &Robot) -> Result<(), String> {
 
 /// Every problem of [`validate_tree`]: [`structure_problems`], then (on a
 /// tree) [`mass_problems`].
-pub fn tree_problems(robot: &Robot) -> Vec<String> {
+pub fn tree_problems(robot: &Robot) -> Vec<SetupError> {
     let out = structure_problems(robot);
     if out.is_empty() {
         mass_problems(robot)
@@ -73,26 +79,31 @@ pub fn tree_problems(robot: &Robot) -> Vec<String> {
 }
 
 /// Why `robot` is not one tree of uniquely named links.
-pub fn structure_problems(robot: &Robot) -> Vec<String> {
+pub fn structure_problems(robot: &Robot) -> Vec<SetupError> {
     if robot.links.is_empty() {
-        return vec!["URDF has no links".into()];
+        return vec![SetupError::urdf("URDF has no links")];
     }
     let mut out = Vec::new();
     let names: HashSet<&str> = robot.links.iter().map(|l| l.name.as_str()).collect();
     if names.len() != robot.links.len() {
-        out.push("URDF has duplicate link names".into());
+        out.push(SetupError::urdf("URDF has duplicate link names"));
     }
     let mut has_parent = HashSet::new();
     for j in &robot.joints {
         for l in [&j.parent.link, &j.child.link] {
             if !names.contains(l.as_str()) {
-                out.push(format!("URDF joint `{}` names unknown link `{l}`", j.name));
+                out.push(SetupError::urdf_at(
+                    "joint",
+                    &j.name,
+                    format!("URDF joint `{}` names unknown link `{l}`", j.name),
+                ));
             }
         }
         if !has_parent.insert(j.child.link.as_str()) {
-            out.push(format!(
-                "URDF link `{}` has two parent joints",
-                j.child.link
+            out.push(SetupError::urdf_at(
+                "link",
+                &j.child.link,
+                format!("URDF link `{}` has two parent joints", j.child.link),
             ));
         }
     }
@@ -106,14 +117,14 @@ pub fn structure_problems(robot: &Robot) -> Vec<String> {
         .filter(|n| !has_parent.contains(n))
         .collect();
     match roots.len() {
-        0 => return vec!["URDF kinematic graph has no root (cycle)".into()],
+        0 => return vec![SetupError::urdf("URDF kinematic graph has no root (cycle)")],
         1 => {}
         _ => {
-            return vec![format!(
+            return vec![SetupError::urdf(format!(
                 "URDF has {} root links ({}): it must be one tree",
                 roots.len(),
                 roots.join(", ")
-            )]
+            ))]
         }
     }
     // One root and one parent per link: a tree exactly when every link is reachable.
@@ -127,27 +138,31 @@ pub fn structure_problems(robot: &Robot) -> Vec<String> {
         }
     }
     if reached.len() != robot.links.len() {
-        return vec!["URDF kinematic graph has a cycle".into()];
+        return vec![SetupError::urdf("URDF kinematic graph has a cycle")];
     }
     out
 }
 
 /// Masses of a tree: finite and ≥ 0, and every body that moves has some.
-pub fn mass_problems(robot: &Robot) -> Vec<String> {
+pub fn mass_problems(robot: &Robot) -> Vec<SetupError> {
     let mut out = Vec::new();
     for l in &robot.links {
         let m = l.inertial.mass.value;
         if !(m.is_finite() && m >= 0.0) {
-            out.push(format!(
-                "URDF link `{}` <mass> must be finite and ≥ 0 (0 or no <inertial>: a frame)",
-                l.name
+            out.push(SetupError::urdf_at(
+                "link",
+                &l.name,
+                format!(
+                    "URDF link `{}` <mass> must be finite and ≥ 0 (0 or no <inertial>: a frame)",
+                    l.name
+                ),
             ));
         }
     }
     if out.is_empty() {
         // Frames (no mass) are lumped into the bodies they are fixed to; a
         // body that moves on its own needs mass.
-        if let Err(e) = super::lump::lump(robot, &[]) {
+        if let Err(e) = crate::physics::lump::lump(robot, &[]) {
             out.push(e);
         }
     }
@@ -155,7 +170,7 @@ pub fn mass_problems(robot: &Robot) -> Vec<String> {
 }
 
 /// What the loader needs beyond a tree: the first problem of [`loadable_problems`].
-pub fn validate_loadable(robot: &Robot) -> Result<(), String> {
+pub fn validate_loadable(robot: &Robot) -> Result<(), SetupError> {
     match loadable_problems(robot).into_iter().next() {
         Some(p) => Err(p),
         None => Ok(()),
@@ -164,22 +179,34 @@ pub fn validate_loadable(robot: &Robot) -> Result<(), String> {
 
 /// What the loader needs beyond a tree: finite inertias of the bodies' links
 /// (frames' are ignored), axes on moving joints.
-pub fn loadable_problems(robot: &Robot) -> Vec<String> {
+pub fn loadable_problems(robot: &Robot) -> Vec<SetupError> {
     let mut out = Vec::new();
     for j in &robot.joints {
         let moving = !matches!(j.joint_type, JointType::Fixed | JointType::Floating);
         let a = j.axis.xyz.0;
         if moving && !(a.iter().all(|c| c.is_finite()) && a.iter().any(|c| *c != 0.0)) {
-            out.push(format!("URDF joint `{}` needs a non-zero <axis>", j.name));
+            out.push(SetupError::urdf_at(
+                "joint",
+                &j.name,
+                format!("URDF joint `{}` needs a non-zero <axis>", j.name),
+            ));
         }
     }
-    for l in robot.links.iter().filter(|l| !super::lump::is_frame(l)) {
+    for l in robot
+        .links
+        .iter()
+        .filter(|l| !crate::physics::lump::is_frame(l))
+    {
         let t = &l.inertial.inertia;
         let all = [t.ixx, t.ixy, t.ixz, t.iyy, t.iyz, t.izz];
         if all.iter().any(|v| !v.is_finite()) || t.ixx < 0.0 || t.iyy < 0.0 || t.izz < 0.0 {
-            out.push(format!(
-                "URDF link `{}` inertia must be finite with ixx, iyy, izz ≥ 0",
-                l.name
+            out.push(SetupError::urdf_at(
+                "link",
+                &l.name,
+                format!(
+                    "URDF link `{}` inertia must be finite with ixx, iyy, izz ≥ 0",
+                    l.name
+                ),
             ));
         }
     }
@@ -204,21 +231,32 @@ pub fn collision_radius(robot: &Robot, link: &str) -> Option<f64> {
 
 /// The radius of `link`'s first round collision (`what`, e.g. "the wheel",
 /// names it in the error when it has none).
-pub fn round_collision(robot: &Robot, link: &str, what: &str) -> Result<f64, String> {
+pub fn round_collision(robot: &Robot, link: &str, what: &str) -> Result<f64, SetupError> {
     if !robot.links.iter().any(|l| l.name == link) {
-        return Err(format!("URDF lacks link `{link}`"));
+        return Err(SetupError::urdf(format!("URDF lacks link `{link}`")));
     }
-    collision_radius(robot, link)
-        .ok_or_else(|| format!("URDF link `{link}` needs a sphere or cylinder collision ({what})"))
+    collision_radius(robot, link).ok_or_else(|| {
+        SetupError::urdf_at(
+            "link",
+            link,
+            format!("URDF link `{link}` needs a sphere or cylinder collision ({what})"),
+        )
+    })
 }
 
 /// Check that `link` has a round collision (`what`, e.g. "the wheel") of the
 /// scenario's `radius`; the error names both values.
-pub fn require_radius(robot: &Robot, link: &str, what: &str, radius: f64) -> Result<(), String> {
+pub fn require_radius(
+    robot: &Robot,
+    link: &str,
+    what: &str,
+    radius: f64,
+) -> Result<(), SetupError> {
     let r = round_collision(robot, link, what)?;
     if (r - radius).abs() > 1e-6 {
-        return Err(format!(
-            "URDF radius of {what} ({r} m) differs from the scenario's model.radius ({radius} m)"
+        return Err(SetupError::key(
+            "model.radius",
+            format!("URDF radius of {what} ({r} m) differs from the scenario's model.radius ({radius} m)"),
         ));
     }
     Ok(())
@@ -275,9 +313,9 @@ pub fn visuals(robot: &Robot) -> Vec<LinkVisual> {
                         // Resolved by the validation pass; one that does not load is left out.
                         urdf_rs::Geometry::Mesh { filename, scale } => Shape::Mesh {
                             file: filename.clone(),
-                            mesh: super::mesh::load(
+                            mesh: crate::physics::mesh::load(
                                 Path::new(filename),
-                                super::mesh::scale_of(scale),
+                                crate::physics::mesh::scale_of(scale),
                             )
                             .ok()?,
                         },
@@ -322,6 +360,7 @@ mod tests {
         s += extra;
         s += "</robot>";
         validate(&urdf_rs::read_from_string(&s).map_err(|e| e.to_string())?)
+            .map_err(|e| e.to_string())
     }
 
     #[test]

@@ -7,7 +7,7 @@
 //! real and measured. Casters are made frictionless, as an ideal ball caster
 //! that rolls every way.
 //!
-//! Geometry comes from the URDF (see [`super::wheeled`]): the wheel radii
+//! Geometry comes from the URDF (see [`crate::physics::wheeled`]): the wheel radii
 //! (their round collisions), the track (the wheel centres' distance across
 //! the body) and the model's reference point (the axle midpoint, in the
 //! body frame). Actuation: servo drives on both wheel joints at
@@ -20,16 +20,17 @@
 //! m/s) and its rim speed relative to the body (`rim_speed_left`,
 //! `rim_speed_right`, m/s).
 
-use super::rapier::math::Pose as RPose;
-use super::rapier::prelude::*;
-use super::reading::UrdfReading;
-use super::real::{f, vector};
-use super::required::Required;
-use super::urdf::{Drive, SimWorld};
-use super::wheeled::{self, Wheel};
-use super::world::origin;
-use super::{angles, PhysicsSettings, PhysicsSystem};
+use crate::error::SetupError;
 use crate::model::{Input, State};
+use crate::physics::rapier::math::Pose as RPose;
+use crate::physics::rapier::prelude::*;
+use crate::physics::reading::UrdfReading;
+use crate::physics::real::{f, vector};
+use crate::physics::required::Required;
+use crate::physics::urdf::{Drive, SimWorld};
+use crate::physics::wheeled::{self, Wheel};
+use crate::physics::world::origin;
+use crate::physics::{angles, PhysicsSettings, PhysicsSystem};
 use crate::record::Pose;
 use std::path::Path;
 
@@ -114,10 +115,10 @@ fn mean(wheels: &[Wheel], f: impl Fn(&Wheel) -> f64) -> f64 {
 
 impl DiffDriveGeometry {
     /// Read and check the URDF: errors name the joint or link at fault.
-    pub fn read(robot: &urdf_rs::Robot, names: &DiffDriveNames) -> Result<Self, String> {
+    pub fn read(robot: &urdf_rs::Robot, names: &DiffDriveNames) -> Result<Self, SetupError> {
         let frames = wheeled::link_frames(robot);
         let base = names.base.as_str();
-        let side = |joints: &[String]| -> Result<Vec<Wheel>, String> {
+        let side = |joints: &[String]| -> Result<Vec<Wheel>, SetupError> {
             let mut out = Vec::new();
             for j in joints {
                 let w = wheeled::wheel(robot, &frames, base, j)?;
@@ -131,10 +132,10 @@ impl DiffDriveGeometry {
         let (l, r) = (&left[0], &right[0]);
         if left.len() == 1 && right.len() == 1 && !wheeled::same_position(l.center[0], r.center[0])
         {
-            return Err(format!(
+            return Err(SetupError::urdf_at("joint", l.joint.to_string(), format!(
                 "URDF joints `{}` and `{}` must put both wheels on one axle: their centres sit at x = {:.4} and {:.4} m in `{base}`",
                 l.joint, r.joint, l.center[0], r.center[0]
-            ));
+            )));
         }
         for ws in [&left, &right] {
             // A side's wheels roll on one line along the body's x axis.
@@ -142,18 +143,18 @@ impl DiffDriveGeometry {
                 .iter()
                 .find(|w| !wheeled::same_position(w.center[1], ws[0].center[1]))
             {
-                return Err(format!(
+                return Err(SetupError::urdf_at("joint", ws[0].joint.to_string(), format!(
                     "URDF joints `{}` and `{}` are on one side but their wheels sit at y = {:.4} and {:.4} m in `{base}`: a side's wheels must share one line",
                     ws[0].joint, w.joint, ws[0].center[1], w.center[1]
-                ));
+                )));
             }
         }
         let (yl, yr) = (left[0].center[1], right[0].center[1]);
         if yl <= yr {
-            return Err(format!(
+            return Err(SetupError::urdf_at("joint", left[0].joint.to_string(), format!(
                 "URDF joint `{}` puts its wheel at y = {yl:.4} m in `{base}`, not left of `{}`'s ({yr:.4} m): left and right swapped?",
                 left[0].joint, right[0].joint
-            ));
+            )));
         }
         let wheels: Vec<Wheel> = left.iter().chain(&right).cloned().collect();
         let ground = wheeled::contact_plane(&wheels.iter().collect::<Vec<_>>())?;
@@ -211,17 +212,19 @@ impl DiffDriveGeometry {
 /// frame, exact for spheres, boxes, cylinders and convex meshes alike.
 pub fn caster_on_plane(
     robot: &urdf_rs::Robot,
-    frames: &std::collections::HashMap<String, super::rapier::math::Pose>,
+    frames: &std::collections::HashMap<String, crate::physics::rapier::math::Pose>,
     base: &str,
     caster: &str,
     ground: f64,
-) -> Result<(), String> {
+) -> Result<(), SetupError> {
     let Some(link) = robot.links.iter().find(|l| l.name == caster) else {
-        return Err(format!("URDF lacks link `{caster}`"));
+        return Err(SetupError::urdf(format!("URDF lacks link `{caster}`")));
     };
     if link.collision.is_empty() {
-        return Err(format!(
-            "URDF link `{caster}` has no <collision>: a caster must touch the ground"
+        return Err(SetupError::urdf_at(
+            "link",
+            caster.to_string(),
+            format!("URDF link `{caster}` has no <collision>: a caster must touch the ground"),
         ));
     }
     if wheeled::rigidly_on(robot, caster, base, "").is_err() {
@@ -229,17 +232,18 @@ pub fn caster_on_plane(
     }
     let in_base = frames[base].inverse() * frames[caster];
     for c in &link.collision {
-        let Some(z) = super::world::lowest_point(&c.geometry, &(in_base * origin(&c.origin)))
+        let Some(z) =
+            crate::physics::world::lowest_point(&c.geometry, &(in_base * origin(&c.origin)))
         else {
             continue;
         };
         if (z - ground).abs() > 2e-3 {
-            return Err(format!(
+            return Err(SetupError::urdf_at("link", caster.to_string(), format!(
                 "URDF link `{caster}`: the lowest point of its {} collision is {:.4} m {} the wheels' contact plane",
-                super::urdf::shape_tag(&c.geometry),
+                crate::physics::urdf::shape_tag(&c.geometry),
                 (z - ground).abs(),
                 if z > ground { "above" } else { "below" }
-            ));
+            )));
         }
     }
     Ok(())
@@ -268,7 +272,7 @@ impl DiffDrivePhysics {
         names: &DiffDriveNames,
         start: &[f64],
         sim: &PhysicsSettings,
-    ) -> Result<Self, String> {
+    ) -> Result<Self, SetupError> {
         let geom = DiffDriveGeometry::read(robot, names)?;
         let frames = wheeled::link_frames(robot);
         // Worn or mismatched tyres (`wheel_radius_scale`): the simulated
@@ -286,7 +290,12 @@ impl DiffDrivePhysics {
         );
         let links: Vec<&str> = geom.wheels.iter().map(|w| w.link.as_str()).collect();
         let worn = (sim.wheel_radius_scale != 1.0).then(|| {
-            super::perturb::shrink_round_collisions(robot, &links, sim.wheel_radius_scale, None)
+            crate::physics::perturb::shrink_round_collisions(
+                robot,
+                &links,
+                sim.wheel_radius_scale,
+                None,
+            )
         });
         let mut sw = SimWorld::on_ground(worn.as_ref().unwrap_or(robot), urdf_dir, sim, root)?;
         let (base, base_offset) = sw.require_frame(&names.base)?;

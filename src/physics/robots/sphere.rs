@@ -14,13 +14,14 @@
 //! the orientation the commanded ω produces when integrated exactly, i.e. the ideal
 //! orientation up to O(dt²)), `height` (centre height minus the radius, m).
 
-use super::rapier::prelude::*;
-use super::real::{f, quat, r, rotation, vector};
-use super::required::Required;
-use super::urdf::SimWorld;
-use super::{PhysicsSettings, PhysicsSystem};
+use crate::error::SetupError;
 use crate::model::rolling_sphere::geodesic_angle;
 use crate::model::{Input, State};
+use crate::physics::rapier::prelude::*;
+use crate::physics::real::{f, quat, r, rotation, vector};
+use crate::physics::required::Required;
+use crate::physics::urdf::SimWorld;
+use crate::physics::{PhysicsSettings, PhysicsSystem};
 use crate::record::Pose;
 use nalgebra::{Quaternion, UnitQuaternion, Vector3};
 use std::path::Path;
@@ -58,24 +59,24 @@ impl SpherePhysics {
         radius: f64,
         start: &[f64],
         sim: &PhysicsSettings,
-    ) -> Result<Self, String> {
-        super::urdf::require_radius(robot, BALL, "the ball", radius)?;
+    ) -> Result<Self, SetupError> {
+        crate::physics::urdf::require_radius(robot, BALL, "the ball", radius)?;
         // A ball of another radius than the model's (`wheel_radius_scale`).
         let s = sim.wheel_radius_scale;
-        let worn =
-            (s != 1.0).then(|| super::perturb::shrink_round_collisions(robot, &[BALL], s, None));
+        let worn = (s != 1.0)
+            .then(|| crate::physics::perturb::shrink_round_collisions(robot, &[BALL], s, None));
         let robot = worn.as_ref().unwrap_or(robot);
         let radius = radius * s;
         if start.len() != 6 {
-            return Err(format!(
+            return Err(SetupError::other(format!(
                 "sphere physics needs a 6-value state, got {}",
                 start.len()
-            ));
+            )));
         }
         let q0 = UnitQuaternion::from_quaternion(Quaternion::new(
             start[2], start[3], start[4], start[5],
         ));
-        let root = super::rapier::math::Pose::from_parts(
+        let root = crate::physics::rapier::math::Pose::from_parts(
             vector(start[0], start[1], radius),
             rotation(q0.i, q0.j, q0.k, q0.w),
         );
@@ -83,8 +84,8 @@ impl SpherePhysics {
         let ball = sw.require_link(BALL)?;
         // The drive: no locked axes, angular velocity motors about the world axes.
         let mut b = GenericJointBuilder::new(JointAxesMask::empty())
-            .local_frame1(super::rapier::math::Pose::IDENTITY)
-            .local_frame2(super::rapier::math::Pose::IDENTITY);
+            .local_frame1(crate::physics::rapier::math::Pose::IDENTITY)
+            .local_frame2(crate::physics::rapier::math::Pose::IDENTITY);
         for axis in [JointAxis::AngX, JointAxis::AngY, JointAxis::AngZ] {
             b = b
                 .motor_velocity(axis, 0.0, r(sim.motor_gain))

@@ -8,10 +8,11 @@
 //! assumes (axles horizontal and across the body's +x axis, the wheels on
 //! the ground plane of the body).
 
-use super::rapier::math::Pose as RPose;
-use super::rapier::prelude::*;
-use super::real::{arr, f, vector};
-use super::world::origin;
+use crate::error::SetupError;
+use crate::physics::rapier::math::Pose as RPose;
+use crate::physics::rapier::prelude::*;
+use crate::physics::real::{arr, f, vector};
+use crate::physics::world::origin;
 use std::collections::HashMap;
 use urdf_rs::{JointType, Robot};
 
@@ -52,7 +53,7 @@ pub fn link_frames(robot: &Robot) -> HashMap<String, RPose> {
 
 /// Check that `link` is `body` or hangs from it through fixed joints only
 /// (so it moves with the body); `what` names the element for the message.
-pub fn rigidly_on(robot: &Robot, link: &str, body: &str, what: &str) -> Result<(), String> {
+pub fn rigidly_on(robot: &Robot, link: &str, body: &str, what: &str) -> Result<(), SetupError> {
     let mut at = link;
     for _ in 0..=robot.joints.len() {
         if at == body {
@@ -63,18 +64,18 @@ pub fn rigidly_on(robot: &Robot, link: &str, body: &str, what: &str) -> Result<(
             _ => break,
         }
     }
-    Err(format!(
+    Err(SetupError::urdf(format!(
         "URDF {what} must hang from link `{body}` through fixed joints only"
-    ))
+    )))
 }
 
 /// A joint by name; the message says what it is for when it is missing.
-pub fn joint<'r>(robot: &'r Robot, name: &str) -> Result<&'r urdf_rs::Joint, String> {
+pub fn joint<'r>(robot: &'r Robot, name: &str) -> Result<&'r urdf_rs::Joint, SetupError> {
     robot
         .joints
         .iter()
         .find(|j| j.name == name)
-        .ok_or_else(|| format!("URDF lacks joint `{name}`"))
+        .ok_or_else(|| SetupError::urdf(format!("URDF lacks joint `{name}`")))
 }
 
 /// A wheel as the kinematics sees it, in the body frame.
@@ -107,8 +108,8 @@ impl Wheel {
     }
 
     /// The wheel as read, for the user.
-    pub fn reading(&self) -> super::reading::WheelReading {
-        super::reading::WheelReading {
+    pub fn reading(&self) -> crate::physics::reading::WheelReading {
+        crate::physics::reading::WheelReading {
             joint: self.joint.clone(),
             link: self.link.clone(),
             radius: self.radius,
@@ -126,15 +127,17 @@ pub fn wheel(
     frames: &HashMap<String, RPose>,
     body: &str,
     joint_name: &str,
-) -> Result<Wheel, String> {
+) -> Result<Wheel, SetupError> {
     let j = joint(robot, joint_name)?;
     if j.joint_type != JointType::Continuous {
-        return Err(format!(
-            "URDF joint `{joint_name}` must be continuous (a wheel turns without limits)"
+        return Err(SetupError::urdf_at(
+            "joint",
+            joint_name.to_string(),
+            format!("URDF joint `{joint_name}` must be continuous (a wheel turns without limits)"),
         ));
     }
     let link = j.child.link.clone();
-    let radius = super::urdf::round_collision(robot, &link, "a wheel's radius")?;
+    let radius = crate::physics::urdf::round_collision(robot, &link, "a wheel's radius")?;
     let (c, shape) = round_collision_center(robot, &link);
     let base = frames[body];
     let wheel_in_body = base.inverse() * frames[&link];
@@ -143,18 +146,18 @@ pub fn wheel(
     let center_local = vector(c[0], c[1], c[2]);
     let off_axis = center_local - axle_local * center_local.dot(axle_local);
     if f(off_axis.length()) > POS_TOL {
-        return Err(format!(
+        return Err(SetupError::urdf_at("link", link.to_string(), format!(
             "URDF link `{link}`: the centre of its round collision must lie on the axle of joint `{joint_name}` (it is {:.4} m off)",
             f(off_axis.length())
-        ));
+        )));
     }
     // The joint frame is the child link's frame: the axle in body coordinates.
     let axle = arr(wheel_in_body.rotation * axle_local);
     if axle[0].abs() > AXIS_TOL || axle[2].abs() > AXIS_TOL {
-        return Err(format!(
+        return Err(SetupError::urdf_at("joint", joint_name.to_string(), format!(
             "URDF joint `{joint_name}` axis must be horizontal and across link `{body}`'s x axis, is ({:.4}, {:.4}, {:.4}) in `{body}`",
             axle[0], axle[1], axle[2]
-        ));
+        )));
     }
     // Rolling without slip moves the centre at ω r (axle × z): +x for an axle along +y.
     let sign = axle[1].signum();
@@ -164,7 +167,7 @@ pub fn wheel(
         radius,
         center: arr(wheel_in_body.transform_point(center_local)),
         center_local: c,
-        axle_local: arr(axle_local * super::real::r(sign)),
+        axle_local: arr(axle_local * crate::physics::real::r(sign)),
         sign,
         shape,
     })
@@ -186,13 +189,13 @@ fn round_collision_center(robot: &Robot, link: &str) -> ([f64; 3], &'static str)
             })
         })
         .map_or(([0.0; 3], "sphere"), |c| {
-            (c.origin.xyz.0, super::urdf::shape_tag(&c.geometry))
+            (c.origin.xyz.0, crate::physics::urdf::shape_tag(&c.geometry))
         })
 }
 
 /// Check that the wheels share one contact plane (their lowest points at the
 /// same height in the body frame, within 0.1 mm); returns that height.
-pub fn contact_plane(wheels: &[&Wheel]) -> Result<f64, String> {
+pub fn contact_plane(wheels: &[&Wheel]) -> Result<f64, SetupError> {
     let low: Vec<f64> = wheels.iter().map(|w| w.center[2] - w.radius).collect();
     let lo = low.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = low.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -202,10 +205,10 @@ pub fn contact_plane(wheels: &[&Wheel]) -> Result<f64, String> {
             .zip(&low)
             .map(|(w, z)| format!("`{}` {z:.4}", w.link))
             .collect();
-        return Err(format!(
+        return Err(SetupError::urdf(format!(
             "URDF wheels must touch one ground plane: their lowest points sit at different heights ({} m)",
             list.join(", ")
-        ));
+        )));
     }
     Ok(lo)
 }
@@ -218,13 +221,19 @@ pub fn contact_plane(wheels: &[&Wheel]) -> Result<f64, String> {
 /// sideways at up to 0.18 m/s with cylinders, 7e-6 m/s with balls, 0.016
 /// m/s with parry's round cylinder (border 0.9 of the half width). The
 /// price: sideways, against an obstacle, the wheel is as wide as it is tall.
-pub fn roll_on_balls(sw: &mut super::world::SimWorld, wheels: &[Wheel]) -> Result<(), String> {
+pub fn roll_on_balls(
+    sw: &mut crate::physics::world::SimWorld,
+    wheels: &[Wheel],
+) -> Result<(), SetupError> {
     let links: Vec<&str> = wheels.iter().map(|w| w.link.as_str()).collect();
     roll_links_on_balls(sw, &links)
 }
 
 /// [`roll_on_balls`] for the wheel links named.
-pub fn roll_links_on_balls(sw: &mut super::world::SimWorld, links: &[&str]) -> Result<(), String> {
+pub fn roll_links_on_balls(
+    sw: &mut crate::physics::world::SimWorld,
+    links: &[&str],
+) -> Result<(), SetupError> {
     for l in links {
         for c in sw.colliders_of(l)? {
             let Some(col) = sw.world.colliders.get_mut(c) else {
@@ -254,7 +263,7 @@ pub fn root_pose(
     y: f64,
     theta: f64,
 ) -> RPose {
-    let rot = Rotation::from_rotation_z(super::real::r(theta));
+    let rot = Rotation::from_rotation_z(crate::physics::real::r(theta));
     let offset = rot * vector(point[0], point[1], ground);
     let body_pose = RPose::from_parts(vector(x, y, 0.0) - offset, rot);
     body_pose * frames[body].inverse()

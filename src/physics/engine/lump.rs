@@ -14,8 +14,9 @@
 //! `base_link`. A model that needs a fixed joint as a joint (the mobile
 //! manipulator's compliant wrist) keeps it ([`lump`]'s `keep`).
 
-use super::rapier::math::Pose as RPose;
-use super::world::origin;
+use crate::error::SetupError;
+use crate::physics::rapier::math::Pose as RPose;
+use crate::physics::world::origin;
 use urdf_rs::{JointType, Robot};
 
 /// How the links of one URDF map onto rigid bodies.
@@ -56,7 +57,7 @@ pub fn is_frame(l: &urdf_rs::Link) -> bool {
 /// Group the links of `robot` (one validated tree) into bodies: every fixed
 /// joint is lumped except those named in `keep`. The error names every
 /// body without mass in one message.
-pub fn lump(robot: &Robot, keep: &[&str]) -> Result<Lumping, String> {
+pub fn lump(robot: &Robot, keep: &[&str]) -> Result<Lumping, SetupError> {
     let n = robot.links.len();
     let index = |name: &str| robot.links.iter().position(|l| l.name == name);
     let mut parent: Vec<Option<usize>> = vec![None; n];
@@ -149,9 +150,14 @@ pub fn lump(robot: &Robot, keep: &[&str]) -> Result<Lumping, String> {
                 root.join(", ")
             ));
         }
-        return Err(format!(
-            "URDF {}: give a link of each an <inertial> with mass > 0",
-            parts.join("; ")
+        let (first, _) = massless[0];
+        return Err(SetupError::urdf_at(
+            "link",
+            &robot.links[first].name,
+            format!(
+                "URDF {}: give a link of each an <inertial> with mass > 0",
+                parts.join("; ")
+            ),
         ));
     }
     let offset = (0..n)
@@ -212,8 +218,8 @@ mod tests {
         assert_eq!(l.body, vec![1, 1, 1, 1, 4]);
         assert_eq!(l.joint_kept, vec![false, false, false, true]);
         let t = |i: usize| l.offset[i].unwrap().translation;
-        assert!((t(0) - super::super::real::vector(0.0, 0.0, -0.1)).length() < 1e-15);
-        assert!((t(2) - super::super::real::vector(0.1, 0.0, 0.2)).length() < 1e-15);
+        assert!((t(0) - crate::physics::real::vector(0.0, 0.0, -0.1)).length() < 1e-15);
+        assert!((t(2) - crate::physics::real::vector(0.1, 0.0, 0.2)).length() < 1e-15);
         assert!(l.offset[1].is_none() && l.offset[4].is_none());
         // Kept: the caster stays a body of its own.
         let k = lump(&r, &["base_link_caster"]).unwrap();
@@ -233,7 +239,7 @@ mod tests {
             joint("fixed", "right", "right_tyre", "0 0 0"),
             joint("revolute", "base", "sensor_mount", "0 0 0.3"),
         ]);
-        let e = lump(&r, &[]).unwrap_err();
+        let e = lump(&r, &[]).unwrap_err().to_string();
         assert_eq!(
             e,
             "URDF links `left`, `sensor_mount` move (child of a non-fixed joint) but neither they nor anything fixed to them has mass: give a link of each an <inertial> with mass > 0"
@@ -243,7 +249,7 @@ mod tests {
             link("frame", 0.0),
             joint("fixed", "world", "frame", "0 0 0"),
         ]);
-        let e = lump(&root, &[]).unwrap_err();
+        let e = lump(&root, &[]).unwrap_err().to_string();
         assert!(e.contains("root link `world` has no mass"), "{e}");
     }
 }

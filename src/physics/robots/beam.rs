@@ -116,8 +116,9 @@
 //! Accelerations come from velocity differences, so call
 //! [`PhysicsBeam::after_step`] after every step.
 
-use super::rapier::prelude::*;
+use crate::error::SetupError;
 use crate::model::beam::Beam;
+use crate::physics::rapier::prelude::*;
 
 /// Chain resolution and damping.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -216,14 +217,16 @@ impl PhysicsBeam {
         centreline: &dyn Fn(Real) -> Pose,
         ends: [Option<Attachment>; 2],
         groups: InteractionGroups,
-    ) -> Result<PhysicsBeam, String> {
+    ) -> Result<PhysicsBeam, SetupError> {
         beam.validate()?;
         let n = opts.segments;
         if n < 2 || !n.is_multiple_of(2) {
-            return Err(format!("beam segments must be even and ≥ 2, got {n}"));
+            return Err(SetupError::other(format!(
+                "beam segments must be even and ≥ 2, got {n}"
+            )));
         }
         if !(opts.damping_time.is_finite() && opts.damping_time >= 0.0) {
-            return Err("beam damping_time must be ≥ 0".into());
+            return Err(SetupError::other(format!("beam damping_time must be ≥ 0")));
         }
         let len = real(beam.length);
         let l = len / n as Real;
@@ -354,10 +357,10 @@ impl PhysicsBeam {
                 segs[n].handle
             };
             if world.bodies.get(att.body).is_none() {
-                return Err(format!(
+                return Err(SetupError::other(format!(
                     "beam end {}: attachment body not in the world",
                     2 * e
-                ));
+                )));
             }
             let mut j = GenericJoint::new(JointAxesMask::LOCKED_FIXED_AXES);
             j.set_local_frame1(att.frame)
