@@ -226,7 +226,9 @@ impl PhysicsBeam {
             )));
         }
         if !(opts.damping_time.is_finite() && opts.damping_time >= 0.0) {
-            return Err(SetupError::other(format!("beam damping_time must be ≥ 0")));
+            return Err(SetupError::other(
+                "beam damping_time must be ≥ 0".to_string(),
+            ));
         }
         let len = real(beam.length);
         let l = len / n as Real;

@@ -268,10 +268,10 @@ impl SpaceRobotPhysics {
     ) -> Result<Self, SetupError> {
         check_urdf(robot, model)?;
         if sim.gravity.iter().any(|g| *g != 0.0) {
-            return Err(SetupError::key("sim.gravity", format!("scenario key `sim.gravity` must be [0, 0, 0]: the space robot floats free (no ground, no gravity)")));
+            return Err(SetupError::key("sim.gravity", "scenario key `sim.gravity` must be [0, 0, 0]: the space robot floats free (no ground, no gravity)".to_string()));
         }
         if start.len() != 3 {
-            return Err(SetupError::other(format!("start needs (θ0, θ1, θ2)")));
+            return Err(SetupError::other("start needs (θ0, θ1, θ2)".to_string()));
         }
         let poses = model.body_poses(&State::from_column_slice(start));
         // Vehicle frame = vehicle CoM (joint 1).

@@ -148,7 +148,7 @@ fn dilf(cfg: &MobileManipulatorConfig, params: &DilfParams) -> Result<Dilf, Setu
     if let Err(crate::planner::PlanError::InvalidParameter { name, reason }) = params.validate() {
         return Err(SetupError::key(
             format!("planner.{name}"),
-            format!("{reason}"),
+            reason.to_string(),
         ));
     }
     let params = params.clone();
@@ -445,7 +445,7 @@ impl System for Dilf {
         if let Err(crate::planner::PlanError::InvalidParameter { name, reason }) =
             dilf::check_configuration(&scene, start, "start")
         {
-            return Err(SetupError::key(format!("{name}"), format!("{reason}")));
+            return Err(SetupError::key(name.to_string(), reason.to_string()));
         }
         let obstacles: Vec<ObstacleShape> = self
             .obstacles

@@ -132,9 +132,9 @@ pub(super) fn add_rotor_inertia(b: &mut RigidBody, a: f64) -> Result<(), SetupEr
     let link = match b.mass_properties().additional_local_mprops.as_deref() {
         Some(RigidBodyAdditionalMassProps::MassProps(p)) => *p,
         _ => {
-            return Err(SetupError::other(format!(
-                "mobile manipulator physics: an arm link has no URDF inertial"
-            )))
+            return Err(SetupError::other(
+                "mobile manipulator physics: an arm link has no URDF inertial".to_string(),
+            ))
         }
     };
     // Massless, about an axis through the link origin along z: the sum's

@@ -294,9 +294,9 @@ impl MobileManipulatorPhysics {
             )));
         }
         if setup.beam.is_some() != (k == 2) {
-            return Err(SetupError::other(format!(
-                "mobile manipulator physics: a beam needs exactly two robots"
-            )));
+            return Err(SetupError::other(
+                "mobile manipulator physics: a beam needs exactly two robots".to_string(),
+            ));
         }
         let root =
             |r: usize| rl::from_spatial(&mm::frames::<f64>(&start[DOF * r..DOF * (r + 1)]).base);
