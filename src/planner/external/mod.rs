@@ -50,8 +50,9 @@ pub struct ExternalParams {
     /// Longest run, s (it ends earlier when the law answers `done`).
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub horizon: f64,
-    /// Longest wait for one answer, s (the first includes the process's
-    /// start); a law that does not answer in time ends the run (exit 3).
+    /// Longest wait for one exchange, s: sending the request and receiving
+    /// the answer (the first includes the process's start); a law that
+    /// does not read or answer in time ends the run (exit 3).
     #[serde(default = "default_timeout")]
     #[schemars(extend("exclusiveMinimum" = 0), range(max = 3600))]
     pub timeout: f64,
