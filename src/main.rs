@@ -703,7 +703,12 @@ fn main() -> ExitCode {
         Ok(code) => ExitCode::from(code),
         Err(errors) => {
             for e in &errors {
-                eprintln!("error: {e}");
+                // A last guard for numbers a message writes in full (1e300 as
+                // 301 digits): the messages format theirs readably already.
+                eprintln!(
+                    "error: {}",
+                    anholonomy::numfmt::shorten_long_numbers(&e.to_string())
+                );
             }
             ExitCode::from(errors.iter().map(|e| e.exit_code()).max().unwrap_or(2) as u8)
         }

@@ -302,9 +302,9 @@ impl CarPhysics {
         let geom = CarGeometry::read(robot, names, model)?;
         if start[3].abs() > model.max_steer + 1e-12 {
             return Err(format!(
-                "key `start`: steering angle {:.3}° is beyond model.max_steer_deg = {}",
-                start[3].to_degrees(),
-                model.max_steer.to_degrees()
+                "key `start`: steering angle {}° is beyond model.max_steer_deg = {}",
+                crate::numfmt::readable(start[3].to_degrees()),
+                crate::numfmt::readable(model.max_steer.to_degrees())
             ));
         }
         let frames = wheeled::link_frames(robot);

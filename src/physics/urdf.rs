@@ -218,7 +218,9 @@ pub fn require_radius(robot: &Robot, link: &str, what: &str, radius: f64) -> Res
     let r = round_collision(robot, link, what)?;
     if (r - radius).abs() > 1e-6 {
         return Err(format!(
-            "URDF radius of {what} ({r} m) differs from the scenario's model.radius ({radius} m)"
+            "URDF radius of {what} ({} m) differs from the scenario's model.radius ({} m)",
+            crate::numfmt::shortest(r),
+            crate::numfmt::shortest(radius)
         ));
     }
     Ok(())

@@ -481,10 +481,23 @@ fn make_plan(sc: &Scenario, system: &dyn System) -> Result<Plan, Error> {
         }
     };
     let plan = system.plan(&start, &goal, &limits).map_err(plan_error)?;
-    if !plan.duration.is_finite() || plan.duration > 1e6 {
+    let max = crate::plan::MAX_DURATION;
+    if !plan.duration.is_finite() || plan.duration > max {
+        use crate::numfmt::readable;
+        // A feedback law runs for its horizon: that key set the duration,
+        // not the goal.
+        let feedback = matches!(plan.law, crate::plan::ControlLaw::Feedback { .. });
+        if feedback && sc.has_key("planner.horizon") {
+            return Err(sc.error(format!(
+                "key `planner.horizon`: {} s is longer than any run may be (at most {} s)",
+                readable(plan.duration),
+                readable(max)
+            )));
+        }
         return Err(plan_error(PlanError::Unreachable(format!(
-            "plan duration {} s is not usable (at most 1e6 s)",
-            crate::numfmt::readable(plan.duration)
+            "plan duration {} s is not usable (at most {} s)",
+            readable(plan.duration),
+            readable(max)
         ))));
     }
     Ok(plan)

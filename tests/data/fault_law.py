@@ -14,6 +14,8 @@ every line it receives to DIR/received-<pid>. MODE:
   exit_quiet    exit with status 0 at sample 5 without a word
   done          report done at t >= 0.5 s
   noread        answer over and over without reading its input
+  noread_paced  answer once per request without reading it (it watches how
+                many bytes wait on its stdin, shrunk to 4 KB): the pipe fills
   twice         answer every request twice (one write of two lines)
   twice_late    answer every request twice (two writes, the second 20 ms later)
   fork_good     start `sleep 200` (holding stdout and stderr), then like good
@@ -51,6 +53,25 @@ if mode == "exit":
 if mode == "ignore_term":
     signal.signal(signal.SIGTERM, signal.SIG_IGN)
     mode = "sleep"
+if mode == "noread_paced":
+    import array
+    import fcntl
+    import termios
+
+    try:
+        fcntl.fcntl(0, 1031, 4096)  # F_SETPIPE_SZ: fill up after ~50 requests
+    except OSError:
+        pass
+    seen = 0
+    while True:
+        waiting = array.array("i", [0])
+        fcntl.ioctl(0, termios.FIONREAD, waiting)
+        if waiting[0] > seen:
+            seen = waiting[0]
+            sys.stdout.write(json.dumps({"u": [0.1, 0.1]}) + "\n")
+            sys.stdout.flush()
+        else:
+            time.sleep(0.0005)
 if mode == "noread":
     while True:
         sys.stdout.write(json.dumps({"u": [0.1, 0.1]}) + "\n")
