@@ -492,7 +492,7 @@ fn check_runs_a_gate_once_and_fails_when_a_gated_margin_drops() {
     assert_eq!(o.status.code(), Some(1), "{stdout}");
     assert!(
         stdout.contains(
-            "FAIL: margin_command_latency < 0.02 s: breaks at command_latency = 0.02: envelope_outside_fraction = "
+            "FAIL: margin_command_latency < 0.02 s: breaks at command_latency = 0.02 s: envelope_outside_fraction = "
         ),
         "{stdout}"
     );

@@ -153,8 +153,12 @@ pub fn gate(prep: &Prepared, o: &mut RunOutcome) -> Result<(), crate::error::Err
                     "the nominal run already fails".to_string()
                 } else {
                     format!(
-                        "breaks at {d} = {}{why}",
-                        crate::numfmt::readable(d.value_at(*least))
+                        "breaks at {d} = {}{}{why}",
+                        crate::numfmt::readable(d.value_at(*least)),
+                        match d.unit() {
+                            "" => String::new(),
+                            u => format!(" {u}"),
+                        }
                     )
                 };
                 o.failures.push(format!("{name} < {at}: {what}"));

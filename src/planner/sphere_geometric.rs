@@ -286,7 +286,7 @@ pub fn solve(
     // The candidate search walks Δβ in steps of 2π up to about ρ: a goal
     // 1e300 m away would never end it (it hung). Far beyond any plan the
     // step budget allows, refused as unreachable.
-    if !(rho <= MAX_RADII) {
+    if rho.is_nan() || rho > MAX_RADII {
         return Err(PlanError::Unreachable(format!(
             "start and goal are {} m apart, {} radii of the ball: at most {} radii",
             crate::numfmt::readable((x_f - x_i).hypot(y_f - y_i)),
