@@ -315,11 +315,20 @@ fn check_perturbation_times(sc: &Scenario, plan: &Plan, budget: &Budget<'_>) -> 
         .gates()
         .into_iter()
         .filter(|(d, _)| d.unit() == "s")
-        .map(|(d, g)| ("margins", d, g));
-    for (table, d, v) in set.chain(gated) {
+        .map(|(d, g)| (format!("margins.{d}"), d, g));
+    let set = set.map(|(table, d, v)| (format!("{table}.{d}"), d, v));
+    // A sweep varying one: the values validation probes (a range's ends).
+    let varied = sc.sweep.iter().flat_map(|sw| {
+        sw.vary.iter().filter_map(|(path, dist)| {
+            let d = D::parse(path.strip_prefix("sim.perturb.")?)?;
+            let top = dist.probes().into_iter().fold(f64::NEG_INFINITY, f64::max);
+            (d.unit() == "s").then(|| (crate::scenario::vary_key(path), d, top))
+        })
+    });
+    for (key, d, v) in set.chain(gated).chain(varied) {
         if v > run {
             return Err(sc.error(format!(
-                "key `{table}.{d}`: {} s is longer than {what}, {} s: {}; at most {} s",
+                "key `{key}`: {} s is longer than {what}, {} s: {}; at most {} s",
                 readable(v),
                 readable(run),
                 match d {

@@ -92,6 +92,17 @@ pub fn cases(c: &mut Corpus) {
         Some("margins.command_latency"),
     );
 
+    // A sweep drawing latencies longer than the horizon: refused up front
+    // (variants 1..n failed one by one at run time).
+    let sweep = edit(&shipped("rover_sweep.toml"), "count = 100", "count = 4")
+        + "\n[sweep.vary]\n\"sim.perturb.command_latency\" = { uniform = [0.0, 1000.0] }\n";
+    c.sc(
+        "sweep: latencies beyond the horizon",
+        sweep,
+        Some("\"sim.perturb.command_latency\" = "),
+        Some("sweep.vary.\"sim.perturb.command_latency\""),
+    );
+
     // Durations of 1e300 s: the key that set them, not the goal.
     let law = "command = [\"sh\", \"law.sh\"]\nperiod = 0.02\nhorizon = 1e300";
     c.sc(
