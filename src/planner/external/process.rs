@@ -160,20 +160,42 @@ impl LawProcess {
         self.stdin = None;
         let pid = self.child.id();
         let t0 = Instant::now();
-        while !exited(pid) && t0.elapsed() < grace {
+        while !self.has_exited() && t0.elapsed() < grace {
             std::thread::sleep(Duration::from_millis(1));
         }
-        let by_itself = exited(pid);
-        // The law is not reaped yet, so its pid (the group's id) cannot be
-        // reused while the group is signalled.
+        let by_itself = self.has_exited();
+        // On Linux the law is not reaped yet, so its pid (the group's id)
+        // cannot be reused while the group is signalled.
         end_group(pid);
-        if !exited(pid) {
+        if !self.has_exited() {
             // It left its group (setsid): killed on its own.
             let _ = self.child.kill();
         }
-        let status = self.child.wait().ok();
+        let status = match self.reaped {
+            Some(s) => Some(s),
+            None => self.child.wait().ok(),
+        };
         self.reaped = status;
         (status, !by_itself)
+    }
+
+    /// Whether the law has exited. On Linux without reaping it
+    /// ([`exited`]); elsewhere it is reaped here (`try_wait`).
+    fn has_exited(&mut self) -> bool {
+        if self.reaped.is_some() {
+            return true;
+        }
+        if cfg!(target_os = "linux") {
+            return exited(self.child.id());
+        }
+        match self.child.try_wait() {
+            Ok(Some(s)) => {
+                self.reaped = Some(s);
+                true
+            }
+            Ok(None) => false,
+            Err(_) => true,
+        }
     }
 
     /// The process id (for tests that check it is gone).
@@ -296,14 +318,9 @@ fn exited(pid: u32) -> bool {
     r != 0 || unsafe { info.si_pid() } != 0
 }
 
-/// Elsewhere: whether it is gone (`kill(pid, 0)` fails; a zombie counts as alive).
-#[cfg(all(unix, not(target_os = "linux")))]
-fn exited(pid: u32) -> bool {
-    // SAFETY: signal 0 only checks that the process exists.
-    unsafe { libc::kill(pid as libc::pid_t, 0) != 0 }
-}
-
-#[cfg(not(unix))]
+/// Elsewhere the run notices the law's exit only when its stdout closes
+/// (or at the timeout); [`LawProcess::stop`] reaps with `try_wait`.
+#[cfg(not(target_os = "linux"))]
 fn exited(_pid: u32) -> bool {
     false
 }
@@ -332,10 +349,12 @@ pub fn group_alive(pgid: u32) -> bool {
         })
 }
 
-/// Elsewhere: assume so (the grace period is then always waited).
+/// Elsewhere: whether any process of the group exists (`kill(-pgid, 0)`;
+/// an unreaped zombie counts, so the grace period may be waited out).
 #[cfg(all(unix, not(target_os = "linux")))]
-pub fn group_alive(_pgid: u32) -> bool {
-    true
+pub fn group_alive(pgid: u32) -> bool {
+    // SAFETY: signal 0 only checks that the group has a member.
+    unsafe { libc::kill(-(pgid as libc::pid_t), 0) == 0 }
 }
 
 /// SIGTERM to what still runs of group `pgid`, then SIGKILL after
