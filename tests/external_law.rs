@@ -242,6 +242,43 @@ fn what_a_law_starts_ends_with_its_run() {
     assert!(t0.elapsed().as_secs_f64() < 5.0);
 }
 
+/// Ctrl-C on the command line: the law, in a group of its own, no longer
+/// gets the terminal's SIGINT, so the harness passes it on. The harness
+/// dies of the signal, the law and what it started with it.
+#[cfg(target_os = "linux")]
+#[test]
+fn ctrl_c_ends_the_law_and_what_it_started() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    disk_with_law(d, "int", &law_command("fork_sleep", d), "timeout = 60.0");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_anholonomy"))
+        .args(["run", "int.toml", "--no-logs", "--quiet"])
+        .current_dir(d)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // The law is asleep (at sample 3) once it has started its child.
+    let t0 = std::time::Instant::now();
+    while grandchildren(d).is_empty() || pids(d).is_empty() {
+        assert!(t0.elapsed().as_secs() < 20, "the law did not start");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) };
+    let status = child.wait().unwrap();
+    use std::os::unix::process::ExitStatusExt;
+    assert_eq!(status.signal(), Some(libc::SIGINT), "{status:?}");
+    let t1 = std::time::Instant::now();
+    for pid in pids(d).into_iter().chain(grandchildren(d)) {
+        // The harness's zombie child is init's to reap now: not running is enough.
+        while exists(pid).is_some_and(|s| s != "Z") {
+            assert!(t1.elapsed().as_secs() < 2, "{pid} still runs after Ctrl-C");
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+    }
+}
+
 #[test]
 fn a_law_that_crashes_at_sample_10() {
     let (m, run, _) = fault("crash", "");

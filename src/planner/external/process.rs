@@ -90,6 +90,8 @@ impl LawProcess {
             cmd.process_group(0);
         }
         let mut child = cmd.spawn()?;
+        #[cfg(unix)]
+        on_signal::register(child.id());
         let stdin = child.stdin.take();
         #[cfg(unix)]
         if let Some(w) = &stdin {
@@ -167,6 +169,8 @@ impl LawProcess {
         // On Linux the law is not reaped yet, so its pid (the group's id)
         // cannot be reused while the group is signalled.
         end_group(pid);
+        #[cfg(unix)]
+        on_signal::unregister(pid);
         if !self.has_exited() {
             // It left its group (setsid): killed on its own.
             let _ = self.child.kill();
@@ -379,6 +383,81 @@ fn end_group(pgid: u32) {
 
 #[cfg(not(unix))]
 fn end_group(_pgid: u32) {}
+
+/// The process groups of the laws running now, for a harness killed by a
+/// signal (Ctrl-C): a law in a group of its own no longer gets the
+/// terminal's SIGINT, so the harness passes it on. Lock-free slots, read
+/// by the handler (only async-signal-safe calls there).
+#[cfg(unix)]
+pub mod on_signal {
+    use std::sync::atomic::{AtomicU32, Ordering};
+
+    static GROUPS: [AtomicU32; 256] = [const { AtomicU32::new(0) }; 256];
+
+    /// Track group `pgid` (best effort: untracked when every slot is taken).
+    pub fn register(pgid: u32) {
+        for g in &GROUPS {
+            if g.compare_exchange(0, pgid, Ordering::SeqCst, Ordering::SeqCst)
+                .is_ok()
+            {
+                return;
+            }
+        }
+    }
+
+    /// Stop tracking group `pgid` (it was ended).
+    pub fn unregister(pgid: u32) {
+        for g in &GROUPS {
+            if g.compare_exchange(pgid, 0, Ordering::SeqCst, Ordering::SeqCst)
+                .is_ok()
+            {
+                return;
+            }
+        }
+    }
+
+    fn signal_all(sig: libc::c_int) -> bool {
+        let mut any = false;
+        for g in &GROUPS {
+            let pgid = g.load(Ordering::SeqCst);
+            if pgid != 0 {
+                // SAFETY: kill(2) is async-signal-safe.
+                unsafe { libc::kill(-(pgid as libc::pid_t), sig) };
+                any = true;
+            }
+        }
+        any
+    }
+
+    extern "C" fn handler(sig: libc::c_int) {
+        if signal_all(libc::SIGTERM) {
+            let grace = libc::timespec {
+                tv_sec: 0,
+                tv_nsec: super::TERM_GRACE.as_nanos() as libc::c_long,
+            };
+            // SAFETY: nanosleep and kill are async-signal-safe.
+            unsafe { libc::nanosleep(&grace, std::ptr::null_mut()) };
+            signal_all(libc::SIGKILL);
+        }
+        // Then die of the signal, as without the handler.
+        // SAFETY: signal and raise are async-signal-safe.
+        unsafe {
+            libc::signal(sig, libc::SIG_DFL);
+            libc::raise(sig);
+        }
+    }
+
+    /// End every running law's group (SIGTERM, SIGKILL after the grace
+    /// period) when this process gets SIGINT, SIGTERM or SIGHUP, then die
+    /// of that signal. For the command line; a host with its own signal
+    /// handling (Python) cancels its runs instead, which ends their laws.
+    pub fn install() {
+        for sig in [libc::SIGINT, libc::SIGTERM, libc::SIGHUP] {
+            // SAFETY: installs a handler that only makes async-signal-safe calls.
+            unsafe { libc::signal(sig, handler as *const () as libc::sighandler_t) };
+        }
+    }
+}
 
 #[cfg(unix)]
 impl Lines {
