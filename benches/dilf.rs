@@ -110,7 +110,8 @@ fn pair_field(c: &mut Criterion) {
         panic!("dilf_paper is a mobile-manipulator scenario");
     };
     let scene =
-        anholonomy::systems::dilf::task_scene(cfg, params, start.as_slice(), &goal).expect("scene");
+        anholonomy::systems::mobile_manipulator::task_scene(cfg, params, start.as_slice(), &goal)
+            .expect("scene");
     let plan = prep.plan().expect("plan");
     let ideal = simulate(prep.model(), &plan, &start, prep.scenario.sim.dt);
     let states: Vec<Vec<f64>> = ideal

@@ -257,8 +257,9 @@ fn main() {
             eprintln!("error: not a dilf scenario");
             std::process::exit(2);
         };
-        let scene = anholonomy::systems::dilf::task_scene(m, p, start.as_slice(), &goal)
-            .expect("validated");
+        let scene =
+            anholonomy::systems::mobile_manipulator::task_scene(m, p, start.as_slice(), &goal)
+                .expect("validated");
         let v_end = scene
             .evaluate::<f64>(end, &mut scene.warm())
             .map_or(f64::NAN, |e| e.v);

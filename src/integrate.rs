@@ -127,6 +127,9 @@ pub enum IdealStop {
     Fault(String),
     /// The token was cancelled.
     Cancelled,
+    /// The model's equations gave a non-finite state (a declared model's
+    /// expression dividing by zero, say): which coordinate, and when.
+    NonFinite(String),
 }
 
 /// [`simulate`], or the fault of a controller that stopped working (an
@@ -138,7 +141,7 @@ pub fn simulate_checked(
     dt: f64,
 ) -> Result<Trajectory, String> {
     simulate_until(model, plan, q0, dt, &Cancel::default()).map_err(|e| match e {
-        IdealStop::Fault(m) => m,
+        IdealStop::Fault(m) | IdealStop::NonFinite(m) => m,
         IdealStop::Cancelled => crate::cancel::CANCELLED.into(),
     })
 }
@@ -185,6 +188,17 @@ fn run_ideal(
             return (out, Some(IdealStop::Cancelled));
         }
         let t = k as f64 * dt;
+        if let Some(i) = q.iter().position(|v| !v.is_finite()) {
+            let name = model.state_names().get(i).copied().unwrap_or("?");
+            return (
+                out,
+                Some(IdealStop::NonFinite(format!(
+                    "ideal run: state `{name}` became {} at t = {} s (its equation gave a non-finite value)",
+                    q[i],
+                    crate::numfmt::readable(t)
+                ))),
+            );
+        }
         let cmd = match &mut clock {
             Some(clock) => {
                 if clock.due(t) {

@@ -99,7 +99,7 @@ impl Page {
                     allowed: "a model kind".into(),
                     doc: format!(
                         "The kinematic model and its rigid-body counterpart: {}. The other keys of `[model]` are on the model's page.",
-                        kinds(&ModelConfig::KINDS, "models")
+                        kinds(ModelConfig::KINDS, "models")
                     ),
                 });
                 rows.push(Row {
@@ -108,7 +108,7 @@ impl Page {
                     allowed: "a planner kind for the model".into(),
                     doc: format!(
                         "The planner: {}. The other keys of `[planner]` are on the planner's page.",
-                        kinds(&PlannerConfig::KINDS, "planners")
+                        kinds(PlannerConfig::KINDS, "planners")
                     ),
                 });
                 rows.sort_by(|a, b| section(&a.key).cmp(section(&b.key)));
@@ -201,7 +201,13 @@ impl Page {
         if let Some(d) = self.schema().map(Schema::description) {
             let _ = writeln!(b, "{d}");
         }
-        if let Page::Model(k) = self {
+        if *self == Page::Model(DECLARED) {
+            let _ = writeln!(
+                b,
+                "start/goal: model.states as declared (model.angles in degrees)"
+            );
+            let _ = writeln!(b, "inputs: model.inputs as declared");
+        } else if let Page::Model(k) = self {
             let (states, inputs) = states_of(k)?;
             let s: Vec<String> = states
                 .iter()
@@ -290,6 +296,9 @@ fn index(b: &mut String) {
     }
 }
 
+/// The model whose states, inputs and URDF names are the scenario's own.
+const DECLARED: &str = "declared";
+
 /// A `[model]` table of `kind` with only its required keys (placeholders), as TOML.
 fn minimal_table(kind: &str) -> Result<String, String> {
     let s = ModelConfig::schema(kind).ok_or_else(|| format!("model `{kind}`: no schema"))?;
@@ -371,6 +380,13 @@ fn model_intro(b: &mut String, kind: &str) -> Result<(), String> {
         .map(|p| format!("[`{p}`](../planners/{p}.md)"))
         .collect();
     let _ = writeln!(b, "Planners: {}.\n", planners.join(", "));
+    if kind == DECLARED {
+        b.push_str("## `start`, `goal` and the inputs
+
+As declared: `start` and `goal` list `model.states` in order (the `model.angles` in degrees), plans give `model.inputs`. See [Declare your own model](../../declared.md).\n\n");
+        let _ = writeln!(b, "## `[model]` keys\n\n`kind = \"{kind}\"` and:\n");
+        return Ok(());
+    }
     let (states, inputs) = states_of(kind)?;
     b.push_str("## `start` and `goal`\n\nBoth list the state in this order (angles in degrees in the file, radians in the logs):\n\n| # | coordinate | unit in the file |\n|---|---|---|\n");
     for (i, (n, u)) in states.iter().enumerate() {

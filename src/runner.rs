@@ -403,6 +403,10 @@ pub fn ideal_run(prep: &Prepared, plan: &Plan, cancel: &Cancel) -> Result<Trajec
             message,
         },
         IdealStop::Cancelled => cancelled(prep),
+        IdealStop::NonFinite(message) => Error::Physics {
+            path: sc.path.clone(),
+            message,
+        },
     })
 }
 

@@ -33,7 +33,9 @@ impl Run {
         else {
             panic!("not a dilf scenario")
         };
-        let scene = anholonomy::systems::dilf::task_scene(m, p, start.as_slice(), &goal).unwrap();
+        let scene =
+            anholonomy::systems::mobile_manipulator::task_scene(m, p, start.as_slice(), &goal)
+                .unwrap();
         let params = p.clone();
         Run {
             prep,

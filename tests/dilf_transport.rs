@@ -27,7 +27,8 @@ fn the_measured_deformation_equals_the_planar_readout_when_the_platforms_stand_f
         panic!("not a dilf pair")
     };
     let (start, goal) = prep.start_goal();
-    let scene = anholonomy::systems::dilf::task_scene(m, p, start.as_slice(), &goal).unwrap();
+    let scene =
+        anholonomy::systems::mobile_manipulator::task_scene(m, p, start.as_slice(), &goal).unwrap();
     let c = scene.object.as_ref().unwrap();
     let mut sys = prep.physics().unwrap();
     let names = sys.channel_names();

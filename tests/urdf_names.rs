@@ -10,10 +10,11 @@ use std::path::Path;
 #[test]
 fn every_model_declares_its_urdf_names_and_ships_a_urdf_with_them() {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("models");
-    for kind in ModelConfig::KINDS {
+    // A declared model names its links and joints in the scenario.
+    for kind in ModelConfig::KINDS.iter().filter(|k| **k != "declared") {
         let table = ModelConfig::required_urdf(kind).unwrap_or_else(|| panic!("{kind}"));
         assert!(!table.is_empty(), "{kind}");
-        let file = match kind {
+        let file = match *kind {
             "rolling_sphere" => "sphere",
             k => k,
         };

@@ -5,6 +5,7 @@
 
 pub mod beam;
 pub mod bicycle;
+pub mod declared;
 pub mod disk;
 pub mod ellipsoid;
 pub mod mobile_manipulator;

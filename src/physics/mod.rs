@@ -11,6 +11,7 @@ pub mod angles;
 pub mod batch;
 pub mod beam;
 pub mod car;
+pub mod declared;
 pub mod diff_drive;
 pub mod disk;
 pub mod lump;

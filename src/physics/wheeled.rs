@@ -219,8 +219,14 @@ pub fn contact_plane(wheels: &[&Wheel]) -> Result<f64, String> {
 /// m/s with parry's round cylinder (border 0.9 of the half width). The
 /// price: sideways, against an obstacle, the wheel is as wide as it is tall.
 pub fn roll_on_balls(sw: &mut super::world::SimWorld, wheels: &[Wheel]) -> Result<(), String> {
-    for w in wheels {
-        for c in sw.colliders_of(&w.link)? {
+    let links: Vec<&str> = wheels.iter().map(|w| w.link.as_str()).collect();
+    roll_links_on_balls(sw, &links)
+}
+
+/// [`roll_on_balls`] for the wheel links named.
+pub fn roll_links_on_balls(sw: &mut super::world::SimWorld, links: &[&str]) -> Result<(), String> {
+    for l in links {
+        for c in sw.colliders_of(l)? {
             let Some(col) = sw.world.colliders.get_mut(c) else {
                 continue;
             };

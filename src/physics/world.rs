@@ -545,6 +545,70 @@ impl SimWorld {
     }
 }
 
+impl SimWorld {
+    /// The position of a one-axis joint: the child's angle about the joint
+    /// axis relative to the parent (rad, in (−π, π]), or its travel along it
+    /// for a prismatic joint (m).
+    pub fn joint_position(&self, joint: ImpulseJointHandle) -> Option<f64> {
+        let j = self.world.impulse_joints.get(joint)?;
+        let b = &self.world.bodies;
+        let f1 = *b.get(j.body1())?.position() * j.data.local_frame1;
+        let f2 = *b.get(j.body2())?.position() * j.data.local_frame2;
+        let rel = f1.inverse() * f2;
+        Some(if j.data.locked_axes.contains(JointAxesMask::LIN_X) {
+            super::angles::about_axis(&rel.rotation, 0)
+        } else {
+            f(rel.translation.x)
+        })
+    }
+
+    /// Move a one-axis joint to `value` (rad, or m for a prismatic joint)
+    /// by turning (sliding) every body below it about (along) its axis:
+    /// for placing a start configuration, before any step.
+    pub fn set_joint_position(
+        &mut self,
+        joint: ImpulseJointHandle,
+        value: f64,
+    ) -> Result<(), String> {
+        let now = self
+            .joint_position(joint)
+            .ok_or("set_joint_position: no such joint")?;
+        let j = self
+            .world
+            .impulse_joints
+            .get(joint)
+            .ok_or("set_joint_position: no such joint")?;
+        let frame = *self.world.bodies[j.body1()].position() * j.data.local_frame1;
+        let axis = frame.rotation * Vector::X;
+        let slider = !j.data.locked_axes.contains(JointAxesMask::LIN_X);
+        let motion = if slider {
+            RPose::from_translation(axis * r(value - now))
+        } else {
+            let turn = Rotation::from_axis_angle(axis, r(value - now));
+            let a = frame.translation;
+            RPose::from_translation(a) * RPose::from_rotation(turn) * RPose::from_translation(-a)
+        };
+        // The child and everything jointed below it.
+        let mut below = vec![j.body2()];
+        let mut i = 0;
+        while i < below.len() {
+            let at = below[i];
+            for (_, other) in self.world.impulse_joints.iter() {
+                if other.body1() == at && !below.contains(&other.body2()) {
+                    below.push(other.body2());
+                }
+            }
+            i += 1;
+        }
+        for h in below {
+            let b = &mut self.world.bodies[h];
+            let p = motion * *b.position();
+            b.set_position(p, true);
+        }
+        Ok(())
+    }
+}
+
 /// A joint axis commanded in velocity, driven like a real servo drive: the
 /// Rapier motor gets the command u as its target velocity and the commanded
 /// angle (the running integral of u) as its target position, so a velocity
@@ -599,15 +663,15 @@ impl SimWorld {
         let target = clamp(d.angle + (n - 1.0) / (2.0 * n) * s.dt * rate);
         d.angle = clamp(d.angle + s.dt * rate);
         let (k, c) = (s.motor_gain * s.motor_angle_gain, s.motor_gain);
+        // Rapier compares angular targets modulo 2π; a slider's is a length.
+        let target = if d.axis == JointAxis::LinX {
+            target
+        } else {
+            crate::compare::wrap_angle(target)
+        };
         if let Some(j) = self.world.impulse_joints.get_mut(d.joint, false) {
             j.data
-                .set_motor(
-                    d.axis,
-                    r(crate::compare::wrap_angle(target)),
-                    r(rate),
-                    r(k),
-                    r(c),
-                )
+                .set_motor(d.axis, r(target), r(rate), r(k), r(c))
                 .set_motor_max_force(
                     d.axis,
                     r(d.max_torque.unwrap_or(s.motor_max_torque) * s.torque_scale),

@@ -18,9 +18,10 @@ use crate::planner::sphere_triangle::SphereTriangleParams;
 use crate::planner::stokes_disk::StokesDiskParams;
 use crate::planner::stokes_space::StokesSpaceParams;
 use crate::systems::car::CarConfig;
+use crate::systems::declared::DeclaredConfig;
 use crate::systems::diff_drive::DiffDriveConfig;
-use crate::systems::dilf::MobileManipulatorConfig;
 use crate::systems::disk::DiskModelConfig;
+use crate::systems::mobile_manipulator::MobileManipulatorConfig;
 use crate::systems::own_plan::{self, Source};
 use crate::systems::rover::RoverConfig;
 use crate::systems::space_robot::{SpacePlanner, SpaceRobotConfig};
@@ -33,68 +34,251 @@ use std::sync::OnceLock;
 use toml::de::{DeValue, ValueDeserializer};
 use toml::Spanned;
 
-/// `[model]`: the kinematic model and its rigid-body counterpart.
-#[derive(Debug, Clone, Serialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-// Parsed once per scenario: the size of the largest variant does not matter.
-#[allow(clippy::large_enum_variant)]
-pub enum ModelConfig {
-    /// Seed 000 §4.2 disk rolling without slipping: state (x, y, θ, α), inputs (θ', α').
-    RollingDisk(DiskModelConfig),
-    /// Free-floating planar space robot (seeds 000 §4.1 and 001).
-    SpaceRobot(SpaceRobotConfig),
-    /// Overconstrained rover with feedback primitives (seed 002).
-    Rover(RoverConfig),
-    /// Sphere rolling on a plane (seed 003).
-    RollingSphere(SphereConfig),
-    /// Mobile manipulators among ellipsoid obstacles (seed 004).
-    MobileManipulator(MobileManipulatorConfig),
-    /// Differential drive: unicycle kinematics (x, y, θ), inputs (v, ω).
-    DiffDrive(DiffDriveConfig),
-    /// Car-like robot: kinematic bicycle (x, y, θ, φ), inputs (v, φ').
-    Car(CarConfig),
+/// The kinds a scenario can name: one row per model and per planner.
+///
+/// A model row gives its `kind`, its variant and configuration type, the
+/// URDF names its physics looks up (`REQUIRED`), and how its system is
+/// built: with each of its own planners (`kind => |model, Variant(params)|
+/// build`), and, for a model without planners of its own, with a plan from
+/// outside (`outside: |model| build`). A planner row gives its `kind`, its
+/// variant and parameter type. The enums, the kind lists, the schema
+/// lookups, the required-URDF tables, [`PAIRS`] and the build arms are
+/// generated from the rows: adding a model is a system module and one row.
+macro_rules! registry {
+    (
+        models {
+            $(
+                $(#[doc = $mdoc:literal])*
+                $mkind:literal => $MVar:ident($MCfg:ty) {
+                    required: $req:expr,
+                    planners: [ $( $pkindm:literal => |$m:ident, $PVm:ident($p:pat_param)| $build:expr ),* $(,)? ],
+                    outside: $outside:expr $(,)?
+                }
+            )*
+        }
+        planners {
+            $(
+                $(#[doc = $pdoc:literal])*
+                $pkind:literal => $PVar:ident($PCfg:ty)
+            ),* $(,)?
+        }
+    ) => {
+        /// `[model]`: the kinematic model and its rigid-body counterpart.
+        #[derive(Debug, Clone, Serialize)]
+        #[serde(tag = "kind", rename_all = "snake_case")]
+        // Parsed once per scenario: the size of the largest variant does not matter.
+        #[allow(clippy::large_enum_variant)]
+        pub enum ModelConfig {
+            $( $(#[doc = $mdoc])* $MVar($MCfg), )*
+        }
+
+        /// `[planner]`: which planner, with its parameters.
+        #[derive(Debug, Clone, Serialize)]
+        #[serde(tag = "kind", rename_all = "snake_case")]
+        pub enum PlannerConfig {
+            $( $(#[doc = $pdoc])* $PVar($PCfg), )*
+        }
+
+        /// Which built-in planners plan for which model (`model kind`,
+        /// `planner kinds`); the [`OUTSIDE`] kinds plan for every model
+        /// besides. A model without a planner of its own has an empty list.
+        pub const PAIRS: &[(&str, &[&str])] = &[ $( ($mkind, &[ $( $pkindm ),* ]), )* ];
+
+        impl ModelConfig {
+            /// Every model `kind`.
+            pub const KINDS: &'static [&'static str] = &[ $( $mkind ),* ];
+
+            /// The `kind` string.
+            pub fn kind(&self) -> &'static str {
+                match self { $( ModelConfig::$MVar(_) => $mkind, )* }
+            }
+
+            /// The URDF path as written (relative to the scenario file).
+            pub fn urdf(&self) -> &Path {
+                match self { $( ModelConfig::$MVar(m) => &m.urdf, )* }
+            }
+
+            /// The schema of the `[model]` table of `kind` (its keys,
+            /// defaults, ranges and docs, with the URDF source keys every
+            /// model shares): what the validation pass checks and `keys` prints.
+            pub fn schema(kind: &str) -> Option<&'static Schema> {
+                static CACHE: OnceLock<Vec<(&'static str, Schema)>> = OnceLock::new();
+                by_kind(&CACHE, Self::KINDS, kind, |k| {
+                    let source = Schema::of::<super::UrdfSourceConfig>();
+                    Some(match k {
+                        $( $mkind => Schema::of::<$MCfg>(), )*
+                        _ => return None,
+                    }
+                    .with_properties_of(&source))
+                })
+            }
+
+            /// The URDF links and joints the model `kind` looks up, as
+            /// declared by its physics module (default names, renaming keys,
+            /// roles): what the validation pass checks and the reference
+            /// lists. `None` for an unknown kind.
+            pub fn required_urdf(kind: &str) -> Option<&'static [Required]> {
+                Some(match kind {
+                    $( $mkind => &$req, )*
+                    _ => return None,
+                })
+            }
+
+            /// The model of `kind` from its table; `Ok(None)` for an unknown kind.
+            pub(crate) fn parse(
+                kind: &str,
+                table: Spanned<DeValue<'_>>,
+            ) -> Result<Option<Self>, toml::de::Error> {
+                Ok(Some(match kind {
+                    $( $mkind => ModelConfig::$MVar(de(table)?), )*
+                    _ => return Ok(None),
+                }))
+            }
+        }
+
+        impl PlannerConfig {
+            /// Every planner `kind`.
+            pub const KINDS: &'static [&'static str] = &[ $( $pkind ),* ];
+
+            /// The `kind` string.
+            pub fn kind(&self) -> &'static str {
+                match self { $( PlannerConfig::$PVar(_) => $pkind, )* }
+            }
+
+            /// The schema of the `[planner]` table of `kind` (see [`ModelConfig::schema`]).
+            pub fn schema(kind: &str) -> Option<&'static Schema> {
+                static CACHE: OnceLock<Vec<(&'static str, Schema)>> = OnceLock::new();
+                by_kind(&CACHE, Self::KINDS, kind, |k| {
+                    Some(match k {
+                        $( $pkind => Schema::of::<$PCfg>(), )*
+                        _ => return None,
+                    })
+                })
+            }
+
+            /// The planner of `kind` from its table; `Ok(None)` for an unknown kind.
+            pub(crate) fn parse(
+                kind: &str,
+                table: Spanned<DeValue<'_>>,
+            ) -> Result<Option<Self>, toml::de::Error> {
+                Ok(Some(match kind {
+                    $( $pkind => PlannerConfig::$PVar(de(table)?), )*
+                    _ => return Ok(None),
+                }))
+            }
+        }
+
+        /// The system for a model and one of its built-in planners, or (for
+        /// a model without planners of its own) a plan from outside.
+        #[allow(unreachable_patterns)]
+        fn builtin_system(
+            model: &ModelConfig,
+            planner: &PlannerConfig,
+        ) -> Result<Box<dyn System>, String> {
+            match (model, planner) {
+                $(
+                    $( (ModelConfig::$MVar($m), PlannerConfig::$PVm($p)) => $build, )*
+                    (ModelConfig::$MVar(m), PlannerConfig::File(_) | PlannerConfig::External(_)) => {
+                        match ($outside)(m) {
+                            Some(built) => built,
+                            None => Err(mismatch(model.kind(), planner.kind())),
+                        }
+                    }
+                )*
+                (m, p) => Err(mismatch(m.kind(), p.kind())),
+            }
+        }
+    };
 }
 
-/// `[planner]`: which planner, with its parameters.
-#[derive(Debug, Clone, Serialize)]
-#[serde(tag = "kind", rename_all = "snake_case")]
-pub enum PlannerConfig {
-    /// Seed 000 §4.2 Stokes planner for the rolling disk.
-    StokesDisk(StokesDiskParams),
-    /// Seed 000 §4.1 Stokes planner for the space robot.
-    StokesSpace(StokesSpaceParams),
-    /// Seed 001 endogenous-configuration-space Jacobian planner.
-    Endogenous(EndogenousParams),
-    /// Seed 002 feedback primitives P1–P3.
-    RoverPrimitives(RoverPrimitiveParams),
-    /// Seed 003 §3 geometric (A)-(B)-(A) planner.
-    SphereGeometric(SphereGeometricParams),
-    /// Seed 003 §4 spherical-triangle planner.
-    SphereTriangle(SphereTriangleParams),
-    /// Seed 004 dipolar inverse Lyapunov function, feedback law of Eq. 18.
-    Dilf(DilfParams),
-    /// A plan read from a CSV, JSON or MCAP file (any model).
-    File(FilePlanParams),
-    /// A feedback law in another process, spoken to over stdin/stdout (any model).
-    External(ExternalParams),
+/// A model with planners of its own: plans from outside wrap its system
+/// built with its first planner ([`model_system`]), never this.
+fn own_planners<M>(_: &M) -> Option<Result<Box<dyn System>, String>> {
+    None
+}
+
+registry! {
+    models {
+        /// Seed 000 §4.2 disk rolling without slipping: state (x, y, θ, α), inputs (θ', α').
+        "rolling_disk" => RollingDisk(DiskModelConfig) {
+            required: crate::physics::disk::REQUIRED,
+            planners: ["stokes_disk" => |m, StokesDisk(p)| systems::disk::build(m, p)],
+            outside: own_planners,
+        }
+        /// Free-floating planar space robot (seeds 000 §4.1 and 001).
+        "space_robot" => SpaceRobot(SpaceRobotConfig) {
+            required: crate::physics::space_robot::REQUIRED,
+            planners: [
+                "stokes_space" => |m, StokesSpace(p)| systems::space_robot::build(m, SpacePlanner::Stokes(p.clone())),
+                "endogenous" => |m, Endogenous(p)| systems::space_robot::build(m, SpacePlanner::Endogenous(p.clone())),
+            ],
+            outside: own_planners,
+        }
+        /// Overconstrained rover with feedback primitives (seed 002).
+        "rover" => Rover(RoverConfig) {
+            required: crate::physics::rover::REQUIRED,
+            planners: ["rover_primitives" => |m, RoverPrimitives(p)| systems::rover::build(m, p)],
+            outside: own_planners,
+        }
+        /// Sphere rolling on a plane (seed 003).
+        "rolling_sphere" => RollingSphere(SphereConfig) {
+            required: crate::physics::sphere::REQUIRED,
+            planners: [
+                "sphere_geometric" => |m, SphereGeometric(p)| systems::sphere::build(m, SpherePlanner::Geometric(p.clone())),
+                "sphere_triangle" => |m, SphereTriangle(p)| systems::sphere::build(m, SpherePlanner::Triangle(p.clone())),
+            ],
+            outside: own_planners,
+        }
+        /// Mobile manipulators among ellipsoid obstacles (seed 004).
+        "mobile_manipulator" => MobileManipulator(MobileManipulatorConfig) {
+            required: crate::physics::mobile_manipulator::REQUIRED,
+            planners: ["dilf" => |m, Dilf(p)| systems::mobile_manipulator::build(m, p)],
+            outside: own_planners,
+        }
+        /// Differential drive: unicycle kinematics (x, y, θ), inputs (v, ω).
+        "diff_drive" => DiffDrive(DiffDriveConfig) {
+            required: crate::physics::diff_drive::REQUIRED,
+            planners: [],
+            outside: |m| Some(systems::diff_drive::build(m)),
+        }
+        /// Car-like robot: kinematic bicycle (x, y, θ, φ), inputs (v, φ').
+        "car" => Car(CarConfig) {
+            required: crate::physics::car::REQUIRED,
+            planners: [],
+            outside: |m| Some(systems::car::build(m)),
+        }
+        /// A model declared in the scenario: q' = f(q, u), its drives and read-back.
+        "declared" => Declared(DeclaredConfig) {
+            required: [],
+            planners: [],
+            outside: |m| Some(systems::declared::build(m)),
+        }
+    }
+    planners {
+        /// Seed 000 §4.2 Stokes planner for the rolling disk.
+        "stokes_disk" => StokesDisk(StokesDiskParams),
+        /// Seed 000 §4.1 Stokes planner for the space robot.
+        "stokes_space" => StokesSpace(StokesSpaceParams),
+        /// Seed 001 endogenous-configuration-space Jacobian planner.
+        "endogenous" => Endogenous(EndogenousParams),
+        /// Seed 002 feedback primitives P1–P3.
+        "rover_primitives" => RoverPrimitives(RoverPrimitiveParams),
+        /// Seed 003 §3 geometric (A)-(B)-(A) planner.
+        "sphere_geometric" => SphereGeometric(SphereGeometricParams),
+        /// Seed 003 §4 spherical-triangle planner.
+        "sphere_triangle" => SphereTriangle(SphereTriangleParams),
+        /// Seed 004 dipolar inverse Lyapunov function, feedback law of Eq. 18.
+        "dilf" => Dilf(DilfParams),
+        /// A plan read from a CSV, JSON or MCAP file (any model).
+        "file" => File(FilePlanParams),
+        /// A feedback law in another process, spoken to over stdin/stdout (any model).
+        "external" => External(ExternalParams),
+    }
 }
 
 /// Planner kinds that plan for every model: the plan comes from outside
 /// the harness (see [`crate::systems::own_plan`]).
 pub const OUTSIDE: [&str; 2] = ["file", "external"];
-
-/// Which built-in planners plan for which model (`model kind`, `planner
-/// kinds`); the [`OUTSIDE`] kinds plan for every model besides. A model
-/// without a planner of its own has an empty list.
-pub const PAIRS: [(&str, &[&str]); 7] = [
-    ("rolling_disk", &["stokes_disk"]),
-    ("space_robot", &["stokes_space", "endogenous"]),
-    ("rover", &["rover_primitives"]),
-    ("rolling_sphere", &["sphere_geometric", "sphere_triangle"]),
-    ("mobile_manipulator", &["dilf"]),
-    ("diff_drive", &[]),
-    ("car", &[]),
-];
 
 /// Typed parameters from a table (its `kind` already removed); serde errors
 /// keep the document's spans, so they name the key and line inside the table.
@@ -102,131 +286,7 @@ fn de<T: DeserializeOwned>(v: Spanned<DeValue<'_>>) -> Result<T, toml::de::Error
     T::deserialize(ValueDeserializer::from(v))
 }
 
-impl ModelConfig {
-    /// Every model `kind`.
-    pub const KINDS: [&'static str; 7] = [
-        "rolling_disk",
-        "space_robot",
-        "rover",
-        "rolling_sphere",
-        "mobile_manipulator",
-        "diff_drive",
-        "car",
-    ];
-
-    /// The `kind` string.
-    pub fn kind(&self) -> &'static str {
-        match self {
-            ModelConfig::RollingDisk(_) => "rolling_disk",
-            ModelConfig::SpaceRobot(_) => "space_robot",
-            ModelConfig::Rover(_) => "rover",
-            ModelConfig::RollingSphere(_) => "rolling_sphere",
-            ModelConfig::MobileManipulator(_) => "mobile_manipulator",
-            ModelConfig::DiffDrive(_) => "diff_drive",
-            ModelConfig::Car(_) => "car",
-        }
-    }
-
-    /// The URDF path as written (relative to the scenario file).
-    pub fn urdf(&self) -> &Path {
-        match self {
-            ModelConfig::RollingDisk(m) => &m.urdf,
-            ModelConfig::SpaceRobot(m) => &m.urdf,
-            ModelConfig::Rover(m) => &m.urdf,
-            ModelConfig::RollingSphere(m) => &m.urdf,
-            ModelConfig::MobileManipulator(m) => &m.urdf,
-            ModelConfig::DiffDrive(m) => &m.urdf,
-            ModelConfig::Car(m) => &m.urdf,
-        }
-    }
-
-    /// The schema of the `[model]` table of `kind` (its keys, defaults,
-    /// ranges and docs): what the validation pass checks and `keys` prints.
-    pub fn schema(kind: &str) -> Option<&'static Schema> {
-        static CACHE: OnceLock<Vec<(&'static str, Schema)>> = OnceLock::new();
-        by_kind(&CACHE, &Self::KINDS, kind, |k| {
-            let source = Schema::of::<super::UrdfSourceConfig>();
-            Some(
-                match k {
-                    "rolling_disk" => Schema::of::<DiskModelConfig>(),
-                    "space_robot" => Schema::of::<SpaceRobotConfig>(),
-                    "rover" => Schema::of::<RoverConfig>(),
-                    "rolling_sphere" => Schema::of::<SphereConfig>(),
-                    "mobile_manipulator" => Schema::of::<MobileManipulatorConfig>(),
-                    "diff_drive" => Schema::of::<DiffDriveConfig>(),
-                    "car" => Schema::of::<CarConfig>(),
-                    _ => return None,
-                }
-                .with_properties_of(&source),
-            )
-        })
-    }
-
-    /// The URDF links and joints the model `kind` looks up, as declared by
-    /// its physics module (default names, renaming keys, roles): what the
-    /// validation pass checks and the reference lists. `None` for an
-    /// unknown kind.
-    pub fn required_urdf(kind: &str) -> Option<&'static [Required]> {
-        use crate::physics as p;
-        Some(match kind {
-            "rolling_disk" => &p::disk::REQUIRED,
-            "space_robot" => &p::space_robot::REQUIRED,
-            "rover" => &p::rover::REQUIRED,
-            "rolling_sphere" => &p::sphere::REQUIRED,
-            "mobile_manipulator" => &p::mobile_manipulator::REQUIRED,
-            "diff_drive" => &p::diff_drive::REQUIRED,
-            "car" => &p::car::REQUIRED,
-            _ => return None,
-        })
-    }
-
-    /// The model of `kind` from its table; `Ok(None)` for an unknown kind.
-    pub(crate) fn parse(
-        kind: &str,
-        table: Spanned<DeValue<'_>>,
-    ) -> Result<Option<Self>, toml::de::Error> {
-        Ok(Some(match kind {
-            "rolling_disk" => ModelConfig::RollingDisk(de(table)?),
-            "space_robot" => ModelConfig::SpaceRobot(de(table)?),
-            "rover" => ModelConfig::Rover(de(table)?),
-            "rolling_sphere" => ModelConfig::RollingSphere(de(table)?),
-            "mobile_manipulator" => ModelConfig::MobileManipulator(de(table)?),
-            "diff_drive" => ModelConfig::DiffDrive(de(table)?),
-            "car" => ModelConfig::Car(de(table)?),
-            _ => return Ok(None),
-        }))
-    }
-}
-
 impl PlannerConfig {
-    /// Every planner `kind`.
-    pub const KINDS: [&'static str; 9] = [
-        "stokes_disk",
-        "stokes_space",
-        "endogenous",
-        "rover_primitives",
-        "sphere_geometric",
-        "sphere_triangle",
-        "dilf",
-        "file",
-        "external",
-    ];
-
-    /// The `kind` string.
-    pub fn kind(&self) -> &'static str {
-        match self {
-            PlannerConfig::StokesDisk(_) => "stokes_disk",
-            PlannerConfig::StokesSpace(_) => "stokes_space",
-            PlannerConfig::Endogenous(_) => "endogenous",
-            PlannerConfig::RoverPrimitives(_) => "rover_primitives",
-            PlannerConfig::SphereGeometric(_) => "sphere_geometric",
-            PlannerConfig::SphereTriangle(_) => "sphere_triangle",
-            PlannerConfig::Dilf(_) => "dilf",
-            PlannerConfig::File(_) => "file",
-            PlannerConfig::External(_) => "external",
-        }
-    }
-
     /// Paths in the planner's parameters are relative to `dir`, the
     /// scenario file's directory (a plan file, an external law's directory).
     pub(crate) fn set_base(&mut self, dir: &Path) {
@@ -235,44 +295,6 @@ impl PlannerConfig {
             PlannerConfig::External(p) => p.base = dir.to_path_buf(),
             _ => {}
         }
-    }
-
-    /// The schema of the `[planner]` table of `kind` (see [`ModelConfig::schema`]).
-    pub fn schema(kind: &str) -> Option<&'static Schema> {
-        static CACHE: OnceLock<Vec<(&'static str, Schema)>> = OnceLock::new();
-        by_kind(&CACHE, &Self::KINDS, kind, |k| {
-            Some(match k {
-                "stokes_disk" => Schema::of::<StokesDiskParams>(),
-                "stokes_space" => Schema::of::<StokesSpaceParams>(),
-                "endogenous" => Schema::of::<EndogenousParams>(),
-                "rover_primitives" => Schema::of::<RoverPrimitiveParams>(),
-                "sphere_geometric" => Schema::of::<SphereGeometricParams>(),
-                "sphere_triangle" => Schema::of::<SphereTriangleParams>(),
-                "dilf" => Schema::of::<DilfParams>(),
-                "file" => Schema::of::<FilePlanParams>(),
-                "external" => Schema::of::<ExternalParams>(),
-                _ => return None,
-            })
-        })
-    }
-
-    /// The planner of `kind` from its table; `Ok(None)` for an unknown kind.
-    pub(crate) fn parse(
-        kind: &str,
-        table: Spanned<DeValue<'_>>,
-    ) -> Result<Option<Self>, toml::de::Error> {
-        Ok(Some(match kind {
-            "stokes_disk" => PlannerConfig::StokesDisk(de(table)?),
-            "stokes_space" => PlannerConfig::StokesSpace(de(table)?),
-            "endogenous" => PlannerConfig::Endogenous(de(table)?),
-            "rover_primitives" => PlannerConfig::RoverPrimitives(de(table)?),
-            "sphere_geometric" => PlannerConfig::SphereGeometric(de(table)?),
-            "sphere_triangle" => PlannerConfig::SphereTriangle(de(table)?),
-            "dilf" => PlannerConfig::Dilf(de(table)?),
-            "file" => PlannerConfig::File(de(table)?),
-            "external" => PlannerConfig::External(de(table)?),
-            _ => return Ok(None),
-        }))
     }
 }
 
@@ -314,33 +336,6 @@ pub(crate) fn model_system(
         .map_err(|e| format!("planner `{kind}` has no defaults: {e}"))?
         .ok_or_else(|| format!("unknown planner `{kind}` in PAIRS"))?;
     builtin_system(model, &defaults)
-}
-
-/// The system for a model and one of its built-in planners.
-fn builtin_system(model: &ModelConfig, planner: &PlannerConfig) -> Result<Box<dyn System>, String> {
-    use ModelConfig as M;
-    use PlannerConfig as P;
-    match (model, planner) {
-        (M::RollingDisk(m), P::StokesDisk(p)) => systems::disk::build(m, p),
-        (M::SpaceRobot(m), P::StokesSpace(p)) => {
-            systems::space_robot::build(m, SpacePlanner::Stokes(p.clone()))
-        }
-        (M::SpaceRobot(m), P::Endogenous(p)) => {
-            systems::space_robot::build(m, SpacePlanner::Endogenous(p.clone()))
-        }
-        (M::Rover(m), P::RoverPrimitives(p)) => systems::rover::build(m, p),
-        (M::RollingSphere(m), P::SphereGeometric(p)) => {
-            systems::sphere::build(m, SpherePlanner::Geometric(p.clone()))
-        }
-        (M::RollingSphere(m), P::SphereTriangle(p)) => {
-            systems::sphere::build(m, SpherePlanner::Triangle(p.clone()))
-        }
-        (M::MobileManipulator(m), P::Dilf(p)) => systems::dilf::build(m, p),
-        // No planner of their own: only plans from outside, which wrap them.
-        (M::DiffDrive(m), P::File(_) | P::External(_)) => systems::diff_drive::build(m),
-        (M::Car(m), P::File(_) | P::External(_)) => systems::car::build(m),
-        (m, p) => Err(mismatch(m.kind(), p.kind())),
-    }
 }
 
 /// Whether the planner `kind` plans for the model `kind` (per [`PAIRS`];
@@ -391,6 +386,8 @@ mod tests {
             .map(|k| {
                 let radius = if k.starts_with("rolling") {
                     "radius = 1.0\n"
+                } else if *k == "declared" {
+                    "states = [\"x\"]\ninputs = [\"v\"]\nkinematics = { x = \"v\" }\nread = { x = \"base.x\" }\n"
                 } else {
                     ""
                 };

@@ -570,10 +570,10 @@ impl Scenario {
         let serde = |e: toml::de::Error| keys.serde_error(path, &e);
         let mut root = root.into_inner();
         let (model_kind, mut model) =
-            take_tagged(&keys, path, &mut root, "model", &ModelConfig::KINDS)?;
+            take_tagged(&keys, path, &mut root, "model", ModelConfig::KINDS)?;
         let urdf_source = take_urdf_source(&mut model).map_err(serde)?;
         let (planner_kind, planner) =
-            take_tagged(&keys, path, &mut root, "planner", &PlannerConfig::KINDS)?;
+            take_tagged(&keys, path, &mut root, "planner", PlannerConfig::KINDS)?;
         // Match model and planner before reading the planner's parameters: a
         // wrong `kind` explains the parameters the other planner lacks.
         if !config::plans_for(&model_kind, &planner_kind) {

@@ -17,15 +17,15 @@
 //!    System>, String>`: check the parameters that need no file (errors
 //!    start with `` key `model.<key>`: `` or `` key `planner.<key>`: ``, so
 //!    the scenario layer can add the line).
-//! 3. In `src/scenario/config.rs`: a variant of `ModelConfig` (and of
-//!    `PlannerConfig` for a new planner), its `kind` string in `KINDS` and
-//!    `parse`, its row in `PAIRS`, and the arm(s) of `build_system` that hand
-//!    the typed configs to `build`.
-//! 4. Declare the URDF links and joints the physics looks up by name
+//! 3. Declare the URDF links and joints the physics looks up by name
 //!    (`REQUIRED` in the physics module, a [`crate::physics::required::Required`]
 //!    table; a `[model]` key may rename them) and return them, as named by
-//!    the scenario, from [`System::urdf_names`]; add the table to
-//!    `ModelConfig::required_urdf` in `src/scenario/config.rs`.
+//!    the scenario, from [`System::urdf_names`].
+//! 4. Add one row to the `registry!` table in `src/scenario/config.rs`: the
+//!    `kind`, the config type, the `REQUIRED` table and the build function
+//!    per planner (or `outside:` for a model planned only from outside).
+//!    The enums, kind lists, schemas, reference pages and model/planner
+//!    pairs are generated from it.
 //! 5. Everything else is checked by the validation pass before anything runs
 //!    (`crate::validate`): it builds the system, calls [`System::plan`] and
 //!    [`System::physics`] at the start pose, and reports their errors as bad
@@ -36,9 +36,10 @@
 //!    `URDF` and names the link or joint (`` link `wheel` ``).
 
 pub mod car;
+pub mod declared;
 pub mod diff_drive;
-pub mod dilf;
 pub mod disk;
+pub mod mobile_manipulator;
 pub mod own_plan;
 pub mod rover;
 pub mod space_robot;
