@@ -399,7 +399,17 @@ pub fn change_text(base: Option<f64>, now: Option<f64>) -> String {
         }
         (Some(b), Some(n)) if b == n => "0".into(),
         (Some(b), Some(n)) if b != 0.0 && b.is_finite() => {
-            format!("{:+.1} %", 100.0 * (n - b) / b.abs())
+            // Readable at any size: a runaway metric's change is `+1e302 %`.
+            let pct = 100.0 * (n - b) / b.abs();
+            if pct.abs() < 1e6 {
+                format!("{pct:+.1} %")
+            } else {
+                format!(
+                    "{}{} %",
+                    if pct > 0.0 { "+" } else { "" },
+                    crate::numfmt::readable(pct)
+                )
+            }
         }
         (Some(b), Some(n)) => format!("{:+.4e}", n - b),
     }
@@ -539,6 +549,7 @@ mod tests {
             steps: 0,
             timings: Default::default(),
             log_dir: None,
+            notes: Vec::new(),
         }
     }
 

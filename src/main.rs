@@ -24,9 +24,11 @@ enum Mode {
     WriteBaselines,
 }
 
+/// A metric for the table: 4 significant digits at any magnitude (a goal
+/// error of 1e300 from a runaway plan is `1e300`, not 300 digits).
 fn fmt_metric(o: &RunOutcome, name: &str) -> String {
     o.metric(name)
-        .map(|v| format!("{v:.4}"))
+        .map(anholonomy::numfmt::readable)
         .unwrap_or_else(|| "-".into())
 }
 
@@ -44,6 +46,16 @@ fn fmt_tracking(o: &RunOutcome, name: &str) -> String {
         fmt_metric(o, name)
     } else {
         "n/a".into()
+    }
+}
+
+/// The result column: the verdict, and the `[margins]` gates that held.
+fn result(o: &RunOutcome) -> String {
+    let v = o.verdict.describe(&o.failures, o.expect_reason.as_deref());
+    if o.notes.is_empty() {
+        v
+    } else {
+        format!("{v} ({})", o.notes.join("; "))
     }
 }
 
@@ -75,7 +87,7 @@ fn print_table(rows: &[RunOutcome]) {
             fmt_metric(o, &format!("sim_goal_{c}")),
             fmt_tracking(o, &format!("tracking_{c}_rms")),
             fmt_tracking(o, &format!("tracking_{c}_max")),
-            o.verdict.describe(&o.failures, o.expect_reason.as_deref())
+            result(o)
         );
     }
     if rows.iter().any(|o| !o.tracking_meaningful) {
@@ -642,8 +654,36 @@ fn merge_cmd(paths: &[PathBuf], out: Option<&Path>) -> Result<u8, Vec<Error>> {
     Ok(0)
 }
 
+/// A command-line error as one line (exit 2, like every bad input): clap's
+/// own first line, with its tip (a similar argument, `--` before a value)
+/// in parentheses, without the usage block. Help and version are printed
+/// as clap prints them.
+fn one_line(e: &clap::Error) -> String {
+    let text = e.render().to_string();
+    let mut lines = text.lines().map(str::trim).filter(|l| !l.is_empty());
+    let first = lines.next().unwrap_or("error: bad arguments");
+    let first = first.strip_prefix("error: ").unwrap_or(first);
+    let tips: Vec<&str> = lines.filter_map(|l| l.strip_prefix("tip: ")).collect();
+    if tips.is_empty() {
+        first.to_string()
+    } else {
+        format!("{first} (tip: {})", tips.join("; "))
+    }
+}
+
 fn main() -> ExitCode {
-    let cli = Cli::parse();
+    // External laws run in process groups of their own: Ctrl-C reaches
+    // them through the harness.
+    #[cfg(unix)]
+    anholonomy::planner::external::process::on_signal::install();
+    let cli = match Cli::try_parse() {
+        Ok(c) => c,
+        Err(e) if !e.use_stderr() => e.exit(),
+        Err(e) => {
+            eprintln!("error: {}", one_line(&e));
+            return ExitCode::from(2);
+        }
+    };
     let res = match &cli.cmd {
         Cmd::Run(a) => run_cmd(a, Mode::Run),
         Cmd::Check(a) => run_cmd(a, Mode::Check),
@@ -667,7 +707,12 @@ fn main() -> ExitCode {
         Ok(code) => ExitCode::from(code),
         Err(errors) => {
             for e in &errors {
-                eprintln!("error: {e}");
+                // A last guard for numbers a message writes in full (1e300 as
+                // 301 digits): the messages format theirs readably already.
+                eprintln!(
+                    "error: {}",
+                    anholonomy::numfmt::shorten_long_numbers(&e.to_string())
+                );
             }
             ExitCode::from(errors.iter().map(|e| e.exit_code()).max().unwrap_or(2) as u8)
         }

@@ -70,6 +70,49 @@ pub fn breach(value: f64, bound: f64) -> (String, String) {
     unreachable!("the loop returns at sig = 17")
 }
 
+/// `text` with every number written out in 20 or more digits (what `{}`
+/// makes of 1e300 or 1e-300, in messages of other crates such as serde's
+/// `invalid type: floating point ...`) in its [`readable`] form. Digits that
+/// continue a word, a path or a name (`w_123...`, `/tmp/123...`) are left
+/// alone.
+pub fn shorten_long_numbers(text: &str) -> String {
+    let b = text.as_bytes();
+    let mut out = String::with_capacity(text.len());
+    let mut i = 0;
+    let mut copied = 0;
+    while i < b.len() {
+        let starts = b[i].is_ascii_digit()
+            && (i == 0
+                || !(b[i - 1].is_ascii_alphanumeric() || matches!(b[i - 1], b'_' | b'/' | b'.')));
+        if !starts {
+            i += 1;
+            continue;
+        }
+        let mut j = i;
+        while j < b.len() && b[j].is_ascii_digit() {
+            j += 1;
+        }
+        if j + 1 < b.len() && b[j] == b'.' && b[j + 1].is_ascii_digit() {
+            j += 1;
+            while j < b.len() && b[j].is_ascii_digit() {
+                j += 1;
+            }
+        }
+        let word_follows = j < b.len() && (b[j].is_ascii_alphanumeric() || b[j] == b'_');
+        let digits = text[i..j].bytes().filter(u8::is_ascii_digit).count();
+        if digits >= 20 && !word_follows {
+            if let Ok(v) = text[i..j].parse::<f64>() {
+                out.push_str(&text[copied..i]);
+                out.push_str(&readable(v));
+                copied = j;
+            }
+        }
+        i = j;
+    }
+    out.push_str(&text[copied..]);
+    out
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -86,6 +129,32 @@ mod tests {
         assert_eq!(readable(f64::NAN), "NaN");
         assert_eq!(readable(f64::INFINITY), "inf");
         assert!(readable(1e300).len() < 10);
+    }
+
+    #[test]
+    fn long_numbers_in_other_crates_messages_are_shortened() {
+        let long = format!("{}", 1e300);
+        let tiny = format!("{}", 1e-300);
+        assert!(long.len() > 300 && tiny.len() > 300);
+        assert_eq!(
+            shorten_long_numbers(&format!(
+                "invalid type: floating point `{long}`, expected u32"
+            )),
+            "invalid type: floating point `1e300`, expected u32"
+        );
+        assert_eq!(
+            shorten_long_numbers(&format!("got -{tiny} s")),
+            "got -1e-300 s"
+        );
+        // Names, paths and ordinary numbers are left alone.
+        for keep in [
+            "/tmp/w25051_89210404934969458471234/x.toml:38: key `a`: got 0.5",
+            "/tmp/12345678901234567890123/case.toml",
+            "run 123456789012345678901234abc",
+            "3.14159 and 2e6",
+        ] {
+            assert_eq!(shorten_long_numbers(keep), keep);
+        }
     }
 
     #[test]

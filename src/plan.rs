@@ -9,6 +9,11 @@ use crate::model::{Input, State};
 use serde::Serialize;
 use std::sync::Arc;
 
+/// The longest plan (or feedback horizon) a scenario may have, s: far
+/// beyond any run the step budget allows, short of durations whose steps
+/// cannot be counted.
+pub const MAX_DURATION: f64 = 1e6;
+
 /// A named time interval of an open-loop plan, e.g. "OZ" or "loop x: PQ".
 #[derive(Debug, Clone, Serialize)]
 pub struct Segment {

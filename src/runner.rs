@@ -132,6 +132,9 @@ pub struct RunOutcome {
     pub timings: Timings,
     /// Log directory, when logs were written.
     pub log_dir: Option<PathBuf>,
+    /// What the result column adds to the verdict: each `[margins]` gate
+    /// that held (`command_latency holds at 0.02 s`).
+    pub notes: Vec<String>,
 }
 
 impl RunOutcome {
@@ -533,6 +536,7 @@ pub fn finish(
         steps: sim.steps,
         timings,
         log_dir: None,
+        notes: Vec::new(),
     };
     let log_error = |message: String| Error::Log {
         path: sc.path.clone(),

@@ -1,16 +1,40 @@
 //! The bad-input corpus: every case through `run`, `check`, `plan` and `list`
 //! (one test per command, so they run in parallel). Each invocation must exit
-//! 2 within a time limit, print one `error: FILE[:LINE]: ...` line per
-//! expected error (with the expected file, line and key), never panic, and
-//! write nothing (the log directory is not even created).
+//! 2 within [`LIMIT`], print one `error: FILE[:LINE]: ...` line per
+//! expected error (with the expected file, line and key), print no number
+//! in 20 digits or more, never panic, and write nothing (the log directory
+//! is not even created).
+//!
+//! The fault corpus (`tests/corpus/faults.rs`): runtime faults and inputs
+//! that run, each ending within [`LIMIT`] with its exit code and message,
+//! without a panic or a process left behind.
 
 mod common;
 mod corpus;
 use common::*;
+use corpus::faults::FaultCase;
 use corpus::{corpus, disk, shipped, Case, Shape, Special};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
+
+/// How long any case may take: bad input is refused before anything runs,
+/// and every fault case ends in a few seconds.
+const LIMIT: Duration = Duration::from_secs(10);
+
+/// The first run of 20 or more digits in `text` (what `{}` makes of 1e300).
+fn long_number(text: &str) -> Option<&str> {
+    let mut start = None;
+    for (i, ch) in text.char_indices() {
+        match (ch.is_ascii_digit(), start) {
+            (true, None) => start = Some(i),
+            (false, Some(s)) if i - s >= 20 => return Some(&text[s..i]),
+            (false, Some(_)) => start = None,
+            _ => {}
+        }
+    }
+    start.filter(|s| text.len() - s >= 20).map(|s| &text[s..])
+}
 
 /// Run the binary in `dir`, killing it after `limit`. Returns (exit code, stdout, stderr).
 fn run_limited(dir: &Path, args: &[String], limit: Duration) -> (Option<i32>, String, String) {
@@ -135,7 +159,7 @@ fn check_command(cmd: &str) {
             _ => continue,
         };
         let dir = setup(case);
-        let (code, stdout, stderr) = run_limited(dir.path(), &args, Duration::from_secs(60));
+        let (code, stdout, stderr) = run_limited(dir.path(), &args, LIMIT);
         invocations += 1;
         let mut bad = |what: String| {
             problems.push(format!(
@@ -149,6 +173,9 @@ fn check_command(cmd: &str) {
         }
         if stderr.contains("panicked") || stderr.contains("RUST_BACKTRACE") {
             bad("panic".into());
+        }
+        if let Some(n) = long_number(&stderr) {
+            bad(format!("a number in {} digits", n.len()));
         }
         let lines: Vec<&str> = stderr.lines().collect();
         if lines.len() != case.expect.len() {
@@ -223,7 +250,130 @@ fn corpus_bases_are_valid() {
     let args: Vec<String> = std::iter::once("list".to_string())
         .chain(bases.iter().map(|(f, _)| f.to_string()))
         .collect();
-    let (code, stdout, stderr) = run_limited(dir.path(), &args, Duration::from_secs(60));
+    let (code, stdout, stderr) = run_limited(dir.path(), &args, LIMIT);
     assert_eq!(code, Some(0), "{stderr}");
     assert_eq!(stdout.lines().count(), bases.len() + 1, "{stdout}");
+}
+
+/// Whether process `pid` still runs (a zombie waiting for init does not).
+fn running(pid: u32) -> Option<String> {
+    let stat = std::fs::read_to_string(format!("/proc/{pid}/stat")).ok()?;
+    let state = stat
+        .rsplit(')')
+        .next()?
+        .split_whitespace()
+        .next()?
+        .to_string();
+    (state != "Z" && state != "X").then_some(state)
+}
+
+/// The pids written into `dir/file`, one per line.
+fn pids_in(dir: &Path, file: &str) -> Vec<u32> {
+    std::fs::read_to_string(dir.join(file))
+        .unwrap_or_default()
+        .lines()
+        .filter_map(|l| l.trim().parse().ok())
+        .collect()
+}
+
+/// What is wrong with one fault case's run, if anything.
+fn fault_problems(case: &FaultCase) -> Vec<String> {
+    let dir = tempfile::tempdir().unwrap();
+    for (name, bytes) in &case.files {
+        std::fs::write(dir.path().join(name), bytes).unwrap();
+    }
+    let t0 = Instant::now();
+    let out = dir.path().join(".stdout");
+    let err = dir.path().join(".stderr");
+    let mut child = Command::new(env!("CARGO_BIN_EXE_anholonomy"))
+        .args(&case.args)
+        .current_dir(dir.path())
+        .stdin(Stdio::null())
+        .stdout(std::fs::File::create(&out).unwrap())
+        .stderr(std::fs::File::create(&err).unwrap())
+        .spawn()
+        .unwrap();
+    let mut problems = Vec::new();
+    let code = loop {
+        if let Some(s) = child.try_wait().unwrap() {
+            break s.code();
+        }
+        if t0.elapsed() > LIMIT {
+            let _ = child.kill();
+            let _ = child.wait();
+            problems.push(format!("hang: killed after {LIMIT:?}"));
+            break None;
+        }
+        std::thread::sleep(Duration::from_millis(5));
+    };
+    let read = |p: &Path| String::from_utf8_lossy(&std::fs::read(p).unwrap()).into_owned();
+    let (stdout, stderr) = (read(&out), read(&err));
+    if code != Some(case.code) {
+        problems.push(format!("exit {code:?}, expected {}", case.code));
+    }
+    if stderr.contains("panicked") || stderr.contains("RUST_BACKTRACE") {
+        problems.push("panic".into());
+    }
+    for (what, text) in [("stdout", &stdout), ("stderr", &stderr)] {
+        if let Some(n) = long_number(text) {
+            problems.push(format!("{what}: a number in {} digits", n.len()));
+        }
+    }
+    for s in &case.stderr_has {
+        if !stderr.contains(s.as_str()) {
+            problems.push(format!("stderr lacks `{s}`"));
+        }
+    }
+    if !case.stderr_any.is_empty() && !case.stderr_any.iter().any(|s| stderr.contains(s.as_str())) {
+        problems.push(format!("stderr has none of {:?}", case.stderr_any));
+    }
+    for s in &case.stdout_has {
+        if !stdout.contains(s.as_str()) {
+            problems.push(format!("stdout lacks `{s}`"));
+        }
+    }
+    if case.one_line && (stderr.lines().count() != 1 || !stderr.starts_with("error: ")) {
+        problems.push("not one `error:` line".into());
+    }
+    // Nothing the run started still runs: the laws and what they started.
+    let mut left = Vec::new();
+    for pid in pids_in(dir.path(), "pids")
+        .into_iter()
+        .chain(pids_in(dir.path(), "grandchildren"))
+    {
+        if let Some(state) = running(pid) {
+            left.push(format!("{pid} ({state})"));
+            // Not ours to leave running, whatever the verdict.
+            let _ = Command::new("kill").arg("-9").arg(pid.to_string()).status();
+        }
+    }
+    if !left.is_empty() {
+        problems.push(format!("processes left behind: {}", left.join(", ")));
+    }
+    problems
+        .into_iter()
+        .map(|p| {
+            format!(
+                "[{}] `anholonomy {}`: {p}\n  stderr: {stderr}",
+                case.name,
+                case.args.join(" ")
+            )
+        })
+        .collect()
+}
+
+/// Every fault case ends in time, with its code and message, no panic and
+/// no process left behind.
+#[test]
+fn fault_corpus_ends_cleanly() {
+    let cases = corpus::faults::cases();
+    assert!(cases.len() >= 18, "{} cases", cases.len());
+    let problems: Vec<String> = cases.iter().flat_map(fault_problems).collect();
+    assert!(
+        problems.is_empty(),
+        "{} problems in {} fault cases:\n{}",
+        problems.len(),
+        cases.len(),
+        problems.join("\n")
+    );
 }

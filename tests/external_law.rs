@@ -50,14 +50,23 @@ urdf = "{urdf}"
 [planner]
 kind = "external"
 command = [{cmd}]
-period = 0.02
-horizon = 1.0
-{extra}
+{period}{horizon}{extra}
 
 [sim]
 dt = 0.002
 "#,
-        urdf = model("rolling_disk.urdf").display()
+        urdf = model("rolling_disk.urdf").display(),
+        // Defaults unless `extra` sets them.
+        period = if extra.contains("period") {
+            ""
+        } else {
+            "period = 0.02\n"
+        },
+        horizon = if extra.contains("horizon") {
+            ""
+        } else {
+            "horizon = 1.0\n"
+        },
     );
     let path = dir.join(format!("{name}.toml"));
     std::fs::write(&path, text).unwrap();
@@ -106,9 +115,34 @@ fn exists(pid: u32) -> Option<String> {
     Some(state)
 }
 
+/// The pids of the `sleep 200` processes the `fork_*` laws started.
+fn grandchildren(dir: &Path) -> Vec<u32> {
+    std::fs::read_to_string(dir.join("grandchildren"))
+        .unwrap_or_default()
+        .lines()
+        .map(|l| l.parse().unwrap())
+        .collect()
+}
+
+/// Every process a law started is gone: not running (a zombie left to
+/// init, which reaps it, is not running).
+fn assert_no_grandchild_runs(dir: &Path, mode: &str) {
+    let gc = grandchildren(dir);
+    assert!(!gc.is_empty(), "{mode}: the law started nothing");
+    for pid in gc {
+        if let Some(state) = exists(pid).filter(|s| s != "Z") {
+            panic!("{mode}: the law's child {pid} is still there (state {state})");
+        }
+    }
+}
+
 /// Run the law in `mode` on the disk; the error it must end with.
 fn fault(mode: &str, extra: &str) -> (String, &'static str, Vec<u32>) {
-    let dir = tempfile::tempdir().unwrap();
+    fault_in(&tempfile::tempdir().unwrap(), mode, extra)
+}
+
+/// [`fault`] in `dir` (kept by the caller, to look at what the law wrote).
+fn fault_in(dir: &tempfile::TempDir, mode: &str, extra: &str) -> (String, &'static str, Vec<u32>) {
     let path = disk_with_law(dir.path(), mode, &law_command(mode, dir.path()), extra);
     let prep = Prepared::new(Scenario::load(&path).unwrap()).unwrap();
     let logs = dir.path().join("logs");
@@ -136,6 +170,113 @@ fn fault(mode: &str, extra: &str) -> (String, &'static str, Vec<u32>) {
         "{mode}: tail lines not indented:\n{message}"
     );
     (message.clone(), run, pids)
+}
+
+/// A law that answers without reading its input, sampled every 2 ms for
+/// 5 s: the harness blocked for ever writing to its full stdin. Now the
+/// answers it sends unasked are a protocol error, at once.
+#[test]
+fn a_law_that_answers_without_reading_ends_the_run() {
+    let t0 = std::time::Instant::now();
+    let (m, _, _) = fault("noread", "period = 0.002\nhorizon = 5.0\ntimeout = 2.0");
+    // Which sample finds the surplus depends on how fast the law writes.
+    assert!(
+        m.contains("a second answer to sample ") && m.contains("(one answer per request)"),
+        "{m}"
+    );
+    assert!(t0.elapsed().as_secs_f64() < 10.0);
+}
+
+/// Two answers to one request: a protocol error naming the sample, whether
+/// they come in one write or the second a little later (then it is found
+/// before the next request is sent, or the one after).
+#[test]
+fn a_second_answer_to_one_request_is_a_protocol_error() {
+    let (m, run, _) = fault("twice", "");
+    assert_eq!(run, "ideal");
+    assert!(
+        m.contains("a second answer to sample 0 (t = 0 s) (one answer per request): `{\"u\": [2.0"),
+        "{m}"
+    );
+    let (m, _, _) = fault("twice_late", "");
+    assert!(m.contains("a second answer to sample "), "{m}");
+}
+
+/// A law that exits at once while the `sleep 200` it started holds its
+/// stdout: its exit is noticed (not "no answer within 2 s"), with its
+/// status, and the sleep is ended with it.
+#[test]
+fn a_law_that_exits_while_its_child_holds_its_pipes() {
+    let dir = tempfile::tempdir().unwrap();
+    let t0 = std::time::Instant::now();
+    let (m, _, _) = fault_in(&dir, "fork_exit", "timeout = 2.0");
+    assert!(
+        m.contains("the law exited with status 1 before answering sample 0"),
+        "{m}"
+    );
+    assert!(t0.elapsed().as_secs_f64() < 1.9, "{:?}", t0.elapsed());
+    assert_no_grandchild_runs(dir.path(), "fork_exit");
+}
+
+/// Whatever ends the run (the law's crash, a timeout, a normal end), what
+/// the law started ends with it: its process group gets SIGTERM, then
+/// SIGKILL (a law that ignores SIGTERM is killed all the same).
+#[test]
+fn what_a_law_starts_ends_with_its_run() {
+    for mode in ["fork_crash", "fork_sleep"] {
+        let dir = tempfile::tempdir().unwrap();
+        fault_in(&dir, mode, "timeout = 1.0");
+        assert_no_grandchild_runs(dir.path(), mode);
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let path = disk_with_law(dir.path(), "g", &law_command("fork_good", dir.path()), "");
+    let prep = Prepared::new(Scenario::load(&path).unwrap()).unwrap();
+    run(&prep, &opts(None)).unwrap();
+    for pid in pids(dir.path()) {
+        assert!(exists(pid).is_none(), "law {pid} left behind");
+    }
+    assert_no_grandchild_runs(dir.path(), "fork_good");
+    let t0 = std::time::Instant::now();
+    let (m, _, _) = fault("ignore_term", "timeout = 1.0");
+    assert!(m.contains("no answer to sample 3"), "{m}");
+    assert!(t0.elapsed().as_secs_f64() < 5.0);
+}
+
+/// Ctrl-C on the command line: the law, in a group of its own, no longer
+/// gets the terminal's SIGINT, so the harness passes it on. The harness
+/// dies of the signal, the law and what it started with it.
+#[cfg(target_os = "linux")]
+#[test]
+fn ctrl_c_ends_the_law_and_what_it_started() {
+    let dir = tempfile::tempdir().unwrap();
+    let d = dir.path();
+    disk_with_law(d, "int", &law_command("fork_sleep", d), "timeout = 60.0");
+    let mut child = std::process::Command::new(env!("CARGO_BIN_EXE_anholonomy"))
+        .args(["run", "int.toml", "--no-logs", "--quiet"])
+        .current_dir(d)
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::null())
+        .spawn()
+        .unwrap();
+    // The law is asleep (at sample 3) once it has started its child.
+    let t0 = std::time::Instant::now();
+    while grandchildren(d).is_empty() || pids(d).is_empty() {
+        assert!(t0.elapsed().as_secs() < 20, "the law did not start");
+        std::thread::sleep(std::time::Duration::from_millis(20));
+    }
+    std::thread::sleep(std::time::Duration::from_millis(300));
+    unsafe { libc::kill(child.id() as libc::pid_t, libc::SIGINT) };
+    let status = child.wait().unwrap();
+    use std::os::unix::process::ExitStatusExt;
+    assert_eq!(status.signal(), Some(libc::SIGINT), "{status:?}");
+    let t1 = std::time::Instant::now();
+    for pid in pids(d).into_iter().chain(grandchildren(d)) {
+        // The harness's zombie child is init's to reap now: not running is enough.
+        while exists(pid).is_some_and(|s| s != "Z") {
+            assert!(t1.elapsed().as_secs() < 2, "{pid} still runs after Ctrl-C");
+            std::thread::sleep(std::time::Duration::from_millis(20));
+        }
+    }
 }
 
 #[test]

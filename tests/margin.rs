@@ -248,10 +248,29 @@ fn state_noise_is_reproducible_per_seed_and_absent_from_the_ideal_run() {
 fn bad_margin_requests_are_refused_with_one_line() {
     let dir = tempfile::tempdir().unwrap();
     write(dir.path(), "d.toml", &shipped("disk_paper.toml"));
-    let cases: [(&[&str], &str); 4] = [
+    let cases: [(&[&str], &str); 8] = [
         (
             &["margin", "d.toml", "--dimension", "latency"],
             "error: --dimension: unknown dimension `latency`",
+        ),
+        // Negative values reach the range checks (clap took `-1` for a flag
+        // and printed its usage, naming `-0` for `-0.1`).
+        (
+            &["margin", "d.toml", "--max-runs", "-1"],
+            "error: --max-runs: -1: must be in 1..=100000",
+        ),
+        (
+            &["margin", "d.toml", "--resolution", "-0.1"],
+            "error: --resolution: -0.1: must be in (0, 1]",
+        ),
+        // Two output formats: refused, not one of them silently.
+        (
+            &["margin", "d.toml", "--markdown", "--json"],
+            "error: the argument '--markdown' cannot be used with '--json'",
+        ),
+        (
+            &["margin", "d.toml", "--dimensoin", "mass_scale"],
+            "error: unexpected argument '--dimensoin' found (tip: a similar argument exists: '--dimension')",
         ),
         (
             &["margin", "d.toml", "--dimension", "state_noise"],
@@ -393,21 +412,22 @@ fn margins_are_the_same_on_one_and_two_threads_and_reported() {
     }
 }
 
-/// `[margins]` gates in `check`: the margin is a metric (`margin_<dimension>`)
-/// that goes into the baseline; when the scenario's margin drops below its
-/// gate, `check` exits 1 naming it, and against the baseline it regresses.
-/// The rover's latency margin is about one control period: sampling every
+/// `[margins]` gates in `check` cost one run: the level at the gate, not a
+/// search. The gate is reported as a metric (`margin_<dimension>`: the gate
+/// when it holds, a lower bound of the margin) that goes into the baseline,
+/// the table says "holds at 0.02 s", and margins.json holds the nominal
+/// level and the one gate level. When the margin drops below the gate,
+/// `check` exits 1 naming it, and against the baseline it regresses. The
+/// rover's latency margin is about one control period: sampling every
 /// 15 ms instead of 50 ms leaves less than the 20 ms the gate asks for.
 #[test]
-fn check_fails_when_a_gated_margin_drops() {
+fn check_runs_a_gate_once_and_fails_when_a_gated_margin_drops() {
     let dir = tempfile::tempdir().unwrap();
     let text = shipped("rover_paper.toml");
     assert!(
         text.contains("[margins]\ncommand_latency = 0.02"),
         "rover_paper gates a margin in CI"
     );
-    // A coarser search than CI's keeps the test short; the gate is the same.
-    let text = text.replace("[margins]\n", "[margins]\nresolution = 0.2\n");
     write(dir.path(), "rover_paper.toml", &text);
     let o = cli(
         dir.path(),
@@ -416,16 +436,36 @@ fn check_fails_when_a_gated_margin_drops() {
             "rover_paper.toml",
             "--baseline",
             "b",
-            "--no-logs",
+            "--logs",
+            "L",
             "--quiet",
         ],
     );
     assert!(o.status.success(), "{}", String::from_utf8_lossy(&o.stderr));
+    let stdout = String::from_utf8_lossy(&o.stdout);
+    assert!(
+        stdout.contains("PASS (command_latency holds at 0.02 s)"),
+        "{stdout}"
+    );
     let base: serde_json::Value =
         serde_json::from_slice(&std::fs::read(dir.path().join("b/rover_paper.json")).unwrap())
             .unwrap();
-    let m = base["metrics"]["margin_command_latency"].as_f64().unwrap();
-    assert!(m >= 0.02, "{m}");
+    assert_eq!(
+        base["metrics"]["margin_command_latency"].as_f64(),
+        Some(0.02)
+    );
+    // One level at the gate, one run: no search.
+    let m = margins_json(&dir.path().join("L/rover_paper/margins.json"));
+    let d = &m["dimensions"][0];
+    assert_eq!(d["status"], "holds", "{d}");
+    assert_eq!(d["runs"], 1, "{d}");
+    let levels: Vec<f64> = d["levels"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|l| l["level"].as_f64().unwrap())
+        .collect();
+    assert_eq!(levels, [0.0, 0.02]);
     let faster = text.replace("horizon = 300.0\n", "horizon = 300.0\nperiod = 0.015\n");
     assert_ne!(faster, text);
     write(dir.path(), "rover_paper.toml", &faster);
@@ -443,7 +483,9 @@ fn check_fails_when_a_gated_margin_drops() {
     let stdout = String::from_utf8_lossy(&o.stdout);
     assert_eq!(o.status.code(), Some(1), "{stdout}");
     assert!(
-        stdout.contains("FAIL: margin_command_latency = ") && stdout.contains(" < 0.02"),
+        stdout.contains(
+            "FAIL: margin_command_latency < 0.02 s: breaks at command_latency = 0.02 s: envelope_outside_fraction = "
+        ),
         "{stdout}"
     );
     let regressed = stdout

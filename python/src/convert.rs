@@ -44,10 +44,14 @@ pub fn py_to_toml(v: &Bound<'_, PyAny>, key: &str) -> PyResult<toml::Value> {
         return Ok(toml::Value::Boolean(v.extract()?));
     }
     if v.is_instance_of::<PyInt>() {
-        return v
-            .extract::<i64>()
-            .map(toml::Value::Integer)
-            .map_err(|_| bad(format!("{v} does not fit in a 64-bit integer")));
+        return v.extract::<i64>().map(toml::Value::Integer).map_err(|_| {
+            // Its size, not its hundreds of digits.
+            let size = v
+                .extract::<f64>()
+                .map(anholonomy::numfmt::readable)
+                .unwrap_or_else(|_| "an integer".into());
+            bad(format!("{size} does not fit in a 64-bit integer"))
+        });
     }
     if v.is_instance_of::<PyFloat>() {
         return Ok(toml::Value::Float(v.extract()?));

@@ -48,6 +48,8 @@ pub fn runtime_failure(py: Python<'_>, text: String) -> PyErr {
 /// The exception for a harness error: its text is the CLI's line without
 /// the `error: ` prefix.
 pub fn to_py(py: Python<'_>, e: &Error) -> PyErr {
+    // The CLI's line exactly, numbers included (1e300, not 301 digits).
+    let text = anholonomy::numfmt::shorten_long_numbers(&e.to_string());
     match e {
         Error::Input {
             path,
@@ -55,14 +57,14 @@ pub fn to_py(py: Python<'_>, e: &Error) -> PyErr {
             message,
         } => input_error(
             py,
-            e.to_string(),
+            text,
             Some(path),
             *line,
             named_key(message).map(str::to_string),
         ),
         Error::Plan {
             path, line, key, ..
-        } => input_error(py, e.to_string(), Some(path), *line, Some(key.clone())),
-        other => runtime_failure(py, other.to_string()),
+        } => input_error(py, text, Some(path), *line, Some(key.clone())),
+        _ => runtime_failure(py, text),
     }
 }

@@ -174,6 +174,8 @@ impl Controller for PyController {
     }
 }
 
+use anholonomy::numfmt::readable;
+
 /// One sample: the law's answer, checked.
 fn call(py: Python<'_>, law: &Py<PyAny>, inputs: &[&str], t: f64, q: &State) -> PyResult<Answer> {
     let arr = PyArray1::from_slice(py, q.as_slice());
@@ -182,7 +184,8 @@ fn call(py: Python<'_>, law: &Py<PyAny>, inputs: &[&str], t: f64, q: &State) -> 
         runtime_failure(
             py,
             format!(
-                "feedback law: law(t, q) returned {what} at t = {t} s; expected {} numbers ({}), or a dict {{\"u\": [...], \"label\": str, \"done\": bool}}",
+                "feedback law: law(t, q) returned {what} at t = {} s; expected {} numbers ({}), or a dict {{\"u\": [...], \"label\": str, \"done\": bool}}",
+                readable(t),
                 inputs.len(),
                 inputs.join(", ")
             ),
@@ -221,8 +224,9 @@ fn call(py: Python<'_>, law: &Py<PyAny>, inputs: &[&str], t: f64, q: &State) -> 
         return Err(runtime_failure(
             py,
             format!(
-                "feedback law: law(t, q) returned {} values at t = {t} s; the model takes {} ({})",
+                "feedback law: law(t, q) returned {} values at t = {} s; the model takes {} ({})",
                 u.len(),
+                readable(t),
                 inputs.len(),
                 inputs.join(", ")
             ),
@@ -232,8 +236,10 @@ fn call(py: Python<'_>, law: &Py<PyAny>, inputs: &[&str], t: f64, q: &State) -> 
         return Err(runtime_failure(
             py,
             format!(
-                "feedback law: law(t, q) returned {} = {} at t = {t} s (not a finite number)",
-                inputs[i], u[i]
+                "feedback law: law(t, q) returned {} = {} at t = {} s (not a finite number)",
+                inputs[i],
+                u[i],
+                readable(t)
             ),
         ));
     }

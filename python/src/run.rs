@@ -118,7 +118,7 @@ fn check_pose_rate(py: Python<'_>, rate: f64) -> PyResult<()> {
     }
     Err(input_error(
         py,
-        format!("pose_rate: {rate} is not a rate: give link poses per second of simulated time (0 = every sample)"),
+        format!("pose_rate: {} is not a rate: give link poses per second of simulated time (0 = every sample)", anholonomy::numfmt::readable(rate)),
         None,
         None,
         Some("pose_rate".into()),
@@ -184,16 +184,18 @@ fn law_plan(
     let horizon = horizon
         .or(external.map(|p| p.horizon))
         .unwrap_or(prep.planned.duration);
+    // Numbers as the CLI prints them: `1e300`, not 301 digits.
+    use anholonomy::numfmt::readable;
     if !(period.is_finite() && period > 0.0) {
         return Err(bad(
             "period",
-            format!("{period} s: must be a finite time > 0"),
+            format!("{} s: must be a finite time > 0", readable(period)),
         ));
     }
     if !(horizon.is_finite() && horizon > 0.0) {
         return Err(bad(
             "horizon",
-            format!("{horizon} s: must be a finite time > 0"),
+            format!("{} s: must be a finite time > 0", readable(horizon)),
         ));
     }
     let steps = ((horizon + sc.sim.settle) / sc.sim.dt).ceil();
@@ -201,8 +203,11 @@ fn law_plan(
         return Err(bad(
             "horizon",
             format!(
-                "{horizon} s plus sim.settle at sim.dt = {} s is {steps} steps, over the budget of {} steps",
-                sc.sim.dt, prep.max_steps
+                "{} s plus sim.settle at sim.dt = {} s is {} steps, over the budget of {} steps",
+                readable(horizon),
+                readable(sc.sim.dt),
+                readable(steps),
+                readable(prep.max_steps as f64)
             ),
         ));
     }

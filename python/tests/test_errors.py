@@ -140,6 +140,14 @@ def test_bad_arguments(disk, tmp_path):
     with pytest.raises(anholonomy.InputError) as e:
         anholonomy.run(disk, law=lambda t, q: [0.0, 0.0])
     assert e.value.key == "period"
+    # Numbers as the CLI prints them: 1e300, not 301 digits.
+    with pytest.raises(anholonomy.InputError) as e:
+        anholonomy.run(disk, law=lambda t, q: [0.0, 0.0], period=0.01, horizon=1e300)
+    assert e.value.key == "horizon"
+    assert "1e300 s plus sim.settle" in str(e.value) and "0" * 20 not in str(e.value)
+    with pytest.raises(anholonomy.InputError) as e:
+        disk.replace({"sim.perturb.command_latency": 1e300})
+    assert e.value.key == "sim.perturb.command_latency" and "0" * 20 not in str(e.value)
     with pytest.raises(anholonomy.InputError) as e:
         anholonomy.run(disk, pose_rate=-1.0)
     assert e.value.key == "pose_rate"

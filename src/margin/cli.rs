@@ -32,33 +32,33 @@ pub struct MarginArgs {
     #[arg(long)]
     pub report: bool,
     /// Print the table as Markdown.
-    #[arg(long)]
+    #[arg(long, conflicts_with = "json")]
     pub markdown: bool,
     /// Print the margins as JSON (an array: one margins.json per scenario) instead of a table.
     #[arg(long)]
     pub json: bool,
     /// Relative resolution: bisect until the edge lies within margin·(1 + R)
     /// [default: the scenario's `margins.resolution`, else 0.05].
-    #[arg(long, value_name = "R")]
+    #[arg(long, value_name = "R", allow_negative_numbers = true)]
     pub resolution: Option<f64>,
     /// Seeds per level of a random dimension (state_noise)
     /// [default: `margins.seeds`, else 8].
-    #[arg(long, value_name = "N")]
-    pub seeds: Option<usize>,
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
+    pub seeds: Option<i64>,
     /// Fraction of a random level's seeds that must pass
     /// [default: `margins.success_rate`, else 0.875].
-    #[arg(long, value_name = "F")]
+    #[arg(long, value_name = "F", allow_negative_numbers = true)]
     pub success_rate: Option<f64>,
     /// Levels run in parallel per round. It decides which levels are
     /// probed, so the margins depend on it (within the resolution), never on
     /// the number of threads.
-    #[arg(long, value_name = "B", default_value_t = DEFAULT_BATCH)]
-    pub batch: usize,
+    #[arg(long, value_name = "B", default_value_t = DEFAULT_BATCH as i64, allow_negative_numbers = true)]
+    pub batch: i64,
     /// At most N runs per dimension: the search stops before a round that
     /// would exceed it and reports the bracket reached (a coarser edge,
     /// noted as such) [default: no limit].
-    #[arg(long, value_name = "N")]
-    pub max_runs: Option<usize>,
+    #[arg(long, value_name = "N", allow_negative_numbers = true)]
+    pub max_runs: Option<i64>,
     /// Print nothing on stderr while searching.
     #[arg(long)]
     pub quiet: bool,
@@ -103,18 +103,23 @@ fn settings(a: &MarginArgs, prep: &Prepared) -> Settings {
     let cfg = &prep.scenario.margins;
     Settings {
         resolution: a.resolution.unwrap_or(cfg.resolution()),
-        seeds: a.seeds.unwrap_or(cfg.seeds()),
+        // Ranges checked by `check_options`.
+        seeds: a.seeds.map_or(cfg.seeds(), |n| n as usize),
         success_rate: a.success_rate.unwrap_or(cfg.success_rate()),
-        batch: a.batch,
-        max_runs: a.max_runs,
+        batch: a.batch as usize,
+        max_runs: a.max_runs.map(|n| n as usize),
     }
 }
 
 fn check_options(a: &MarginArgs) -> Result<(), Vec<Error>> {
+    use crate::numfmt::shortest;
     let bad = |opt: &str, m: String| Err(vec![Error::input(opt, m)]);
     if let Some(r) = a.resolution {
         if !(r > 0.0 && r <= 1.0) {
-            return bad("--resolution", format!("{r}: must be in (0, 1]"));
+            return bad(
+                "--resolution",
+                format!("{}: must be in (0, 1]", shortest(r)),
+            );
         }
     }
     if let Some(n) = a.seeds {
@@ -124,7 +129,10 @@ fn check_options(a: &MarginArgs) -> Result<(), Vec<Error>> {
     }
     if let Some(f) = a.success_rate {
         if !(f > 0.0 && f <= 1.0) {
-            return bad("--success-rate", format!("{f}: must be in (0, 1]"));
+            return bad(
+                "--success-rate",
+                format!("{}: must be in (0, 1]", shortest(f)),
+            );
         }
     }
     if let Some(n) = a.max_runs {

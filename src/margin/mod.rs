@@ -12,14 +12,18 @@
 //!
 //! `anholonomy margin` prints the margins ([`output`]) and writes
 //! `margins.json` beside the nominal run's logs; `[margins]` in a scenario
-//! makes `run`/`check` search the gated dimensions ([`gate`]) and report
-//! each as a metric `margin_<dimension>`, so baselines hold them too.
+//! makes `run`/`check` check each gated dimension at its gate, one level
+//! each ([`gate`]: not a search), and report it as a metric
+//! `margin_<dimension>`, so baselines hold them too.
 
 pub mod cli;
 pub mod early;
+mod gate;
 pub mod level;
 pub mod output;
 pub mod search;
+
+pub use gate::{check_gate, gate};
 
 use crate::gate::Breach;
 use crate::physics::perturb::{Dimension, Perturbation};
@@ -82,10 +86,28 @@ pub fn range(d: Dimension) -> (f64, f64, f64) {
     }
 }
 
+/// The largest level of `d` a run of `prep` can take: what `[sim.perturb]`
+/// accepts (a time no longer than the run; a latency whose extra steps fit
+/// the step budget), within [`range`]'s ceiling.
+pub fn ceiling(d: Dimension, prep: &Prepared) -> f64 {
+    let (_, floor, ceiling) = range(d);
+    if d.unit() != "s" {
+        return ceiling;
+    }
+    let sc = &prep.scenario;
+    let run = prep.planned.duration;
+    let mut cap = run;
+    if d == Dimension::CommandLatency {
+        let steps_left = prep.max_steps as f64 * sc.sim.dt - run - sc.sim.settle;
+        cap = cap.min(steps_left);
+    }
+    ceiling.min(cap).max(floor)
+}
+
 /// The search spec of `d`; a gated dimension's ladder starts at its gate
 /// (a level the verdict needs anyway).
-pub fn spec(d: Dimension, s: &Settings, gate: Option<f64>) -> Spec {
-    let (start, floor, ceiling) = range(d);
+pub fn spec(d: Dimension, s: &Settings, gate: Option<f64>, ceiling: f64) -> Spec {
+    let (start, floor, _) = range(d);
     let start = match gate {
         Some(g) if g > 0.0 => g.clamp(floor, ceiling),
         _ => start,
@@ -202,6 +224,8 @@ impl DimensionResult {
             )),
             Status::NominalFails => notes.push("the nominal run already fails".into()),
             Status::Budget => notes.push(format!("run budget ({} runs) spent", self.runs)),
+            Status::Holds => notes.push("holds at the gate (one level run, not searched)".into()),
+            Status::Breaks => notes.push("breaks at the gate (one level run, not searched)".into()),
             Status::Found => {}
         }
         if self.non_monotone {
@@ -290,7 +314,7 @@ pub fn search_dimension(
             .gates()
             .into_iter()
             .find_map(|(g, least)| (g == d).then_some(least));
-        search::search(&spec(d, s, gate), &mut eval)
+        search::search(&spec(d, s, gate, ceiling(d, ctx.prep)), &mut eval)
     } else {
         search::Outcome {
             status: Status::NominalFails,
@@ -492,65 +516,4 @@ pub fn margins(
         minimums: sc.minimums.clone(),
         dimensions,
     }
-}
-
-/// `[margins]` of a scenario in `run`/`check`: search every gated dimension
-/// after the nominal run `o`, add `margin_<dimension>` metrics, fail the run
-/// when one is below its gate, and write `margins.json` beside the logs.
-pub fn gate(prep: &Prepared, o: &mut RunOutcome) -> Result<(), crate::error::Error> {
-    let gates = prep.scenario.margins.gates();
-    if gates.is_empty() {
-        return Ok(());
-    }
-    let t0 = Instant::now();
-    let dims: Vec<Dimension> = gates.iter().map(|(d, _)| *d).collect();
-    let s = Settings::of(&prep.scenario.margins);
-    let report = margins(prep, Nominal::of(prep, o), &dims, &s, &|_| {});
-    for ((d, least), r) in gates.iter().zip(&report.dimensions) {
-        let name = MarginsConfig::metric(*d);
-        o.metrics.push((name.clone(), r.margin));
-        if r.margin.is_nan() || r.margin < *least {
-            let (v, b) = crate::numfmt::breach(r.margin, *least);
-            let why = r
-                .first_broken
-                .first()
-                .map(|b| format!(", beyond it {b}"))
-                .unwrap_or_default();
-            o.failures.push(format!("{name} = {v} < {b}{why}"));
-            o.passed = false;
-        }
-    }
-    // The verdict the run computed did not know the margins.
-    o.verdict =
-        crate::verdict::Verdict::of(o.failures.is_empty(), prep.scenario.expect_fails.is_some());
-    let wall = t0.elapsed().as_secs_f64();
-    o.timings.total += wall;
-    if let Some(dir) = &o.log_dir {
-        let log_error = |message: String| crate::error::Error::Log {
-            path: prep.scenario.path.clone(),
-            message,
-        };
-        report.write(dir, wall).map_err(log_error)?;
-        amend_summary(&dir.join("summary.json"), o).map_err(log_error)?;
-    }
-    Ok(())
-}
-
-/// The run's `summary.json` with the margins' verdict: `passed`, `failures`
-/// and `metrics` as the outcome now has them (the run wrote it before the
-/// margins were searched).
-fn amend_summary(path: &std::path::Path, o: &RunOutcome) -> Result<(), String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
-    let mut s: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
-    s["passed"] = serde_json::json!(o.passed);
-    s["failures"] = serde_json::json!(o.failures);
-    s["verdict"] = serde_json::json!(o.verdict);
-    let metrics: std::collections::BTreeMap<&str, f64> =
-        o.metrics.iter().map(|(k, v)| (k.as_str(), *v)).collect();
-    s["metrics"] = serde_json::json!(metrics);
-    s["wall_time_s"]["total"] = serde_json::json!(o.timings.total);
-    crate::log::atomic::write_atomic(path, |w| {
-        serde_json::to_writer_pretty(w, &s).map_err(std::io::Error::other)
-    })
 }

@@ -55,12 +55,18 @@ pub fn magnitude(d: Dimension, m: f64) -> String {
 /// The row of one dimension's result.
 pub fn row(scenario: &str, r: &DimensionResult) -> Row {
     let d = r.dimension;
-    let (_, floor, ceiling) = range(d);
+    let (_, floor, _) = range(d);
     let margin = match r.status {
         Status::Found => magnitude(d, r.margin),
-        Status::Ceiling => format!("≥ {}", magnitude(d, ceiling)),
+        // The ceiling the search reached (a time dimension's is at most the run).
+        Status::Ceiling => format!("≥ {}", magnitude(d, r.margin)),
         Status::BelowFloor => format!("< {}", magnitude(d, floor)),
         Status::NominalFails => "none".into(),
+        Status::Holds => format!("≥ {}", magnitude(d, r.margin)),
+        Status::Breaks => match r.first_failing {
+            Some(g) => format!("< {}", magnitude(d, g)),
+            None => "none".into(),
+        },
         Status::Budget => match r.first_failing {
             None => format!("≥ {}", magnitude(d, r.margin)),
             Some(hi) if r.margin == 0.0 => format!("< {}", magnitude(d, hi)),

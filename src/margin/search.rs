@@ -23,6 +23,15 @@
 //! A **run budget** (`max_levels`) ends the search before the next round
 //! that would exceed it: the bracket reached so far is the result
 //! ([`Status::Budget`]), coarser than the resolution and stated as such.
+//! Every round is charged to it, one level at least, so a round that finds
+//! nothing new to probe still spends budget.
+//!
+//! **Termination** whatever the resolution: the bisection also stops when
+//! the bracket is within [`float_floor`] of its upper end (a few float
+//! spacings per level of a round: below that the levels of a round could
+//! not be told apart), and when a round finds no level it has not probed.
+//! A resolution of 1e-300 therefore ends at the float spacing, after at
+//! most about 40 rounds of 2.
 
 use serde::Serialize;
 
@@ -58,6 +67,12 @@ pub enum Status {
     /// The run budget ended the search: the edge lies in [margin, hi) (hi
     /// ∞: not bracketed yet; margin 0: no level passed yet).
     Budget,
+    /// A `[margins]` gate in `run`/`check`: the one level at the gate passed,
+    /// so the margin is at least the gate (not searched further).
+    Holds,
+    /// A `[margins]` gate in `run`/`check`: the level at the gate failed, so
+    /// the margin is below the gate (not searched further).
+    Breaks,
 }
 
 /// One evaluated level.
@@ -113,8 +128,12 @@ pub fn search<T>(spec: &Spec, eval: &mut Eval<'_, T>) -> Outcome<T> {
             }
             x = (2.0 * x).min(spec.ceiling);
         }
-        if !st.run(levels, eval) {
-            return st.finish(Status::Budget);
+        match st.run(levels, eval) {
+            Round::Ran => {}
+            Round::Budget => return st.finish(Status::Budget),
+            // Up the ladder every level is new: this cannot happen, and
+            // must not loop if it did.
+            Round::NothingNew => return st.finish(Status::Budget),
         }
         if st.probes.iter().any(|p| !p.pass) {
             break;
@@ -138,15 +157,16 @@ pub fn search<T>(spec: &Spec, eval: &mut Eval<'_, T>) -> Outcome<T> {
         if levels.is_empty() {
             return st.finish(Status::BelowFloor);
         }
-        if !st.run(levels, eval) {
-            return st.finish(Status::Budget);
+        match st.run(levels, eval) {
+            Round::Ran => {}
+            Round::Budget | Round::NothingNew => return st.finish(Status::Budget),
         }
     }
     // 3. Bisect, checking once above the bracket.
     let mut checked_above = false;
     loop {
         let (lo, hi) = st.bracket();
-        if hi <= lo * (1.0 + spec.resolution) {
+        if hi <= lo * (1.0 + spec.resolution) || hi - lo <= float_floor(hi, b) {
             break;
         }
         let mut levels: Vec<f64> = (1..=b)
@@ -158,11 +178,31 @@ pub fn search<T>(spec: &Spec, eval: &mut Eval<'_, T>) -> Outcome<T> {
                 levels.push((2.0 * hi).min(spec.ceiling));
             }
         }
-        if !st.run(levels, eval) {
-            return st.finish(Status::Budget);
+        match st.run(levels, eval) {
+            Round::Ran => {}
+            Round::Budget => return st.finish(Status::Budget),
+            // The bracket is as fine as the floats allow.
+            Round::NothingNew => break,
         }
     }
     st.finish(Status::Found)
+}
+
+/// The narrowest bracket worth bisecting at upper end `hi` with `batch`
+/// levels per round: 4 float spacings per level (so every level of a round
+/// is a float of its own between the ends), whatever the resolution asked.
+pub fn float_floor(hi: f64, batch: usize) -> f64 {
+    4.0 * (batch + 1) as f64 * f64::EPSILON * hi.abs().max(f64::MIN_POSITIVE)
+}
+
+/// What a round did.
+enum Round {
+    /// Levels were evaluated.
+    Ran,
+    /// Nothing was left to probe (the round was charged to the budget all the same).
+    NothingNew,
+    /// The budget is spent: nothing was run.
+    Budget,
 }
 
 /// The probes so far.
@@ -175,22 +215,24 @@ struct State<T> {
 
 impl<T> State<T> {
     /// Evaluate the levels not probed yet, as one round, as many as the
-    /// budget leaves (in order: the search's first choices first). False
-    /// when the budget is spent and nothing was run.
-    fn run(&mut self, levels: Vec<f64>, eval: &mut Eval<'_, T>) -> bool {
+    /// budget leaves (in order: the search's first choices first). Every
+    /// round costs the budget one level at least, so a search that keeps
+    /// finding nothing new still ends.
+    fn run(&mut self, levels: Vec<f64>, eval: &mut Eval<'_, T>) -> Round {
         let mut levels: Vec<f64> = levels
             .into_iter()
             .filter(|l| !self.probes.iter().any(|p| p.level == *l))
             .collect();
+        levels.dedup();
         if let Some(left) = &mut self.budget {
             if *left == 0 {
-                return false;
+                return Round::Budget;
             }
             levels.truncate(*left);
-            *left -= levels.len();
+            *left -= levels.len().max(1);
         }
         if levels.is_empty() {
-            return true;
+            return Round::NothingNew;
         }
         self.rounds += 1;
         for (level, (pass, data)) in levels.iter().zip(eval(&levels)) {
@@ -201,7 +243,7 @@ impl<T> State<T> {
                 data,
             });
         }
-        true
+        Round::Ran
     }
 
     /// The smallest failure (∞ without one) and the largest pass below it (0 without one).
@@ -231,8 +273,8 @@ impl<T> State<T> {
             }
         }
         let margin = match status {
-            Status::BelowFloor | Status::NominalFails => 0.0,
-            Status::Found | Status::Ceiling | Status::Budget => lo,
+            Status::BelowFloor | Status::NominalFails | Status::Breaks => 0.0,
+            Status::Found | Status::Ceiling | Status::Budget | Status::Holds => lo,
         };
         Outcome {
             status,
@@ -334,6 +376,56 @@ mod tests {
         let (o, _) = run(&spec(), |l| l < 1e-7);
         assert_eq!((o.status, o.margin), (Status::BelowFloor, 0.0));
         assert!(o.probes.iter().all(|p| p.level >= 1e-6));
+    }
+
+    /// A resolution far below the float spacing (1e-300) ends, with and
+    /// without a budget: at a bracket a few float spacings wide that holds
+    /// the edge, within about 40 rounds (it looped for ever when the
+    /// bracket reached adjacent floats and no new level was offered).
+    #[test]
+    fn a_resolution_below_the_float_spacing_ends() {
+        for batch in [1, 2, 5] {
+            for max_levels in [None, Some(1000), Some(30)] {
+                let s = Spec {
+                    resolution: 1e-300,
+                    batch,
+                    max_levels,
+                    ..spec()
+                };
+                let edge = 0.0123456789;
+                let mut rounds = 0;
+                let o = search(&s, &mut |levels: &[f64]| {
+                    rounds += 1;
+                    assert!(rounds < 500, "the search does not end");
+                    levels.iter().map(|l| (*l <= edge, ())).collect()
+                });
+                assert!(o.margin <= edge && edge < o.hi, "{} {}", o.margin, o.hi);
+                match max_levels {
+                    Some(30) => assert_eq!(o.status, Status::Budget),
+                    _ => {
+                        assert_eq!(o.status, Status::Found);
+                        assert!(o.hi - o.margin <= float_floor(o.hi, batch), "{o:?}");
+                        assert!(o.rounds < 200, "{} rounds", o.rounds);
+                    }
+                }
+            }
+        }
+    }
+
+    /// A round that finds nothing new to probe is charged to the budget:
+    /// an evaluation that always offers the same level ends.
+    #[test]
+    fn rounds_with_nothing_new_still_spend_the_budget() {
+        let mut st = State::<()> {
+            probes: Vec::new(),
+            rounds: 0,
+            budget: Some(3),
+        };
+        let mut eval = |l: &[f64]| l.iter().map(|_| (true, ())).collect::<Vec<_>>();
+        assert!(matches!(st.run(vec![0.5], &mut eval), Round::Ran));
+        assert!(matches!(st.run(vec![0.5], &mut eval), Round::NothingNew));
+        assert!(matches!(st.run(vec![0.5], &mut eval), Round::NothingNew));
+        assert!(matches!(st.run(vec![0.5], &mut eval), Round::Budget));
     }
 
     /// Pass up to 0.05, fail in (0.05, 0.1), pass again in [0.1, 0.3]: the

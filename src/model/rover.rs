@@ -289,13 +289,14 @@ impl SwitchingSignal {
         }
         if !(horizon.is_finite() && horizon >= 0.0) {
             return Err(format!(
-                "telegraph horizon must be finite and >= 0, got {horizon}"
+                "telegraph horizon must be finite and >= 0, got {}",
+                crate::numfmt::readable(horizon)
             ));
         }
         if rate * horizon > 1e7 {
             return Err(format!(
                 "telegraph rate × horizon = {} exceeds 1e7 switches",
-                rate * horizon
+                crate::numfmt::readable(rate * horizon)
             ));
         }
         let mut rng = ChaCha8Rng::seed_from_u64(seed);

@@ -209,13 +209,18 @@ pub fn p2_routh_margins(geom: &RoverGeometry, k: f64, k1: f64, k2: f64, k3: f64)
     })
 }
 
+use crate::numfmt::readable;
+
 impl RoverPrimitiveParams {
     fn resolve(&self, geom: &RoverGeometry, limits: &Limits) -> Result<Resolved, PlanError> {
         let pos = |name: &str, v: f64| {
             if v.is_finite() && v > 0.0 {
                 Ok(v)
             } else {
-                Err(bad(name, format!("must be finite and > 0, got {v}")))
+                Err(bad(
+                    name,
+                    format!("must be finite and > 0, got {}", readable(v)),
+                ))
             }
         };
         geom.validate().map_err(|e| bad("geometry", e))?;
@@ -240,7 +245,7 @@ impl RoverPrimitiveParams {
         if psi1 > max_steer {
             return Err(bad(
                 "p1_wheel_deg",
-                format!("exceeds max_steer_deg = {max_steer}"),
+                format!("exceeds max_steer_deg = {}", readable(max_steer)),
             ));
         }
         let approach = pos("approach_deg", self.approach_deg)?;
@@ -251,12 +256,19 @@ impl RoverPrimitiveParams {
         if !(p1_tol.is_finite() && (0.0..approach).contains(&p1_tol)) {
             return Err(bad(
                 "p1_tolerance_deg",
-                format!("must be in [0, approach_deg), got {p1_tol}"),
+                format!("must be in [0, approach_deg), got {}", readable(p1_tol)),
             ));
         }
         if let Some(&m) = limits.max_rate.first() {
             if m.is_finite() && speed > m {
-                return Err(bad("speed", format!("{speed} exceeds the drive limit {m}")));
+                return Err(bad(
+                    "speed",
+                    format!(
+                        "{} exceeds the drive limit {}",
+                        readable(speed),
+                        readable(m)
+                    ),
+                ));
             }
         }
         if let Some(&m) = limits.max_rate.get(1) {
@@ -279,7 +291,7 @@ impl RoverPrimitiveParams {
         if !(psi_tol.is_finite() && (0.0..=1.0).contains(&psi_tol)) {
             return Err(bad(
                 "steer_tolerance_deg",
-                format!("must be in [0, 1], got {psi_tol}"),
+                format!("must be in [0, 1], got {}", readable(psi_tol)),
             ));
         }
         let psi_tol = psi_tol.to_radians().max(1e-12);

@@ -263,6 +263,9 @@ fn solve_delta(rho: f64, target: f64, p: &SphereGeometricParams) -> Vec<(f64, f6
     out
 }
 
+/// The farthest start–goal distance solved, in radii of the ball.
+pub const MAX_RADII: f64 = 1e5;
+
 /// Solves the whole manoeuvre for `start` → `goal` (Euler-chart states).
 pub fn solve(
     model: &RollingSphere,
@@ -280,6 +283,17 @@ pub fn solve(
     let beta_f = alg + phg;
     let r = ((x_f - x_i).powi(2) + (y_f - y_i).powi(2)).sqrt();
     let rho = r / a;
+    // The candidate search walks Δβ in steps of 2π up to about ρ: a goal
+    // 1e300 m away would never end it (it hung). Far beyond any plan the
+    // step budget allows, refused as unreachable.
+    if rho.is_nan() || rho > MAX_RADII {
+        return Err(PlanError::Unreachable(format!(
+            "start and goal are {} m apart, {} radii of the ball: at most {} radii",
+            crate::numfmt::readable((x_f - x_i).hypot(y_f - y_i)),
+            crate::numfmt::readable((x_f - x_i).hypot(y_f - y_i) / a),
+            crate::numfmt::readable(MAX_RADII)
+        )));
+    }
     let db0 = wrap(beta_f - beta_i);
     let max_tp = p.max_theta_prime_deg.to_radians();
     let fixed = th0.abs() + thg.abs();

@@ -456,10 +456,12 @@ pub fn solve_triangles(
             .map(|t| vec![t])
             .ok_or_else(|| {
                 PlanError::Unreachable(format!(
-                "no single spherical triangle with ψ = φ + {off}° reaches d = {d:.6}, α = {:.4}°; \
+                    "no single spherical triangle with ψ = φ + {}° reaches d = {}, α = {}°; \
                  unset psi_offset_deg to let ψ (and a second triangle) be chosen",
-                yaw.to_degrees()
-            ))
+                    crate::numfmt::readable(off),
+                    crate::numfmt::with_digits(d, 7),
+                    crate::numfmt::with_digits(yaw.to_degrees(), 5)
+                ))
             });
     }
     if let Some(t) = solve_single(d, phi, yaw, p) {

@@ -441,10 +441,10 @@ pub(super) fn sweep_figures(s: &Value) -> Result<String, String> {
         for r in failed {
             let _ = write!(
                 b,
-                "<tr><td>{}</td><td>{:.4}</td><td>{:.4}</td><td>{}</td><td class=\"l\">{}</td></tr>",
+                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"l\">{}</td></tr>",
                 r["index"],
-                f(r, "friction"),
-                f(r, "mass_scale"),
+                num(Some(f(r, "friction"))),
+                num(Some(f(r, "mass_scale"))),
                 num(r["final_error"].as_f64()),
                 esc(r["error"].as_str().unwrap_or(""))
             );

@@ -45,11 +45,16 @@ pub fn section(m: &Value) -> Result<String, String> {
             "nominal_fails" => "none".into(),
             "budget" if d["first_failing"].is_null() => format!("≥ {}", magnitude(dim, margin)),
             "budget" if margin == 0.0 => "below the first failing level".into(),
+            "holds" => format!("≥ {}", magnitude(dim, margin)),
+            "breaks" => match d["first_failing"].as_f64() {
+                Some(g) => format!("< {}", magnitude(dim, g)),
+                None => "none".into(),
+            },
             _ => magnitude(dim, margin),
         };
         let gate = gates[name].as_f64();
         let gate_cell = match gate {
-            Some(g) if margin >= g => {
+            Some(g) if margin >= g && status != "breaks" && status != "nominal_fails" => {
                 format!("≥ {} <span class=\"pass\">ok</span>", magnitude(dim, g))
             }
             Some(g) => format!("≥ {} <span class=\"fail\">FAIL</span>", magnitude(dim, g)),
@@ -94,6 +99,10 @@ pub fn section(m: &Value) -> Result<String, String> {
             "nominal_fails" => note.push("the nominal run already fails".into()),
             "budget" => note.push(
                 "the run budget ended the search: the edge is known only to the levels shown"
+                    .into(),
+            ),
+            "holds" | "breaks" => note.push(
+                "a gate of `run`/`check`: one level run at the gate, not searched (`anholonomy margin` searches)"
                     .into(),
             ),
             _ => {}

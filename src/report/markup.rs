@@ -13,7 +13,7 @@ pub(super) fn esc(s: &str) -> String {
 pub(super) fn num(v: Option<f64>) -> String {
     match v {
         None => "–".into(),
-        Some(x) => crate::baseline::fmt_value(x),
+        Some(x) => crate::numfmt::readable(x),
     }
 }
 

@@ -214,7 +214,8 @@ impl KeyIndex {
     /// A serde error from deserializing (part of) this document: names the
     /// key at the error's span and its line.
     pub fn serde_error(&self, path: &Path, e: &toml::de::Error) -> Error {
-        let raw = e.message().trim().replace('\n', " ");
+        // serde writes floats in full (`floating point `1000...0``).
+        let raw = crate::numfmt::shorten_long_numbers(&e.message().trim().replace('\n', " "));
         let span = e.span();
         let at = span
             .as_ref()

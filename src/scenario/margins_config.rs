@@ -2,7 +2,7 @@
 //!
 //! ```toml
 //! [margins]
-//! command_latency = 0.02   # check fails when the latency margin is below 20 ms
+//! command_latency = 0.02   # check runs once at 20 ms of latency and fails if a gate breaks there
 //! resolution = 0.05        # optional: bisect until the edge is within 5 %
 //! seeds = 8                # optional: runs per level of a random dimension
 //! success_rate = 0.875     # optional: a random level passes at ≥ 7 of 8
@@ -25,14 +25,14 @@ pub const DEFAULT_SEEDS: usize = 8;
 /// Default success rate a level of a random dimension needs.
 pub const DEFAULT_SUCCESS_RATE: f64 = 0.875;
 
-/// `[margins]`: least robustness margins `run`/`check` search and gate (reported and
-/// baselined as `margin_<dimension>`), and how they are searched. A margin is a
-/// perturbation magnitude: the amount for latencies, lags and noise, the distance
-/// from 1 for factors.
+/// `[margins]`: least robustness margins `run`/`check` gate (each checked with one
+/// run at the gate, not searched; reported and baselined as `margin_<dimension>`),
+/// and how `anholonomy margin` searches them. A margin is a perturbation magnitude:
+/// the amount for latencies, lags and noise, the distance from 1 for factors.
 #[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct MarginsConfig {
-    /// Least command-latency margin, s: `check` fails below it.
+    /// Least command-latency margin, s: `check` runs the scenario once at this latency and fails when a gate breaks there.
     #[serde(skip_serializing_if = "Option::is_none")]
     #[schemars(range(min = 0))]
     pub command_latency: Option<f64>,
@@ -44,7 +44,7 @@ pub struct MarginsConfig {
     #[serde(skip_serializing_if = "Option::is_none")]
     #[schemars(range(min = 0), extend("exclusiveMaximum" = 1))]
     pub torque_scale: Option<f64>,
-    /// Least state-noise margin (σ, m or rad).
+    /// Least state-noise margin (σ, m or rad): checked with `seeds` runs at this σ.
     #[serde(skip_serializing_if = "Option::is_none")]
     #[schemars(range(min = 0))]
     pub state_noise: Option<f64>,
@@ -98,7 +98,8 @@ impl MarginsConfig {
             .collect()
     }
 
-    /// The metric a margin is reported (and baselined) as: `margin_<dimension>`.
+    /// The metric a gated margin is reported (and baselined) as:
+    /// `margin_<dimension>`, the gate when it holds (NaN when it breaks).
     pub fn metric(d: Dimension) -> String {
         format!("margin_{}", d.name())
     }
@@ -120,7 +121,8 @@ impl MarginsConfig {
 
     /// Default baseline tolerance of a margin metric (relative): two
     /// resolutions, since a search can land one resolution step either way
-    /// of an edge that moved by less than that.
+    /// of an edge that moved by less than that (a gate that held is the
+    /// gate itself: any tolerance keeps it).
     pub fn tolerance(&self) -> f64 {
         2.0 * self.resolution()
     }

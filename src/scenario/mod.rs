@@ -497,7 +497,10 @@ impl Scenario {
                         Error::Input { message, .. } => message,
                         other => other.to_string(),
                     };
-                    return Err(err(format!("with `{kp}` = {x}: {inner}")));
+                    return Err(err(format!(
+                        "with `{kp}` = {}: {inner}",
+                        crate::numfmt::readable(x)
+                    )));
                 }
             }
         }

@@ -99,11 +99,13 @@ fn is_unsigned(node: &Value) -> bool {
 }
 
 /// A number as a user writes it (`0.1`, `1000000`, `1e-9`).
+/// A bound or a value in a message: whole numbers as integers, the rest in
+/// the shortest form that reads back (`1e300`, not 301 digits).
 fn num(x: f64) -> String {
     if x == x.trunc() && x.abs() < 1e15 {
         format!("{}", x as i64)
     } else {
-        format!("{x}")
+        crate::numfmt::shortest(x)
     }
 }
 

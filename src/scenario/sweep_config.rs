@@ -82,12 +82,16 @@ impl Dist {
     fn check(&self) -> Result<(), String> {
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
         match self {
-            Dist::Uniform([lo, hi]) if !(finite(&[*lo, *hi]) && lo <= hi) => {
-                Err(format!("uniform [{lo}, {hi}]: need finite lo ≤ hi"))
-            }
-            Dist::Normal([m, s]) if !(finite(&[*m, *s]) && *s >= 0.0) => {
-                Err(format!("normal [{m}, {s}]: need a finite mean and σ ≥ 0"))
-            }
+            Dist::Uniform([lo, hi]) if !(finite(&[*lo, *hi]) && lo <= hi) => Err(format!(
+                "uniform [{}, {}]: need finite lo ≤ hi",
+                crate::numfmt::readable(*lo),
+                crate::numfmt::readable(*hi)
+            )),
+            Dist::Normal([m, s]) if !(finite(&[*m, *s]) && *s >= 0.0) => Err(format!(
+                "normal [{}, {}]: need a finite mean and σ ≥ 0",
+                crate::numfmt::readable(*m),
+                crate::numfmt::readable(*s)
+            )),
             Dist::Values(v) | Dist::Grid(v) if v.is_empty() || !finite(v) => {
                 Err("needs at least one value, all finite".into())
             }

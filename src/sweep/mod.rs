@@ -478,6 +478,7 @@ pub fn run_sweep_report(
             ..Default::default()
         },
         log_dir: dir,
+        notes: Vec::new(),
     };
     Ok((outcome, table))
 }

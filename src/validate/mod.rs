@@ -183,6 +183,7 @@ impl Prepared {
             }
         }
         check_perturbable(&scenario, system.as_ref(), &planned)?;
+        check_perturbation_times(&scenario, &planned, &budget)?;
         let prep = Prepared {
             scenario,
             system,
@@ -289,6 +290,63 @@ fn check_perturbable(sc: &Scenario, system: &dyn System, plan: &Plan) -> Result<
                 not_applicable(d, sc, &applies)
             )));
         }
+    }
+    Ok(())
+}
+
+/// The dimensions measured in seconds: each must fit in the run (a command
+/// or a state older than the whole run, or a lag slower than it, leaves the
+/// run without its plan), and the latency's extra steps in the step budget.
+/// Refused before anything runs: a latency of 1e300 s overflowed the delay
+/// line, one of 1e6 s allocated gigabytes.
+fn check_perturbation_times(sc: &Scenario, plan: &Plan, budget: &Budget<'_>) -> Result<(), Error> {
+    use crate::numfmt::readable;
+    use crate::physics::perturb::Dimension as D;
+    let run = plan.duration;
+    let what = match plan.law {
+        crate::plan::ControlLaw::Feedback { .. } => "the run (planner.horizon)",
+        _ => "the plan",
+    };
+    let set = [D::CommandLatency, D::StateLatency, D::ActuatorTau]
+        .into_iter()
+        .map(|d| ("sim.perturb", d, d.value(&sc.sim.perturb)));
+    let gated = sc
+        .margins
+        .gates()
+        .into_iter()
+        .filter(|(d, _)| d.unit() == "s")
+        .map(|(d, g)| (format!("margins.{d}"), d, g));
+    let set = set.map(|(table, d, v)| (format!("{table}.{d}"), d, v));
+    // A sweep varying one: the values validation probes (a range's ends).
+    let varied = sc.sweep.iter().flat_map(|sw| {
+        sw.vary.iter().filter_map(|(path, dist)| {
+            let d = D::parse(path.strip_prefix("sim.perturb.")?)?;
+            let top = dist.probes().into_iter().fold(f64::NEG_INFINITY, f64::max);
+            (d.unit() == "s").then(|| (crate::scenario::vary_key(path), d, top))
+        })
+    });
+    for (key, d, v) in set.chain(gated).chain(varied) {
+        if v > run {
+            return Err(sc.error(format!(
+                "key `{key}`: {} s is longer than {what}, {} s: {}; at most {} s",
+                readable(v),
+                readable(run),
+                match d {
+                    D::CommandLatency => "no command would reach the drives before it ends",
+                    D::StateLatency => "the law would see nothing but the start state",
+                    _ => "the drives would not follow a single command",
+                },
+                readable(run)
+            )));
+        }
+    }
+    let latency = sc.sim.perturb.command_latency;
+    if latency > 0.0 {
+        budget.check(
+            run + sc.sim.settle + latency,
+            "sim.perturb.command_latency",
+            "the plan, settling and the command latency",
+        )?;
     }
     Ok(())
 }
@@ -432,10 +490,23 @@ fn make_plan(sc: &Scenario, system: &dyn System) -> Result<Plan, Error> {
         }
     };
     let plan = system.plan(&start, &goal, &limits).map_err(plan_error)?;
-    if !plan.duration.is_finite() || plan.duration > 1e6 {
+    let max = crate::plan::MAX_DURATION;
+    if !plan.duration.is_finite() || plan.duration > max {
+        use crate::numfmt::readable;
+        // A feedback law runs for its horizon: that key set the duration,
+        // not the goal.
+        let feedback = matches!(plan.law, crate::plan::ControlLaw::Feedback { .. });
+        if feedback && sc.has_key("planner.horizon") {
+            return Err(sc.error(format!(
+                "key `planner.horizon`: {} s is longer than any run may be (at most {} s)",
+                readable(plan.duration),
+                readable(max)
+            )));
+        }
         return Err(plan_error(PlanError::Unreachable(format!(
-            "plan duration {} s is not usable (at most 1e6 s)",
-            crate::numfmt::readable(plan.duration)
+            "plan duration {} s is not usable (at most {} s)",
+            readable(plan.duration),
+            readable(max)
         ))));
     }
     Ok(plan)

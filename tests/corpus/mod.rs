@@ -148,7 +148,9 @@ pub fn no_line(file: &str) -> Shape {
 }
 
 mod dilf;
+pub mod faults;
 mod files;
+mod held_out;
 mod own_plan;
 mod runaway;
 mod studies;
@@ -163,5 +165,6 @@ pub fn corpus() -> Vec<Case> {
     files::cases(&mut c);
     own_plan::cases(&mut c);
     runaway::cases(&mut c);
+    held_out::cases(&mut c);
     c.0
 }

@@ -49,20 +49,20 @@ use serde::{Deserialize, Serialize};
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct Perturbation {
-    /// Delay from the controller to the drives, s: the drives receive each command this much later.
+    /// Delay from the controller to the drives, s: the drives receive each command this much later (at most the plan's duration, or the horizon of a feedback law).
     #[schemars(range(min = 0))]
     pub command_latency: f64,
-    /// Time constant of a first-order lag on each drive's command, s.
+    /// Time constant of a first-order lag on each drive's command, s (at most the plan's duration, or the horizon of a feedback law).
     #[schemars(range(min = 0))]
     pub actuator_tau: f64,
-    /// Factor on the drives' torque limit (`sim.motor_max_torque`).
+    /// Factor on each drive's effective torque limit, whatever its source (the URDF's `<limit effort>`, a model key or `sim.motor_max_torque`).
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub torque_scale: f64,
     /// Standard deviation of the Gaussian noise on each coordinate of the
     /// state a feedback law sees (m, rad, in each coordinate's SI unit); feedback laws only.
     #[schemars(range(min = 0))]
     pub state_noise: f64,
-    /// Age of the state a feedback law sees, s (feedback laws only).
+    /// Age of the state a feedback law sees, s (feedback laws only; at most the horizon).
     #[schemars(range(min = 0))]
     pub state_latency: f64,
     /// Factor on the simulated wheels' radius; the model and the controller keep the nominal one (wheeled models only).
@@ -347,7 +347,7 @@ fn steps_and_fraction(duration: f64, dt: f64) -> (usize, f64) {
 /// Steps a replay under `p` is extended by, so every delayed command arrives.
 pub fn extra_steps(p: &Perturbation, dt: f64) -> usize {
     let (n, f) = steps_and_fraction(p.command_latency, dt);
-    n + usize::from(f > 0.0)
+    n.saturating_add(usize::from(f > 0.0))
 }
 
 /// The command and observation perturbations of one replay (module docs).

@@ -256,7 +256,11 @@ pub fn require_radius(
     if (r - radius).abs() > 1e-6 {
         return Err(SetupError::key(
             "model.radius",
-            format!("URDF radius of {what} ({r} m) differs from the scenario's model.radius ({radius} m)"),
+            format!(
+                "URDF radius of {what} ({} m) differs from the scenario's model.radius ({} m)",
+                crate::numfmt::shortest(r),
+                crate::numfmt::shortest(radius)
+            ),
         ));
     }
     Ok(())

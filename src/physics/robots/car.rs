@@ -315,9 +315,9 @@ impl CarPhysics {
             return Err(SetupError::key(
                 "start",
                 format!(
-                    "steering angle {:.3}° is beyond model.max_steer_deg = {}",
-                    start[3].to_degrees(),
-                    model.max_steer.to_degrees()
+                    "steering angle {}° is beyond model.max_steer_deg = {}",
+                    crate::numfmt::readable(start[3].to_degrees()),
+                    crate::numfmt::readable(model.max_steer.to_degrees())
                 ),
             ));
         }

@@ -560,29 +560,36 @@ pub fn check_configuration(scene: &Scene, q: &[f64], what: &str) -> Result<(), P
     }
     if let (true, Some(o)) = (e.overstrained(), &scene.object) {
         let st = o.state::<f64>(q);
+        use crate::numfmt::readable as r;
         let stretch = o.max_stretch.map_or(String::new(), |eps| {
-            format!(", stretch {:.4} m against max_stretch = {eps}", st.q_f[0])
+            format!(
+                ", stretch {} m against max_stretch = {}",
+                r(st.q_f[0]),
+                r(eps)
+            )
         });
         let bound = match (o.bound, o.wrenches(&st.q_f, &st.gravity)) {
             (object::Bound::Wrench { force, moment }, Some(w)) => {
                 let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();
                 format!(
-                    "a grasp wrench leaves |F| ≤ {force} N, |M| ≤ {moment} N m (grasp 1: {:.1} N, \
-                     {:.2} N m; grasp 2: {:.1} N, {:.2} N m)",
-                    norm(&w[0][..3]),
-                    norm(&w[0][3..]),
-                    norm(&w[1][..3]),
-                    norm(&w[1][3..])
+                    "a grasp wrench leaves |F| ≤ {} N, |M| ≤ {} N m (grasp 1: {} N, \
+                     {} N m; grasp 2: {} N, {} N m)",
+                    r(force),
+                    r(moment),
+                    r(norm(&w[0][..3])),
+                    r(norm(&w[0][3..])),
+                    r(norm(&w[1][..3])),
+                    r(norm(&w[1][3..]))
                 )
             }
-            _ => format!("a node leaves the ball ‖q_fi‖ ≤ q_F = {}", o.q_max),
+            _ => format!("a node leaves the ball ‖q_fi‖ ≤ q_F = {}", r(o.q_max)),
         };
         return Err(bad(format!(
             "deforms the beam beyond its bound: {bound} or the stretch bound \
-             (‖q_f‖∞ = {:.3}{stretch}, grasp points {:.3} m apart, beam {:.3} m)",
-            e.max_deformation,
-            object::grasp_distance(q),
-            o.fe.beam().length
+             (‖q_f‖∞ = {}{stretch}, grasp points {} m apart, beam {} m)",
+            r(e.max_deformation),
+            r(object::grasp_distance(q)),
+            r(o.fe.beam().length)
         )));
     }
     Ok(())

@@ -162,10 +162,16 @@ impl Carried {
     pub fn with_grasps(mut self, bound: Bound, wrist: Wrist) -> Result<Carried, String> {
         if let Bound::Wrench { force, moment } = bound {
             if !(force.is_finite() && force > 0.0) {
-                return Err(format!("`max_force` must be > 0 N, got {force}"));
+                return Err(format!(
+                    "`max_force` must be > 0 N, got {}",
+                    crate::numfmt::readable(force)
+                ));
             }
             if !(moment.is_finite() && moment > 0.0) {
-                return Err(format!("`max_moment` must be > 0 N m, got {moment}"));
+                return Err(format!(
+                    "`max_moment` must be > 0 N m, got {}",
+                    crate::numfmt::readable(moment)
+                ));
             }
         }
         // In end-0 axes (the end frames share them at rest): the grasp

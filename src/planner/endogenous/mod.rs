@@ -104,7 +104,10 @@ fn validate<const N: usize, const M: usize>(p: &EndogenousParams) -> Result<(), 
         if !(v.is_finite() && v > 0.0) {
             return Err(invalid(
                 name,
-                format!("must be positive and finite, got {v}"),
+                format!(
+                    "must be positive and finite, got {}",
+                    crate::numfmt::readable(v)
+                ),
             ));
         }
     }
@@ -149,7 +152,11 @@ fn validate<const N: usize, const M: usize>(p: &EndogenousParams) -> Result<(), 
         if !(cp.time.is_finite() && (0.0..=total).contains(&cp.time)) {
             return Err(invalid(
                 "control_points",
-                format!("time {} outside [0, {total}]", cp.time),
+                format!(
+                    "time {} outside [0, {}]",
+                    crate::numfmt::readable(cp.time),
+                    crate::numfmt::readable(total)
+                ),
             ));
         }
         check_vec("control_points.value", &cp.value, M)?;

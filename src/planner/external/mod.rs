@@ -19,6 +19,7 @@ pub mod protocol;
 
 use crate::error::SetupError;
 use crate::model::{Input, State};
+use crate::numfmt::readable;
 use crate::plan::{Command, Controller, LabelTable, OncePerSample, Plan, PolicyFactory};
 use process::{describe, Failure, LawProcess};
 use protocol::Answer;
@@ -50,8 +51,9 @@ pub struct ExternalParams {
     /// Longest run, s (it ends earlier when the law answers `done`).
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub horizon: f64,
-    /// Longest wait for one answer, s (the first includes the process's
-    /// start); a law that does not answer in time ends the run (exit 3).
+    /// Longest wait for one exchange, s: sending the request and receiving
+    /// the answer (the first includes the process's start); a law that
+    /// does not read or answer in time ends the run (exit 3).
     #[serde(default = "default_timeout")]
     #[schemars(extend("exclusiveMinimum" = 0), range(max = 3600))]
     pub timeout: f64,
@@ -77,14 +79,14 @@ impl ExternalParams {
             if !(v.is_finite() && v > 0.0) {
                 return Err(SetupError::key(
                     format!("planner.{key}"),
-                    format!("must be a number > 0 s, got {v}"),
+                    format!("must be a number > 0 s, got {}", readable(v)),
                 ));
             }
         }
         if !(self.timeout.is_finite() && self.timeout > 0.0 && self.timeout <= 3600.0) {
             return Err(SetupError::key(
                 "planner.timeout",
-                format!("must be in (0, 3600] s, got {}", self.timeout),
+                format!("must be in (0, 3600] s, got {}", readable(self.timeout)),
             ));
         }
         let Some(program) = self.command.first() else {
@@ -180,6 +182,7 @@ impl PolicyFactory for ExternalFactory {
             proc,
             fault,
             sample: 0,
+            last_t: 0.0,
             buf: Vec::with_capacity(256),
         }))
     }
@@ -193,6 +196,9 @@ impl PolicyFactory for ExternalFactory {
 enum Why {
     Exited,
     Timeout,
+    WriteTimeout,
+    /// A second answer to sample (k, t): the line.
+    Twice(usize, f64, Vec<u8>),
     Bad(String),
 }
 
@@ -202,6 +208,8 @@ pub struct ExternalController {
     proc: Option<LawProcess>,
     fault: Option<String>,
     sample: usize,
+    /// Time of the last sample sent.
+    last_t: f64,
     m: usize,
     buf: Vec<u8>,
 }
@@ -216,7 +224,8 @@ impl ExternalController {
     /// law that closed its output gets a second to exit, any other is killed
     /// at once) and its stderr tail appended.
     fn fail(&mut self, k: usize, t: f64, why: Why) -> Command {
-        let at = format!("sample {k} (t = {t} s)");
+        let sample = |k: usize, t: f64| format!("sample {k} (t = {} s)", readable(t));
+        let at = sample(k, t);
         let (status, killed, tail) = match self.proc.as_mut() {
             Some(p) => {
                 let grace = match why {
@@ -233,7 +242,16 @@ impl ExternalController {
             Why::Exited => format!("the law {} before answering {at}", describe(status, killed)),
             Why::Timeout => format!(
                 "no answer to {at} within {} s (planner.timeout){killed_note}",
-                self.law.timeout.as_secs_f64()
+                readable(self.law.timeout.as_secs_f64())
+            ),
+            Why::WriteTimeout => format!(
+                "could not send {at} within {} s (planner.timeout): the law does not read its input{killed_note}",
+                readable(self.law.timeout.as_secs_f64())
+            ),
+            Why::Twice(j, tj, line) => format!(
+                "a second answer to {} (one answer per request): {}{killed_note}",
+                sample(j, tj),
+                protocol::quote(&String::from_utf8_lossy(&line))
             ),
             Why::Bad(m) => format!("bad answer to {at}: {m}{killed_note}"),
         };
@@ -257,6 +275,7 @@ impl Controller for ExternalController {
         }
         let k = self.sample;
         self.sample += 1;
+        let last_t = std::mem::replace(&mut self.last_t, t);
         let Some(proc) = self.proc.as_mut() else {
             return self.zero();
         };
@@ -273,6 +292,15 @@ impl Controller for ExternalController {
             },
             Err(Failure::Exited) => self.fail(k, t, Why::Exited),
             Err(Failure::Timeout) => self.fail(k, t, Why::Timeout),
+            Err(Failure::WriteTimeout) => self.fail(k, t, Why::WriteTimeout),
+            Err(Failure::Extra(line)) if k == 0 => {
+                let m = format!(
+                    "the law wrote {} before it was asked anything (one answer per request)",
+                    protocol::quote(&String::from_utf8_lossy(&line))
+                );
+                self.fail(k, t, Why::Bad(m))
+            }
+            Err(Failure::Extra(line)) => self.fail(k, t, Why::Twice(k - 1, last_t, line)),
             Err(Failure::Line(m)) => self.fail(k, t, Why::Bad(m)),
         }
     }

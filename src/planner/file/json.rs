@@ -20,13 +20,20 @@ struct JsonPlan {
 
 /// The plan file as text (a regular file within the size cap, UTF-8).
 pub(super) fn read_text(r: &Reader<'_>) -> Result<String, PlanError> {
-    crate::input::read_text(r.file, "plan file", TEXT_MAX_BYTES).map_err(|e| match e {
-        crate::error::Error::Input {
-            path,
-            line,
-            message,
-        } => PlanError::file(path, line, message),
-        other => r.file_error(other),
+    let text =
+        crate::input::read_text(r.file, "plan file", TEXT_MAX_BYTES).map_err(|e| match e {
+            crate::error::Error::Input {
+                path,
+                line,
+                message,
+            } => PlanError::file(path, line, message),
+            other => r.file_error(other),
+        })?;
+    // A UTF-8 byte order mark (spreadsheets write one) is not part of the
+    // first column's name: dropped.
+    Ok(match text.strip_prefix('\u{feff}') {
+        Some(rest) => rest.to_string(),
+        None => text,
     })
 }
 

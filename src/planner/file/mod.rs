@@ -220,6 +220,7 @@ impl<'a> Reader<'a> {
         u_at: &dyn Fn(usize) -> At,
         label: Option<&str>,
     ) -> Result<(), PlanError> {
+        use crate::numfmt::shortest;
         if !t.is_finite() {
             return Err(self.error(t_at, format!("{t} is not a finite time")));
         }
@@ -227,16 +228,32 @@ impl<'a> Reader<'a> {
             None if t != 0.0 => {
                 return Err(self.error(
                     t_at,
-                    format!("the first sample must be at t = 0, not {t}"),
+                    format!("the first sample must be at t = 0, not {}", shortest(t)),
                 ))
             }
             Some(&prev) if t <= prev => {
                 return Err(self.error(
                     t_at,
-                    format!("{t} does not come after the previous sample's {prev} (t must increase strictly)"),
+                    format!(
+                    "{} does not come after the previous sample's {} (t must increase strictly)",
+                    shortest(t),
+                    shortest(prev)
+                ),
                 ))
             }
             _ => {}
+        }
+        // The last sample's t is the plan's duration: refused here, at its
+        // row, rather than as an unreachable goal.
+        if t > crate::plan::MAX_DURATION {
+            return Err(self.error(
+                t_at,
+                format!(
+                    "{} s is past the longest plan ({} s; this sample's t would be the plan's duration)",
+                    shortest(t),
+                    shortest(crate::plan::MAX_DURATION)
+                ),
+            ));
         }
         for (i, v) in u.iter().enumerate() {
             if !v.is_finite() {

@@ -150,7 +150,10 @@ pub(super) fn check_params(p: &StokesSpaceParams) -> Result<(), PlanError> {
         if !(v.is_finite() && v > 0.0) {
             return Err(invalid(
                 name,
-                format!("must be positive and finite, got {v}"),
+                format!(
+                    "must be positive and finite, got {}",
+                    crate::numfmt::readable(v)
+                ),
             ));
         }
     }
