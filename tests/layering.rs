@@ -104,3 +104,209 @@ fn an_offending_import_is_detected() {
     std::fs::write(&f, "use crate::scenario::SimConfig;\n").unwrap();
     assert_eq!(uses(&f, &["scenario"]).len(), 1);
 }
+
+/// The module path of a source file (`src/physics/engine/world.rs` →
+/// `physics::engine::world`; `mod.rs` and `lib.rs` name their directory).
+fn module_of(src: &Path, file: &Path) -> Vec<String> {
+    let rel = file.strip_prefix(src).unwrap().with_extension("");
+    let mut parts: Vec<String> = rel
+        .components()
+        .map(|c| c.as_os_str().to_string_lossy().into_owned())
+        .collect();
+    if parts.last().is_some_and(|p| p == "mod" || p == "lib") {
+        parts.pop();
+    }
+    parts
+}
+
+/// Every module path a line names: `crate::a::b`, `super::c` (resolved from
+/// `module`), and the items of a `use P::{x, y::z}` group.
+fn paths_in(line: &str, module: &[String], is_mod_rs: bool) -> Vec<Vec<String>> {
+    let ident = |c: char| c.is_ascii_alphanumeric() || c == '_';
+    let mut out = Vec::new();
+    let mut rest = line;
+    while let Some(i) = rest.find(|c: char| c == 'c' || c == 's') {
+        let tail = &rest[i..];
+        let before_ok = i == 0 || !rest[..i].ends_with(|c: char| ident(c) || c == ':');
+        let (base, skip) = if before_ok && tail.starts_with("crate::") {
+            (Vec::new(), "crate::".len())
+        } else if before_ok && tail.starts_with("super::") {
+            // `super` of a mod.rs is its directory's parent; of a file, its directory.
+            let mut b = module.to_vec();
+            let mut t = tail;
+            let mut n = 0;
+            while t.starts_with("super::") {
+                t = &t["super::".len()..];
+                n += 1;
+            }
+            let up = if is_mod_rs { n } else { n };
+            for _ in 0..up {
+                b.pop();
+            }
+            (b, tail.len() - t.len())
+        } else {
+            rest = &rest[i + 1..];
+            continue;
+        };
+        let t = &tail[skip..];
+        let end = t.find(|c: char| !(ident(c) || c == ':')).unwrap_or(t.len());
+        let path: Vec<String> = t[..end]
+            .split("::")
+            .filter(|s| !s.is_empty())
+            .map(String::from)
+            .collect();
+        let mut full = base.clone();
+        full.extend(path.iter().cloned());
+        // A group `P::{a, b::c}`: each item too.
+        if t[end..].starts_with('{') {
+            if let Some(close) = t[end..].find('}') {
+                for item in t[end + 1..end + close].split(',') {
+                    let item = item.trim().split(" as ").next().unwrap_or("").trim();
+                    let mut p = full.clone();
+                    p.extend(
+                        item.split("::")
+                            .filter(|s| !s.is_empty() && *s != "self" && *s != "*")
+                            .map(String::from),
+                    );
+                    out.push(p);
+                }
+            }
+        }
+        out.push(full);
+        rest = &tail[skip + end..];
+    }
+    out
+}
+
+/// The lines of `text` outside `#[cfg(test)]` modules (tests may borrow
+/// another file's test helpers: that is no circle of the code).
+fn code_lines(text: &str) -> Vec<&str> {
+    let mut out = Vec::new();
+    let (mut depth, mut skip_until, mut armed) = (0i64, None::<i64>, false);
+    for line in text.lines() {
+        let t = line.trim_start();
+        if t.starts_with("//") {
+            continue;
+        }
+        let test_mod =
+            armed && (t.starts_with("mod ") || t.starts_with("pub(crate) mod ")) && t.contains('{');
+        if skip_until.is_none() && test_mod {
+            skip_until = Some(depth);
+        }
+        armed = t.starts_with("#[cfg(test)]");
+        let opens = line.matches('{').count() as i64;
+        let closes = line.matches('}').count() as i64;
+        if skip_until.is_none() {
+            out.push(line);
+        }
+        depth += opens - closes;
+        if skip_until.is_some_and(|d| depth <= d) && closes > 0 {
+            skip_until = None;
+        }
+    }
+    out
+}
+
+/// Import circles between files: two files, neither the other's parent
+/// module, that each name the other (test modules left out). The world
+/// loader and the batch, the margin search's early stop and its level
+/// runner were such pairs.
+fn import_circles(src: &Path) -> Vec<String> {
+    let files = rust_files(src);
+    let modules: Vec<(Vec<String>, &PathBuf)> =
+        files.iter().map(|f| (module_of(src, f), f)).collect();
+    let is_module = |p: &[String]| modules.iter().position(|(m, _)| m.as_slice() == p);
+    // Re-exported modules (`pub use engine::{world, ...}` in a mod.rs).
+    let mut alias: Vec<(Vec<String>, Vec<String>)> = Vec::new();
+    for (m, f) in &modules {
+        if !f.ends_with("mod.rs") {
+            continue;
+        }
+        let text = std::fs::read_to_string(f).unwrap().replace('\n', " ");
+        for part in text.split("pub use ").skip(1) {
+            let Some((head, tail)) = part.split_once("::{") else {
+                continue;
+            };
+            let Some((items, _)) = tail.split_once('}') else {
+                continue;
+            };
+            for item in items.split(',').map(str::trim).filter(|s| !s.is_empty()) {
+                let mut from = m.clone();
+                from.push(item.to_string());
+                let mut to = m.clone();
+                to.push(head.trim().to_string());
+                to.push(item.to_string());
+                if is_module(&to).is_some() {
+                    alias.push((from, to));
+                }
+            }
+        }
+    }
+    let resolve = |p: &[String]| -> Option<usize> {
+        for n in (1..=p.len()).rev() {
+            let mut q = p[..n].to_vec();
+            if let Some((_, to)) = alias.iter().find(|(from, _)| q.starts_with(from)) {
+                let rest = q.split_off(to.len().min(q.len()).min(n));
+                let _ = rest;
+                q = to.clone();
+            }
+            if let Some(i) = is_module(&q) {
+                return Some(i);
+            }
+        }
+        None
+    };
+    let mut edges = std::collections::BTreeSet::new();
+    for (i, (m, f)) in modules.iter().enumerate() {
+        let is_mod_rs = f.ends_with("mod.rs");
+        let text = std::fs::read_to_string(f).unwrap();
+        for line in code_lines(&text) {
+            for p in paths_in(line, m, is_mod_rs) {
+                if let Some(j) = resolve(&p) {
+                    if j != i {
+                        edges.insert((i, j));
+                    }
+                }
+            }
+        }
+    }
+    let ancestor = |a: &[String], b: &[String]| b.len() > a.len() && b.starts_with(a);
+    let mut out = Vec::new();
+    for &(i, j) in &edges {
+        let (a, b) = (&modules[i].0, &modules[j].0);
+        if i < j && edges.contains(&(j, i)) && !ancestor(a, b) && !ancestor(b, a) {
+            out.push(format!(
+                "{} <-> {}",
+                modules[i].1.display(),
+                modules[j].1.display()
+            ));
+        }
+    }
+    out
+}
+
+#[test]
+fn no_two_files_import_each_other() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let circles = import_circles(&src);
+    assert!(
+        circles.is_empty(),
+        "import circles:\n{}",
+        circles.join("\n")
+    );
+}
+
+/// The rule can fail: two sibling files that name each other are caught.
+#[test]
+fn an_import_circle_is_detected() {
+    let dir = tempfile::tempdir().unwrap();
+    let m = dir.path().join("m");
+    std::fs::create_dir(&m).unwrap();
+    std::fs::write(m.join("mod.rs"), "pub mod a;\npub mod b;\n").unwrap();
+    std::fs::write(m.join("a.rs"), "use super::b::Thing;\n").unwrap();
+    std::fs::write(m.join("b.rs"), "use crate::m::{a::Other, b};\n").unwrap();
+    std::fs::write(dir.path().join("lib.rs"), "pub mod m;\n").unwrap();
+    assert_eq!(import_circles(dir.path()).len(), 1);
+    std::fs::write(m.join("b.rs"), "// crate::m::a in a comment\n").unwrap();
+    assert!(import_circles(dir.path()).is_empty());
+}

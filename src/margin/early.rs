@@ -25,7 +25,6 @@
 //! twice the cost of the final evaluation) and just after each
 //! first-passage threshold.
 
-use super::level::Ctx;
 use crate::gate::Breach;
 use crate::record::SimTrajectory;
 
@@ -96,102 +95,6 @@ pub struct Stopped {
     pub metrics: Vec<(String, f64)>,
     /// The gates that broke for certain.
     pub certain: Vec<Breach>,
-}
-
-/// Checks a running replay at its checkpoints.
-pub struct Monitor<'a> {
-    ctx: &'a Ctx<'a>,
-    /// Sample counts at which to check, ascending.
-    checkpoints: Vec<usize>,
-    next: usize,
-    /// Set when the run should stop.
-    pub stopped: Option<Stopped>,
-}
-
-/// A margin level's replay stops when its verdict is known.
-impl crate::physics::ReplayObserver for Monitor<'_> {
-    fn after_step(&mut self, so_far: &SimTrajectory) -> bool {
-        self.check(so_far)
-    }
-}
-
-impl<'a> Monitor<'a> {
-    /// A monitor for a run of at most `n_max` steps of `dt` (no checkpoints
-    /// when no gate of the scenario can be judged early).
-    pub fn new(ctx: &'a Ctx<'a>, n_max: usize, dt: f64) -> Monitor<'a> {
-        let mut times = Vec::new();
-        if ctx.gates.iter().any(|g| g.family != Family::EndOnly) {
-            let end = n_max as f64 * dt;
-            let mut t = 0.5;
-            while t < end {
-                times.push(t);
-                t *= 2.0;
-            }
-            for g in ctx
-                .gates
-                .iter()
-                .filter(|g| g.family == Family::FirstPassage)
-            {
-                times.push(g.bound + dt);
-            }
-        }
-        let mut checkpoints: Vec<usize> = times
-            .into_iter()
-            .map(|t| (t / dt).ceil() as usize + 1)
-            .filter(|&k| k <= n_max)
-            .collect();
-        checkpoints.sort_unstable();
-        checkpoints.dedup();
-        Monitor {
-            ctx,
-            checkpoints,
-            next: 0,
-            stopped: None,
-        }
-    }
-
-    /// Called after every step: true when the run should stop.
-    pub fn check(&mut self, sim: &SimTrajectory) -> bool {
-        let k = sim.traj.t.len();
-        if self.checkpoints.get(self.next).is_none_or(|&c| k < c) {
-            return false;
-        }
-        while self.checkpoints.get(self.next).is_some_and(|&c| c <= k) {
-            self.next += 1;
-        }
-        let pre = prefix(sim);
-        let t = pre.traj.t.last().copied().unwrap_or(0.0);
-        let ideal = self.ctx.ideal_until(t);
-        let metrics = self.ctx.metrics(&ideal, &pre);
-        let value = |m: &str| {
-            metrics
-                .iter()
-                .find(|(n, _)| n == m)
-                .map(|(_, v)| *v)
-                .unwrap_or(f64::NAN)
-        };
-        let certain: Vec<Breach> = self
-            .ctx
-            .gates
-            .iter()
-            .filter(|g| certain(g.family, value(&g.metric), g.bound, t))
-            .map(|g| Breach {
-                metric: g.metric.clone(),
-                value: value(&g.metric),
-                bound: g.bound,
-                minimum: g.minimum,
-            })
-            .collect();
-        if certain.is_empty() {
-            return false;
-        }
-        self.stopped = Some(Stopped {
-            t,
-            metrics,
-            certain,
-        });
-        true
-    }
 }
 
 /// The run so far as a finished trajectory (the last command repeated, as

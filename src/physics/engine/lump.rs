@@ -16,7 +16,7 @@
 
 use crate::error::SetupError;
 use crate::physics::rapier::math::Pose as RPose;
-use crate::physics::world::origin;
+use crate::physics::real::origin;
 use urdf_rs::{JointType, Robot};
 
 /// How the links of one URDF map onto rigid bodies.

@@ -10,7 +10,6 @@
 //! carry no mass (density 0): mass properties come from `<inertial>` only.
 
 use crate::error::SetupError;
-use crate::physics::rapier::glamx::EulerRot;
 use crate::physics::rapier::math::{Matrix, Pose as RPose};
 use crate::physics::rapier::na::Unit;
 use crate::physics::rapier::prelude::*;
@@ -21,14 +20,7 @@ use std::collections::HashMap;
 use std::path::Path;
 use urdf_rs::{Geometry, JointType, Robot};
 
-/// URDF `<origin>` (xyz, fixed-axis roll-pitch-yaw) as an engine pose:
-/// R = Rz(yaw) Ry(pitch) Rx(roll).
-pub fn origin(p: &urdf_rs::Pose) -> RPose {
-    RPose::from_parts(
-        vector(p.xyz[0], p.xyz[1], p.xyz[2]),
-        Rotation::from_euler(EulerRot::ZYX, r(p.rpy[2]), r(p.rpy[1]), r(p.rpy[0])),
-    )
-}
+pub use super::real::origin;
 
 /// Mass, centre of mass and inertia of an `<inertial>` (inertia given about
 /// the CoM in the inertial frame, which may be rotated).
