@@ -33,6 +33,7 @@
 //! the run no longer produces is a regression; a new metric is reported only.
 
 use crate::error::Error;
+use crate::error::SetupError;
 pub use crate::metric::Direction;
 use crate::runner::RunOutcome;
 use crate::systems::System;
@@ -94,10 +95,10 @@ pub struct RegressionConfig {
 
 impl RegressionConfig {
     /// Values must be finite and ≥ 0 (messages name the key).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), SetupError> {
         let ok = |key: String, v: Option<f64>| match v {
             Some(x) if !(x.is_finite() && x >= 0.0) => {
-                Err(format!("key `{key}`: must be finite and ≥ 0"))
+                Err(SetupError::key(key, "must be finite and ≥ 0"))
             }
             _ => Ok(()),
         };
@@ -213,17 +214,16 @@ impl Baseline {
         scenario: &str,
         planner: &str,
     ) -> Result<Baseline, Error> {
-        let bad = |key: &str, message: String| Error::Input {
-            path: path.into(),
-            line: line_of_key(text, key),
-            message: format!("key `{key}`: {message}"),
-        };
+        let bad =
+            |key: &str, message: String| Error::keyed(path, line_of_key(text, key), key, message);
         let doc: Value = serde_json::from_str(text).map_err(|e| Error::Input {
+            key: None,
             path: path.into(),
             line: Some(e.line()),
             message: format!("not a baseline file: {e}"),
         })?;
         let obj = doc.as_object().ok_or_else(|| Error::Input {
+            key: None,
             path: path.into(),
             line: Some(1),
             message: "not a baseline file: expected a JSON object".into(),
@@ -588,6 +588,7 @@ mod tests {
         assert!(bad
             .validate()
             .unwrap_err()
+            .to_string()
             .contains("regression.metrics.x.rel"));
     }
 

@@ -13,6 +13,9 @@ pub enum Error {
         path: PathBuf,
         /// 1-based line, when known.
         line: Option<usize>,
+        /// The scenario key at fault, when the error is about one (the
+        /// message names it too).
+        key: Option<String>,
         /// One-line description naming the key.
         message: String,
     },
@@ -170,9 +173,25 @@ impl Error {
     /// Shorthand for an input error without a line.
     pub fn input(path: impl Into<PathBuf>, message: impl Into<String>) -> Self {
         Error::Input {
+            key: None,
             path: path.into(),
             line: None,
             message: message.into(),
+        }
+    }
+
+    /// An input error about key `key`: "key `key`: message".
+    pub fn keyed(
+        path: impl Into<PathBuf>,
+        line: Option<usize>,
+        key: &str,
+        message: impl std::fmt::Display,
+    ) -> Self {
+        Error::Input {
+            path: path.into(),
+            line,
+            key: Some(key.to_string()),
+            message: format!("key `{key}`: {message}"),
         }
     }
 

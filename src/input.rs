@@ -75,6 +75,7 @@ pub fn read_text(path: &Path, what: &str, max: u64) -> Result<String, Error> {
         let ok = e.utf8_error().valid_up_to();
         let line = e.as_bytes()[..ok].iter().filter(|&&b| b == b'\n').count() + 1;
         Error::Input {
+            key: None,
             path: path.into(),
             line: Some(line),
             message: format!("{what} is not UTF-8 text (invalid byte at offset {ok})"),

@@ -154,10 +154,13 @@ fn one_variant(preps: Vec<Prepared>, i: usize, gated: bool) -> Result<Prepared, 
         ));
     }
     if i >= cfg.count {
-        return Err(vec![prep.scenario.error(format!(
-            "key `sweep.count`: --variant {i} is not a variant of this sweep (0..{})",
-            cfg.count
-        ))]);
+        return Err(vec![prep.scenario.error_at(
+            "sweep.count",
+            format!(
+                "--variant {i} is not a variant of this sweep (0..{})",
+                cfg.count
+            ),
+        )]);
     }
     let v = cfg.variant(i);
     let mut one = prep.variant(&v).map_err(|e| vec![e])?;

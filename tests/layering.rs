@@ -121,17 +121,18 @@ fn module_of(src: &Path, file: &Path) -> Vec<String> {
 
 /// Every module path a line names: `crate::a::b`, `super::c` (resolved from
 /// `module`), and the items of a `use P::{x, y::z}` group.
-fn paths_in(line: &str, module: &[String], is_mod_rs: bool) -> Vec<Vec<String>> {
+fn paths_in(line: &str, module: &[String]) -> Vec<Vec<String>> {
     let ident = |c: char| c.is_ascii_alphanumeric() || c == '_';
     let mut out = Vec::new();
     let mut rest = line;
-    while let Some(i) = rest.find(|c: char| c == 'c' || c == 's') {
+    while let Some(i) = rest.find(['c', 's']) {
         let tail = &rest[i..];
         let before_ok = i == 0 || !rest[..i].ends_with(|c: char| ident(c) || c == ':');
         let (base, skip) = if before_ok && tail.starts_with("crate::") {
             (Vec::new(), "crate::".len())
         } else if before_ok && tail.starts_with("super::") {
-            // `super` of a mod.rs is its directory's parent; of a file, its directory.
+            // A module's path names the module itself (`a/b.rs` and
+            // `a/b/mod.rs` are both `a::b`): each `super` drops one name.
             let mut b = module.to_vec();
             let mut t = tail;
             let mut n = 0;
@@ -139,8 +140,7 @@ fn paths_in(line: &str, module: &[String], is_mod_rs: bool) -> Vec<Vec<String>> 
                 t = &t["super::".len()..];
                 n += 1;
             }
-            let up = if is_mod_rs { n } else { n };
-            for _ in 0..up {
+            for _ in 0..n {
                 b.pop();
             }
             (b, tail.len() - t.len())
@@ -258,10 +258,9 @@ fn import_circles(src: &Path) -> Vec<String> {
     };
     let mut edges = std::collections::BTreeSet::new();
     for (i, (m, f)) in modules.iter().enumerate() {
-        let is_mod_rs = f.ends_with("mod.rs");
         let text = std::fs::read_to_string(f).unwrap();
         for line in code_lines(&text) {
-            for p in paths_in(line, m, is_mod_rs) {
+            for p in paths_in(line, m) {
                 if let Some(j) = resolve(&p) {
                     if j != i {
                         edges.insert((i, j));

@@ -3,7 +3,6 @@
 //! bad input → `InputError` (file, line, key, the CLI's one-line message),
 //! runtime failures → `RuntimeFailure`.
 
-use anholonomy::scenario::doc::named_key;
 use anholonomy::Error;
 use pyo3::prelude::*;
 use pyo3::sync::PyOnceLock;
@@ -52,16 +51,8 @@ pub fn to_py(py: Python<'_>, e: &Error) -> PyErr {
     let text = anholonomy::numfmt::shorten_long_numbers(&e.to_string());
     match e {
         Error::Input {
-            path,
-            line,
-            message,
-        } => input_error(
-            py,
-            text,
-            Some(path),
-            *line,
-            named_key(message).map(str::to_string),
-        ),
+            path, line, key, ..
+        } => input_error(py, text, Some(path), *line, key.clone()),
         Error::Plan {
             path, line, key, ..
         } => input_error(py, text, Some(path), *line, Some(key.clone())),

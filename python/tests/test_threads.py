@@ -18,9 +18,10 @@ import anholonomy
 from conftest import REPO, SCENARIOS
 
 
-def test_another_thread_runs_during_a_two_second_physics_run(disk):
-    # disk_paper settling long enough for seconds of physics.
-    long = disk.replace({"sim.settle": 200.0})
+def test_another_thread_runs_during_a_long_physics_run(disk):
+    # disk_paper settling long enough for seconds of physics on a fast
+    # machine (1.2 s per 200 s of settling on CI's, 2.1 s on the laptop's).
+    long = disk.replace({"sim.settle": 500.0})
     ticks: list = []
     stop = threading.Event()
 
@@ -38,11 +39,12 @@ def test_another_thread_runs_during_a_two_second_physics_run(disk):
     finally:
         stop.set()
         th.join()
-    assert r.timings["physics"] >= 2.0, r.timings
+    # The check below needs a run far longer than a thread's time slice.
+    assert r.timings["physics"] >= 1.0, r.timings
     during = [t for t in ticks if t0 <= t <= t1]
     gaps = np.diff([t0] + during + [t1])
     # Holding the GIL, the thread would not tick for the whole run.
-    assert gaps.max() < 0.5, gaps.max()
+    assert gaps.max() < r.timings["physics"] / 4, gaps.max()
     assert len(during) > 100 * (t1 - t0) / 4
 
 

@@ -71,6 +71,7 @@ fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, Error> {
     let text = std::fs::read_to_string(path)
         .map_err(|e| Error::input(path, format!("cannot read: {e}")))?;
     serde_json::from_str(&text).map_err(|e| Error::Input {
+        key: None,
         path: path.into(),
         line: Some(e.line()),
         message: format!("unreadable (half-written or not from anholonomy): {e}"),

@@ -143,6 +143,7 @@ impl KeyIndex {
     pub fn check_finite(&self, path: &Path) -> Result<(), Error> {
         match self.nonfinite.first() {
             Some((key, span, raw)) => Err(Error::Input {
+                key: Some(key.clone()),
                 path: path.into(),
                 line: Some(self.line_at(span.start)),
                 message: format!("key `{key}`: {raw} is not a finite number"),
@@ -151,25 +152,11 @@ impl KeyIndex {
         }
     }
 
-    /// The key a message is about: the first `` key `k` `` it names, else a
-    /// dotted key path of a scenario table it mentions (`model.radius`, written
-    /// or defaulted), else the longest key path of this file it mentions as a
-    /// word.
-    pub fn key_of_message(&self, message: &str) -> Option<String> {
-        if let Some(k) = named_key(message).or_else(|| dotted_key(message)) {
-            return Some(k.to_string());
-        }
-        self.entries
-            .iter()
-            .filter(|e| mentions(message, &e.path))
-            .max_by_key(|e| e.path.len())
-            .map(|e| e.path.clone())
-    }
-
     /// An input error about key `key` of this file, at its line:
     /// "key `key`: message".
     pub fn error_at(&self, path: &Path, key: &str, message: impl std::fmt::Display) -> Error {
         Error::Input {
+            key: Some(key.to_string()),
             path: path.into(),
             line: self.line_of(key),
             message: format!("key `{key}`: {message}"),
@@ -180,34 +167,10 @@ impl KeyIndex {
     /// if it is about one.
     pub fn setup_error(&self, path: &Path, e: &crate::error::SetupError) -> Error {
         Error::Input {
+            key: e.key_name().map(str::to_string),
             path: path.into(),
             line: e.key_name().and_then(|k| self.line_of(k)),
             message: e.to_string(),
-        }
-    }
-
-    /// An input error about this file; the line comes from the key the
-    /// message names (see [`KeyIndex::key_of_message`]).
-    pub fn error(&self, path: &Path, message: impl Into<String>) -> Error {
-        let message = message.into();
-        let line = self.key_of_message(&message).and_then(|k| self.line_of(&k));
-        Error::Input {
-            path: path.into(),
-            line,
-            message,
-        }
-    }
-
-    /// Like [`KeyIndex::error`], but prefixes `` key `k`: `` when the message
-    /// does not start with a key already (messages from planners and physics).
-    pub fn error_about(&self, path: &Path, message: &str) -> Error {
-        match self.key_of_message(message) {
-            Some(k) if !message.starts_with("key") => Error::Input {
-                path: path.into(),
-                line: self.line_of(&k),
-                message: format!("key `{k}`: {message}"),
-            },
-            _ => self.error(path, message),
         }
     }
 
@@ -240,14 +203,16 @@ impl KeyIndex {
         } else {
             (at.unwrap_or_default(), raw.clone())
         };
-        let message = if key.is_empty() {
-            message
+        let (key, message) = if key.is_empty() {
+            (None, message)
         } else {
-            format!("key `{key}`: {message}")
+            let m = format!("key `{key}`: {message}");
+            (Some(key), m)
         };
         Error::Input {
             path: path.into(),
             line,
+            key,
             message,
         }
     }
@@ -256,65 +221,12 @@ impl KeyIndex {
     pub fn syntax_error(path: &Path, text: &str, e: &toml::de::Error) -> Error {
         let ix = KeyIndex::new(text, &DeTable::default());
         Error::Input {
+            key: None,
             path: path.into(),
             line: e.span().map(|s| ix.line_at(s.start)),
             message: format!("TOML syntax: {}", e.message().trim().replace('\n', " ")),
         }
     }
-}
-
-/// `k` from the first `` key `k` `` (or `` keys `k` ``) in a message.
-pub fn named_key(message: &str) -> Option<&str> {
-    let i = message
-        .find("key `")
-        .map(|i| i + 5)
-        .or_else(|| message.find("keys `").map(|i| i + 6))?;
-    let rest = &message[i..];
-    rest.find('`').map(|j| &rest[..j]).filter(|k| !k.is_empty())
-}
-
-/// Tables of a scenario file, for [`dotted_key`].
-const TABLES: [&str; 8] = [
-    "model",
-    "planner",
-    "limits",
-    "sim",
-    "thresholds",
-    "minimums",
-    "sweep",
-    "regression",
-];
-
-/// The first `table.key` path (a scenario table, then a dot) in a message,
-/// e.g. `model.geometry.wheel_radius`.
-pub fn dotted_key(message: &str) -> Option<&str> {
-    let is_key = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '.';
-    for (i, c) in message.char_indices() {
-        if i > 0 && message[..i].chars().next_back().is_some_and(is_key) || !c.is_ascii_lowercase()
-        {
-            continue;
-        }
-        let word = &message[i..];
-        let end = word.find(|c: char| !is_key(c)).unwrap_or(word.len());
-        let word = word[..end].trim_end_matches('.');
-        if let Some((table, rest)) = word.split_once('.') {
-            if TABLES.contains(&table) && !rest.is_empty() {
-                return Some(word);
-            }
-        }
-    }
-    None
-}
-
-/// Whether `message` contains `key` as a whole word (not inside a longer
-/// identifier or key path).
-fn mentions(message: &str, key: &str) -> bool {
-    let ident = |c: char| c.is_alphanumeric() || c == '_' || c == '.' || c == '[';
-    message.match_indices(key).any(|(i, _)| {
-        let before = message[..i].chars().next_back();
-        let after = message[i + key.len()..].chars().next();
-        !before.is_some_and(ident) && !after.is_some_and(|c| ident(c) && c != '.')
-    })
 }
 
 #[cfg(test)]
@@ -337,31 +249,5 @@ mod tests {
         assert_eq!(ix.line_of("sim.friction"), Some(5));
         assert_eq!(ix.line_of("planner.via.a"), Some(10));
         assert_eq!(ix.line_of("limits.ramp"), None);
-    }
-
-    #[test]
-    fn keys_in_messages() {
-        let ix = index("[model]\nradius = 1.0\n[sim]\ngravity = [0.0, 0.0, 1.0]\n");
-        assert_eq!(
-            ix.key_of_message("key `sim.dt`: must be > 0").as_deref(),
-            Some("sim.dt")
-        );
-        assert_eq!(
-            ix.key_of_message("URDF radius differs from the scenario's model.radius (0.3 m)")
-                .as_deref(),
-            Some("model.radius")
-        );
-        assert_eq!(
-            ix.key_of_message("URDF wheel radius differs from model.geometry.wheel_radius 0.1 m.")
-                .as_deref(),
-            Some("model.geometry.wheel_radius")
-        );
-        // A word inside a longer identifier is not a mention.
-        assert_eq!(ix.key_of_message("simulation diverged"), None);
-        assert_eq!(
-            ix.key_of_message("scenario key `sim.gravity` must be [0, 0, 0]")
-                .as_deref(),
-            Some("sim.gravity")
-        );
     }
 }

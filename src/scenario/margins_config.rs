@@ -13,6 +13,7 @@
 //! latencies, lags and noise, the distance from 1 for factors
 //! (`friction_scale = 0.3` asks that the gates hold at 0.7× friction).
 
+use crate::error::SetupError;
 use crate::physics::perturb::Dimension;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -128,7 +129,7 @@ impl MarginsConfig {
     }
 
     /// Ranges (messages start with the key).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), SetupError> {
         for (d, g) in self.gates() {
             let top = match d {
                 Dimension::MassScale => f64::INFINITY,
@@ -136,30 +137,33 @@ impl MarginsConfig {
                 _ => f64::INFINITY,
             };
             if !(g >= 0.0 && g < top) {
-                return Err(format!(
-                    "key `margins.{d}`: a margin is a perturbation magnitude ≥ 0{}, got {}",
-                    if top.is_finite() {
-                        " and < 1 (the distance of the factor from 1)"
-                    } else {
-                        ""
-                    },
-                    crate::numfmt::readable(g)
+                return Err(SetupError::key(
+                    format!("margins.{d}"),
+                    format!(
+                        "a margin is a perturbation magnitude ≥ 0{}, got {}",
+                        if top.is_finite() {
+                            " and < 1 (the distance of the factor from 1)"
+                        } else {
+                            ""
+                        },
+                        crate::numfmt::readable(g)
+                    ),
                 ));
             }
         }
         if let Some(r) = self.resolution {
             if !(r > 0.0 && r <= 1.0) {
-                return Err("key `margins.resolution`: must be in (0, 1]".into());
+                return Err(SetupError::key("margins.resolution", "must be in (0, 1]"));
             }
         }
         if let Some(n) = self.seeds {
             if !(1..=1000).contains(&n) {
-                return Err("key `margins.seeds`: must be in 1..=1000".into());
+                return Err(SetupError::key("margins.seeds", "must be in 1..=1000"));
             }
         }
         if let Some(r) = self.success_rate {
             if !(r > 0.0 && r <= 1.0) {
-                return Err("key `margins.success_rate`: must be in (0, 1]".into());
+                return Err(SetupError::key("margins.success_rate", "must be in (0, 1]"));
             }
         }
         Ok(())

@@ -329,6 +329,7 @@ fn take_tagged<'i>(
     let known = kinds.join(", ");
     let Some((_, mut v)) = root.remove_entry(name) else {
         return Err(Error::Input {
+            key: None,
             path: path.into(),
             line: Some(1),
             message: format!(
@@ -337,27 +338,30 @@ fn take_tagged<'i>(
         });
     };
     let DeValue::Table(t) = v.get_mut() else {
-        return Err(keys.error(path, format!("key `{name}`: expected a table with `kind`")));
+        return Err(keys.error_at(path, name, "expected a table with `kind`"));
     };
     let kind = match t.remove("kind").map(|k| k.into_inner()) {
         Some(DeValue::String(s)) => s.to_string(),
         Some(_) => {
-            return Err(keys.error(
+            return Err(keys.error_at(
                 path,
-                format!("key `{name}.kind`: expected a string, one of {known}"),
+                &format!("{name}.kind"),
+                format!("expected a string, one of {known}"),
             ))
         }
         None => {
-            return Err(keys.error(
+            return Err(keys.error_at(
                 path,
-                format!("key `{name}.kind`: required key is missing (one of {known})"),
+                &format!("{name}.kind"),
+                format!("required key is missing (one of {known})"),
             ))
         }
     };
     if !kinds.contains(&kind.as_str()) {
-        return Err(keys.error(
+        return Err(keys.error_at(
             path,
-            format!("key `{name}.kind`: unknown {name} `{kind}` (known: {known})"),
+            &format!("{name}.kind"),
+            format!("unknown {name} `{kind}` (known: {known})"),
         ));
     }
     Ok((kind, v))
@@ -369,12 +373,6 @@ impl Scenario {
     pub fn load(path: &Path) -> Result<Scenario, Error> {
         let text = read_text(path, "scenario", SCENARIO_MAX_BYTES)?;
         Self::parse(path, &text)
-    }
-
-    /// An input error about this scenario, with the line of the key the
-    /// message names (`` key `sim.dt`: ... ``, or a key path it mentions).
-    pub fn error(&self, message: impl Into<String>) -> Error {
-        self.keys.error(&self.path, message)
     }
 
     /// An input error about `key`, at its line: "key `key`: message".
@@ -420,11 +418,7 @@ impl Scenario {
     pub fn replace(&self, changes: &[(String, String)]) -> Result<Scenario, Error> {
         let mut edits: Vec<Edit> = self.edits.to_vec();
         for (key, value) in changes {
-            let kp = KeyPath::parse(key).map_err(|m| Error::Input {
-                path: self.path.clone(),
-                line: None,
-                message: format!("key `{key}`: {m}"),
-            })?;
+            let kp = KeyPath::parse(key).map_err(|m| Error::keyed(&self.path, None, key, m))?;
             edits.push((kp, value.clone()));
         }
         let sc = Self::parse_with(&self.path, &self.text, &edits, &[])?;
@@ -441,9 +435,12 @@ impl Scenario {
         let overrides: Vec<(KeyPath, f64)> = v
             .params
             .iter()
-            .map(|(k, x)| KeyPath::parse(k).map(|p| (p, *x)))
-            .collect::<Result<_, _>>()
-            .map_err(|m| self.error(m))?;
+            .map(|(k, x)| {
+                KeyPath::parse(k)
+                    .map(|p| (p, *x))
+                    .map_err(|m| self.error_at(k, m))
+            })
+            .collect::<Result<_, _>>()?;
         let mut sc = if overrides.is_empty() {
             let mut sc = self.clone();
             sc.sweep = None;
@@ -468,11 +465,7 @@ impl Scenario {
         Self::apply_edits(&self.path, &self.text, &mut root, &self.edits)?;
         for (path, dist) in &sw.vary {
             let key = vary_key(path);
-            let err = |m: String| Error::Input {
-                path: self.path.clone(),
-                line: self.keys.line_of(&key),
-                message: format!("key `{key}`: {m}"),
-            };
+            let err = |m: String| self.error_at(&key, m);
             let kp = KeyPath::parse(path).map_err(&err)?;
             match keypath::find(root.get_ref(), &kp) {
                 keypath::Found::Number { integer } => {
@@ -521,11 +514,8 @@ impl Scenario {
         for (kp, value) in edits {
             let t = root.get_mut();
             let anchor = keypath::anchor(t, kp);
-            let err = |m: String| Error::Input {
-                path: path.into(),
-                line: (anchor.end > 0).then(|| lines.line_at(anchor.start)),
-                message: format!("key `{kp}`: {m}"),
-            };
+            let line = (anchor.end > 0).then(|| lines.line_at(anchor.start));
+            let err = |m: String| Error::keyed(path, line, &kp.to_string(), m);
             if let keypath::Found::Unreachable(why) = keypath::find(t, kp) {
                 return Err(err(format!("cannot be set: {why}")));
             }
@@ -564,14 +554,13 @@ impl Scenario {
             t.remove("sweep");
             for ((kp, _), n) in overrides.iter().zip(&numbers) {
                 let v = DeValue::parse(n)
-                    .map_err(|e| Error::input(path, format!("key `{kp}`: {n}: {e}")))?
+                    .map_err(|e| Error::keyed(path, None, &kp.to_string(), format!("{n}: {e}")))?
                     .into_inner();
                 keypath::set(t, kp, v, span.clone()).map_err(|m| Error::input(path, m))?;
             }
         }
         let keys = KeyIndex::new(text, root.get_ref());
         keys.check_finite(path)?;
-        let bad = |message: String| keys.error(path, message);
         let serde = |e: toml::de::Error| keys.serde_error(path, &e);
         let mut root = root.into_inner();
         let (model_kind, mut model) =
@@ -588,20 +577,25 @@ impl Scenario {
         let file = ScenarioFile::deserialize(ValueDeserializer::from(rest)).map_err(serde)?;
         let model = ModelConfig::parse(&model_kind, model)
             .map_err(serde)?
-            .ok_or_else(|| bad(format!("key `model.kind`: unknown model `{model_kind}`")))?;
+            .ok_or_else(|| {
+                keys.error_at(path, "model.kind", format!("unknown model `{model_kind}`"))
+            })?;
         let mut planner = PlannerConfig::parse(&planner_kind, planner)
             .map_err(serde)?
             .ok_or_else(|| {
-                bad(format!(
-                    "key `planner.kind`: unknown planner `{planner_kind}`"
-                ))
+                keys.error_at(
+                    path,
+                    "planner.kind",
+                    format!("unknown planner `{planner_kind}`"),
+                )
             })?;
         // Every number against its documented range (the reference pages
         // show the same schemas).
         let ranges = |schema: &schema::Schema, value: Result<serde_json::Value, _>, prefix| {
-            let value =
-                value.map_err(|e: serde_json::Error| bad(format!("key `{prefix}`: {e}")))?;
-            schema.check(&value, prefix).map_err(&bad)
+            let value = value.map_err(|e: serde_json::Error| keys.error_at(path, prefix, e))?;
+            schema
+                .check(&value, prefix)
+                .map_err(|e| keys.setup_error(path, &e))
         };
         ranges(file_schema(), serde_json::to_value(&file), "")?;
         if let Some(s) = ModelConfig::schema(&model_kind) {
@@ -613,9 +607,11 @@ impl Scenario {
         let name = match &file.name {
             Some(n) => {
                 if let Some(p) = name_problem(n) {
-                    return Err(bad(format!(
-                        "key `name`: {n:?} {p}: it is the log directory name"
-                    )));
+                    return Err(keys.error_at(
+                        path,
+                        "name",
+                        format!("{n:?} {p}: it is the log directory name"),
+                    ));
                 }
                 n.clone()
             }
@@ -625,9 +621,11 @@ impl Scenario {
                     .map(|s| s.to_string_lossy().into_owned())
                     .unwrap_or_default();
                 if let Some(p) = name_problem(&stem) {
-                    return Err(bad(format!(
-                        "file name {stem:?} {p}: it would be the log directory name; set key `name`"
-                    )));
+                    return Err(keys.error_at(
+                        path,
+                        "name",
+                        format!("not set, and the file name {stem:?} {p}: it would be the log directory name"),
+                    ));
                 }
                 stem
             }
@@ -635,13 +633,17 @@ impl Scenario {
         let expect_fails = match (file.expect, &file.reason) {
             (Some(Expect::Fails), Some(r)) if !r.trim().is_empty() => Some(r.trim().to_string()),
             (Some(Expect::Fails), _) => {
-                return Err(bad(
-                    "key `expect`: `expect = \"fails\"` needs a `reason` (why the scenario is meant to fail)".into(),
+                return Err(keys.error_at(
+                    path,
+                    "expect",
+                    "`expect = \"fails\"` needs a `reason` (why the scenario is meant to fail)",
                 ))
             }
             (_, Some(_)) => {
-                return Err(bad(
-                    "key `reason`: only with `expect = \"fails\"` (the reason a scenario is meant to fail)".into(),
+                return Err(keys.error_at(
+                    path,
+                    "reason",
+                    "only with `expect = \"fails\"` (the reason a scenario is meant to fail)",
                 ))
             }
             _ => None,
@@ -659,18 +661,23 @@ impl Scenario {
         let default_rate = system.default_max_rate();
         let urdf = base.join(model.urdf());
         if !urdf.exists() {
-            return Err(bad(format!(
-                "key `model.urdf`: file not found: {}",
-                urdf.display()
-            )));
+            return Err(keys.error_at(
+                path,
+                "model.urdf",
+                format!("file not found: {}", urdf.display()),
+            ));
         }
         let to_si = |key: &str, v: &[f64]| -> Result<Vec<f64>, Error> {
             if v.len() != n_state {
-                return Err(bad(format!(
-                    "key `{key}`: expected {n_state} values ({}), got {}",
-                    chart.state_names().join(", "),
-                    v.len()
-                )));
+                return Err(keys.error_at(
+                    path,
+                    key,
+                    format!(
+                        "expected {n_state} values ({}), got {}",
+                        chart.state_names().join(", "),
+                        v.len()
+                    ),
+                ));
             }
             Ok(v.iter()
                 .enumerate()
@@ -687,33 +694,35 @@ impl Scenario {
         let goal = system.state_from_file(to_si("goal", &file.goal)?);
         let max_rate = file.limits.max_rate.clone().unwrap_or(default_rate);
         if max_rate.len() != n_input {
-            return Err(bad(format!(
-                "key `limits.max_rate`: expected {n_input} values, got {}",
-                max_rate.len()
-            )));
+            return Err(keys.error_at(
+                path,
+                "limits.max_rate",
+                format!("expected {n_input} values, got {}", max_rate.len()),
+            ));
         }
         if let Some(i) = max_rate.iter().position(|r| *r <= 0.0) {
-            return Err(bad(format!(
-                "key `limits.max_rate[{i}]`: rates must be > 0"
-            )));
+            return Err(keys.error_at(path, &format!("limits.max_rate[{i}]"), "rates must be > 0"));
         }
-        file.sim.perturb.validate().map_err(&bad)?;
-        file.margins.validate().map_err(&bad)?;
+        let typed = |e: crate::error::SetupError| keys.setup_error(path, &e);
+        file.sim.perturb.validate().map_err(typed)?;
+        file.margins.validate().map_err(typed)?;
         if let Some(sw) = &file.sweep {
-            sw.validate().map_err(&bad)?;
+            sw.validate().map_err(typed)?;
             if !file.margins.gates().is_empty() {
-                return Err(bad(
-                    "key `margins`: a sweep's verdict is its success rate over the variants; margins are searched and gated on single runs (drop [sweep] or [margins])".into(),
-                ));
+                return Err(keys.error_at(path, "margins", "a sweep's verdict is its success rate over the variants; margins are searched and gated on single runs (drop [sweep] or [margins])"));
             }
             if sw.sigma_rate.is_some() && !matches!(model, ModelConfig::Rover(_)) {
-                return Err(bad(format!(
-                    "key `sweep.sigma_rate`: model `{}` has no switching signal σ (rover only)",
-                    model.kind()
-                )));
+                return Err(keys.error_at(
+                    path,
+                    "sweep.sigma_rate",
+                    format!(
+                        "model `{}` has no switching signal σ (rover only)",
+                        model.kind()
+                    ),
+                ));
             }
         }
-        file.regression.validate().map_err(&bad)?;
+        file.regression.validate().map_err(typed)?;
         // Margins are coarse (a search to a resolution): their own default tolerance.
         let mut regression = file.regression;
         for (d, _) in file.margins.gates() {

@@ -12,6 +12,7 @@
 //! Convention: a bound on an array or on a table of numbers (`ka`,
 //! `thresholds`) applies to each of its numbers.
 
+use crate::error::SetupError;
 use schemars::JsonSchema;
 use serde_json::{Map, Value};
 use std::sync::OnceLock;
@@ -196,11 +197,11 @@ impl Schema {
 
     /// Check every number of `value` (the table as parsed, serialized) against
     /// its documented range; the message names the key under `prefix`.
-    pub fn check(&self, value: &Value, prefix: &str) -> Result<(), String> {
+    pub fn check(&self, value: &Value, prefix: &str) -> Result<(), SetupError> {
         self.check_node(&self.root, value, prefix)
     }
 
-    fn check_node(&self, node: &Value, value: &Value, path: &str) -> Result<(), String> {
+    fn check_node(&self, node: &Value, value: &Value, path: &str) -> Result<(), SetupError> {
         // Bounds written on a `$ref` property sit beside the reference.
         let outer = Bounds::of(node);
         let node = self.resolve(node);
@@ -516,11 +517,16 @@ impl Schema {
     }
 }
 
-fn check_bounds(b: &Bounds, value: &Value, path: &str) -> Result<(), String> {
+fn check_bounds(b: &Bounds, value: &Value, path: &str) -> Result<(), SetupError> {
     if b.is_empty() {
         return Ok(());
     }
-    let bad = |key: &str, x: f64| Err(format!("key `{key}`: must be {}, got {}", b.text(), num(x)));
+    let bad = |key: &str, x: f64| {
+        Err(SetupError::key(
+            key,
+            format!("must be {}, got {}", b.text(), num(x)),
+        ))
+    };
     match value {
         Value::Number(n) => match n.as_f64() {
             Some(x) if !b.admits(x) => bad(path, x),
@@ -722,7 +728,7 @@ mod tests {
         ] {
             let mut v = sample();
             *v.pointer_mut(ptr).unwrap() = serde_json::json!(bad);
-            let e = s.check(&v, "planner").unwrap_err();
+            let e = s.check(&v, "planner").unwrap_err().to_string();
             assert!(
                 e.starts_with(&format!("key `{key}`: must be {want}")),
                 "{ptr}: {e}"

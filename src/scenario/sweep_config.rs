@@ -12,6 +12,7 @@
 //! seeded per variant.
 
 use super::keypath::KeyPath;
+use crate::error::SetupError;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use schemars::JsonSchema;
@@ -140,15 +141,16 @@ pub fn vary_key(path: &str) -> String {
 impl SweepConfig {
     /// Checks ranges and counts (messages name the key). The key paths of
     /// `vary` are checked against the file by [`super::Scenario::parse`].
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), SetupError> {
         if self.count == 0 || self.count > 1_000_000 {
-            return Err("key `sweep.count`: must be in 1..=1000000".into());
+            return Err(SetupError::key("sweep.count", "must be in 1..=1000000"));
         }
-        let range = |key: &str, r: Option<[f64; 2]>, min: f64| -> Result<(), String> {
+        let range = |key: &str, r: Option<[f64; 2]>, min: f64| -> Result<(), SetupError> {
             if let Some([lo, hi]) = r {
                 if !(lo.is_finite() && hi.is_finite() && lo >= min && lo <= hi) {
-                    return Err(format!(
-                        "key `sweep.{key}`: need finite lo ≤ hi with lo ≥ {min}"
+                    return Err(SetupError::key(
+                        format!("sweep.{key}"),
+                        format!("need finite lo ≤ hi with lo ≥ {min}"),
                     ));
                 }
             }
@@ -158,43 +160,58 @@ impl SweepConfig {
         range("mass_scale", self.mass_scale, 1e-3)?;
         if let Some(r) = self.sigma_rate {
             if !(r.is_finite() && r >= 0.0) {
-                return Err("key `sweep.sigma_rate`: must be finite and ≥ 0".into());
+                return Err(SetupError::key(
+                    "sweep.sigma_rate",
+                    "must be finite and ≥ 0",
+                ));
             }
         }
         if !(self.success_max.is_finite() && self.success_max >= 0.0) {
-            return Err("key `sweep.success_max`: must be finite and ≥ 0".into());
+            return Err(SetupError::key(
+                "sweep.success_max",
+                "must be finite and ≥ 0",
+            ));
         }
         if !(0.0..=1.0).contains(&self.min_success_rate) {
-            return Err("key `sweep.min_success_rate`: must be in [0, 1]".into());
+            return Err(SetupError::key(
+                "sweep.min_success_rate",
+                "must be in [0, 1]",
+            ));
         }
         for (path, dist) in &self.vary {
             let key = vary_key(path);
-            let kp = KeyPath::parse(path).map_err(|m| format!("key `{key}`: {m}"))?;
-            dist.check().map_err(|m| format!("key `{key}`: {m}"))?;
+            let kp = KeyPath::parse(path).map_err(|m| SetupError::key(key.clone(), m))?;
+            dist.check().map_err(|m| SetupError::key(key.clone(), m))?;
             if kp.to_string() == "sim.friction" && self.friction.is_some() {
-                return Err(format!(
-                    "key `{key}`: `sweep.friction` already sweeps sim.friction (keep one)"
+                return Err(SetupError::key(
+                    key.to_string(),
+                    "`sweep.friction` already sweeps sim.friction (keep one)",
                 ));
             }
             if kp.to_string() == "sim.perturb.mass_scale" && self.mass_scale.is_some() {
-                return Err(format!(
-                    "key `{key}`: `sweep.mass_scale` already sweeps sim.perturb.mass_scale (keep one)"
+                return Err(SetupError::key(
+                    key.to_string(),
+                    "`sweep.mass_scale` already sweeps sim.perturb.mass_scale (keep one)",
                 ));
             }
             if kp.root() == "sweep" {
-                return Err(format!("key `{key}`: a sweep cannot vary its own table"));
+                return Err(SetupError::key(
+                    key.to_string(),
+                    "a sweep cannot vary its own table",
+                ));
             }
         }
         let g = self.grid_size();
         if g > 1_000_000 {
-            return Err(format!(
-                "key `sweep.vary`: the grid has {g} points (at most 1000000)"
+            return Err(SetupError::key(
+                "sweep.vary",
+                format!("the grid has {g} points (at most 1000000)"),
             ));
         }
         if !self.count.is_multiple_of(g) {
-            return Err(format!(
-                "key `sweep.count`: {} is not a multiple of the grid's {g} points",
-                self.count
+            return Err(SetupError::key(
+                "sweep.count",
+                format!("{} is not a multiple of the grid's {g} points", self.count),
             ));
         }
         Ok(())
@@ -382,7 +399,7 @@ mod tests {
         g.validate().unwrap();
         let mut bad = g.clone();
         bad.count = 7;
-        assert!(bad.validate().unwrap_err().contains("multiple"));
+        assert!(bad.validate().unwrap_err().to_string().contains("multiple"));
     }
 
     #[test]
@@ -392,7 +409,10 @@ mod tests {
             (Dist::Normal([1.0, -0.1]), "σ ≥ 0"),
             (Dist::Values(vec![]), "at least one"),
         ] {
-            let e = cfg(&[("planner.k1", d)]).validate().unwrap_err();
+            let e = cfg(&[("planner.k1", d)])
+                .validate()
+                .unwrap_err()
+                .to_string();
             assert!(
                 e.starts_with("key `sweep.vary.\"planner.k1\"`") && e.contains(want),
                 "{e}"
@@ -400,11 +420,13 @@ mod tests {
         }
         let e = cfg(&[("sim.friction", Dist::Values(vec![1.0]))])
             .validate()
-            .unwrap_err();
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("already sweeps"), "{e}");
         let e = cfg(&[("a..b", Dist::Values(vec![1.0]))])
             .validate()
-            .unwrap_err();
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("not a key path"), "{e}");
     }
 }

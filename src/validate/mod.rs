@@ -89,10 +89,10 @@ impl Prepared {
         let gates = scenario.thresholds.keys().map(|k| ("thresholds", k));
         for (table, k) in gates.chain(scenario.minimums.keys().map(|k| ("minimums", k))) {
             if !known.contains(k) {
-                return Err(scenario.error(format!(
-                    "key `{table}.{k}`: {}",
-                    unknown_metric(k, system.as_ref(), &[])
-                )));
+                return Err(scenario.error_at(
+                    &format!("{table}.{k}"),
+                    unknown_metric(k, system.as_ref(), &[]).to_string(),
+                ));
             }
         }
         let written = |k: &str| scenario.has_key(k);
@@ -120,10 +120,10 @@ impl Prepared {
                 } else {
                     format!("the default `{m}` does not fit this model: name a metric; ")
                 };
-                return Err(scenario.error(format!(
-                    "key `sweep.{key}`: {default}{}",
-                    unknown_metric(m, system.as_ref(), &[])
-                )));
+                return Err(scenario.error_at(
+                    &format!("sweep.{key}"),
+                    format!("{default}{}", unknown_metric(m, system.as_ref(), &[])),
+                ));
             }
         }
         let mut regressable = known.clone();
@@ -140,10 +140,10 @@ impl Prepared {
             .collect();
         regressable.extend(margin_metrics);
         if let Some(k) = scenario.regression.unknown_metrics(&regressable).next() {
-            return Err(scenario.error(format!(
-                "key `regression.metrics.{k}`: {}",
-                unknown_metric(k, system.as_ref(), &sweep_metrics)
-            )));
+            return Err(scenario.error_at(
+                &format!("regression.metrics.{k}"),
+                unknown_metric(k, system.as_ref(), &sweep_metrics).to_string(),
+            ));
         }
         // The physics first: a URDF that disagrees with the model explains a
         // planner refusal better than the refusal does.
@@ -176,9 +176,7 @@ impl Prepared {
             let gates = scenario.thresholds.keys().map(|k| ("thresholds", k));
             for (table, k) in gates.chain(scenario.minimums.keys().map(|k| ("minimums", k))) {
                 if k.starts_with("tracking_") {
-                    return Err(scenario.error(format!(
-                        "key `{table}.{k}`: tracking errors mean nothing for this plan (a feedback policy: each run closes the loop on its own state and reaches the goal at its own time); gate on `sim_goal_*` instead"
-                    )));
+                    return Err(scenario.error_at(&format!("{table}.{k}"), "tracking errors mean nothing for this plan (a feedback policy: each run closes the loop on its own state and reaches the goal at its own time); gate on `sim_goal_*` instead"));
                 }
             }
         }
@@ -205,11 +203,14 @@ impl Prepared {
                     .iter()
                     .map(|(k, x)| format!("{k} = {x:.4}"))
                     .collect();
-                return Err(prep.scenario.error(format!(
-                    "key `sweep`: variant 0 ({}mass scale {:.4}) cannot run: {e}",
-                    params.iter().map(|p| format!("{p}, ")).collect::<String>(),
-                    v.mass_scale
-                )));
+                return Err(prep.scenario.error_at(
+                    "sweep",
+                    format!(
+                        "variant 0 ({}mass scale {:.4}) cannot run: {e}",
+                        params.iter().map(|p| format!("{p}, ")).collect::<String>(),
+                        v.mass_scale
+                    ),
+                ));
             }
         }
         Ok(prep)
@@ -285,10 +286,7 @@ fn check_perturbable(sc: &Scenario, system: &dyn System, plan: &Plan) -> Result<
     let gated = sc.margins.gates().into_iter().map(|(d, _)| ("margins", d));
     for (table, d) in set.chain(gated) {
         if !applies.contains(&d) {
-            return Err(sc.error(format!(
-                "key `{table}.{d}`: {}",
-                not_applicable(d, sc, &applies)
-            )));
+            return Err(sc.error_at(&format!("{table}.{d}"), not_applicable(d, sc, &applies)));
         }
     }
     Ok(())
@@ -327,17 +325,20 @@ fn check_perturbation_times(sc: &Scenario, plan: &Plan, budget: &Budget<'_>) -> 
     });
     for (key, d, v) in set.chain(gated).chain(varied) {
         if v > run {
-            return Err(sc.error(format!(
-                "key `{key}`: {} s is longer than {what}, {} s: {}; at most {} s",
-                readable(v),
-                readable(run),
-                match d {
-                    D::CommandLatency => "no command would reach the drives before it ends",
-                    D::StateLatency => "the law would see nothing but the start state",
-                    _ => "the drives would not follow a single command",
-                },
-                readable(run)
-            )));
+            return Err(sc.error_at(
+                &key.to_string(),
+                format!(
+                    "{} s is longer than {what}, {} s: {}; at most {} s",
+                    readable(v),
+                    readable(run),
+                    match d {
+                        D::CommandLatency => "no command would reach the drives before it ends",
+                        D::StateLatency => "the law would see nothing but the start state",
+                        _ => "the drives would not follow a single command",
+                    },
+                    readable(run)
+                ),
+            ));
         }
     }
     let latency = sc.sim.perturb.command_latency;
@@ -401,12 +402,9 @@ impl Budget<'_> {
         } else {
             format!("{what} of {} s", readable(seconds))
         };
-        Err(self.sc.error(format!(
-            "key `{key}`: {span} at sim.dt = {} s is {} steps, over the budget of {} steps (raise it with --max-steps)",
-            readable(dt),
+        Err(self.sc.error_at(key, format!("{span} at sim.dt = {} s is {} steps, over the budget of {} steps (raise it with --max-steps)", readable(dt),
             readable(steps),
-            readable(self.max_steps as f64)
-        )))
+            readable(self.max_steps as f64))))
     }
 }
 
@@ -476,6 +474,7 @@ fn make_plan(sc: &Scenario, system: &dyn System) -> Result<Plan, Error> {
         // A bad plan file is reported at its own row, like a bad URDF.
         if let PlanError::File(f) = source {
             return Error::Input {
+                key: None,
                 path: f.path,
                 line: f.line,
                 message: f.message,
@@ -497,11 +496,14 @@ fn make_plan(sc: &Scenario, system: &dyn System) -> Result<Plan, Error> {
         // not the goal.
         let feedback = matches!(plan.law, crate::plan::ControlLaw::Feedback { .. });
         if feedback && sc.has_key("planner.horizon") {
-            return Err(sc.error(format!(
-                "key `planner.horizon`: {} s is longer than any run may be (at most {} s)",
-                readable(plan.duration),
-                readable(max)
-            )));
+            return Err(sc.error_at(
+                "planner.horizon",
+                format!(
+                    "{} s is longer than any run may be (at most {} s)",
+                    readable(plan.duration),
+                    readable(max)
+                ),
+            ));
         }
         return Err(plan_error(PlanError::Unreachable(format!(
             "plan duration {} s is not usable (at most {} s)",
@@ -603,11 +605,14 @@ pub fn prepare_each(paths: &[PathBuf], call: &Call<'_>) -> (Vec<Prepared>, Vec<E
             }
         };
         if let Some(other) = names.insert(sc.name.to_lowercase(), f.clone()) {
-            errors.push(sc.error(format!(
-                "key `name`: `{}` is also the name of {}: both would write the same log directory",
-                sc.name,
-                other.display()
-            )));
+            errors.push(sc.error_at(
+                "name",
+                format!(
+                    "`{}` is also the name of {}: both would write the same log directory",
+                    sc.name,
+                    other.display()
+                ),
+            ));
             continue;
         }
         if call.sharded && sc.sweep.is_none() {

@@ -61,6 +61,7 @@ pub fn load(path: &Path) -> Result<Robot, Error> {
 pub fn load_from(path: &Path, source: &Source) -> Result<Loaded, Vec<Error>> {
     let one = |line: Option<usize>, m: String| {
         vec![Error::Input {
+            key: None,
             path: path.into(),
             line,
             message: m,
@@ -91,6 +92,7 @@ pub fn load_from(path: &Path, source: &Source) -> Result<Loaded, Vec<Error>> {
     let mut errors: Vec<Error> = Vec::new();
     let mut push = |line: Option<usize>, m: String| {
         errors.push(Error::Input {
+            key: None,
             path: path.into(),
             line,
             message: m,
@@ -188,6 +190,7 @@ fn resolve_meshes(
 pub fn error_in(path: &Path, e: &SetupError) -> Error {
     let text = read_text(path, "URDF", URDF_MAX_BYTES).unwrap_or_default();
     Error::Input {
+        key: None,
         path: path.into(),
         line: line_of_error(&text, e),
         message: e.to_string(),

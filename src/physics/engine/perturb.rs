@@ -36,6 +36,7 @@
 //! * Noise σ: each time the law is sampled, every coordinate of what it sees
 //!   gets an independent N(0, σ²) deviate (ChaCha8 seeded with `seed`).
 
+use crate::error::SetupError;
 use crate::model::{Input, State};
 use crate::plan::{ControlLaw, Plan};
 use rand::{Rng, SeedableRng};
@@ -104,7 +105,7 @@ impl Perturbation {
     }
 
     /// Checks the ranges; the message starts with the key (`sim.perturb.<name>`).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), SetupError> {
         for d in Dimension::ALL {
             let v = d.value(self);
             let bad = match d.kind() {
@@ -116,11 +117,13 @@ impl Perturbation {
                     Kind::Scale => "a factor > 0",
                     Kind::Amount => "≥ 0",
                 };
-                return Err(format!(
-                    "key `sim.perturb.{}`: must be {need}, got {}{}",
-                    d.name(),
-                    crate::numfmt::readable(v),
-                    d.unit_suffix()
+                return Err(SetupError::key(
+                    format!("sim.perturb.{}", d.name()),
+                    format!(
+                        "must be {need}, got {}{}",
+                        crate::numfmt::readable(v),
+                        d.unit_suffix()
+                    ),
                 ));
             }
         }
@@ -638,7 +641,7 @@ mod tests {
             d.set(&mut q, v);
             assert_eq!(q.active(), vec![d]);
             d.set(&mut q, if d.kind() == Kind::Scale { 0.0 } else { -1.0 });
-            let e = q.validate().unwrap_err();
+            let e = q.validate().unwrap_err().to_string();
             assert!(e.starts_with(&format!("key `sim.perturb.{d}`")), "{e}");
         }
         p.mass_scale = 1.5;

@@ -23,6 +23,7 @@ pub(super) fn read_text(r: &Reader<'_>) -> Result<String, PlanError> {
     let text =
         crate::input::read_text(r.file, "plan file", TEXT_MAX_BYTES).map_err(|e| match e {
             crate::error::Error::Input {
+                key: None,
                 path,
                 line,
                 message,
