@@ -161,6 +161,14 @@ impl FilePlanParams {
                     ),
                 ))
             }
+            // A bag directory is named without an extension: one that is
+            // not there is a missing file, not an unknown format.
+            None if !self.file().exists() => {
+                return Err(SetupError::key(
+                    "planner.path",
+                    format!("file not found: {}", self.file().display()),
+                ))
+            }
             other => {
                 return Err(SetupError::key(
                     "planner.path",

@@ -136,11 +136,7 @@ impl Inventory {
         for (fi, file) in files.iter().enumerate() {
             let bytes = read_bytes(file)?;
             let bad = |e: mcap::McapError| {
-                PlanError::file(
-                    file.clone(),
-                    None,
-                    format!("not a readable MCAP file: {e}"),
-                )
+                PlanError::file(file.clone(), None, format!("not a readable MCAP file: {e}"))
             };
             let mut schemas: HashMap<u16, String> = HashMap::new();
             let mut index: HashMap<u16, usize> = HashMap::new();
@@ -245,10 +241,7 @@ fn unmapped(ty: &str, input: &str, inputs: &[&str]) -> String {
     );
     if let Some((_, d)) = defaults {
         let names: Vec<&str> = d.iter().map(|(n, _)| *n).collect();
-        m.push_str(&format!(
-            "; {ty} gives {} by default",
-            names.join(" and ")
-        ));
+        m.push_str(&format!("; {ty} gives {} by default", names.join(" and ")));
         if names.contains(&"steer") && input == "steer_rate" {
             m.push_str(
                 " (a steering angle: steer the car by angle with `[model] steering = \"angle\"`)",
@@ -383,7 +376,11 @@ pub fn read_with(
         }
         let bytes = read_bytes(file)?;
         let at_msg = |k: usize, m: String| {
-            PlanError::file(file.clone(), None, format!("topic `{topic}` message {k}: {m}"))
+            PlanError::file(
+                file.clone(),
+                None,
+                format!("topic `{topic}` message {k}: {m}"),
+            )
         };
         let stream = mcap::MessageStream::new(&bytes).map_err(|e| {
             PlanError::file(file.clone(), None, format!("not a readable MCAP file: {e}"))
@@ -415,7 +412,9 @@ pub fn read_with(
             let v = p.def.decode(&m.data).map_err(|e| at_msg(k, e))?;
             let mut u = Vec::with_capacity(inputs.len());
             for (i, path) in p.paths.iter().enumerate() {
-                let x = msg::number_at(&v, path).map_err(|e| at_msg(k, e))?;
+                let x = msg::number_at(&v, path).map_err(|e| {
+                    at_msg(k, format!("input `{}` = `{}`: {e}", inputs[i], path.text))
+                })?;
                 if !x.is_finite() {
                     return Err(at_msg(
                         k,

@@ -164,14 +164,16 @@ impl Definition {
         &self.schema.spec.name
     }
 
-    fn resolve(&self, scope: &MessageSpecification, ty: &ComplexType) -> Option<&MessageSpecification> {
+    fn resolve(
+        &self,
+        scope: &MessageSpecification,
+        ty: &ComplexType,
+    ) -> Option<&MessageSpecification> {
         let full = type_name(scope, ty);
         self.names
             .get(&full)
             .map(|&i| &self.schema.dependencies[i])
-            .or_else(|| {
-                (normalize(&self.schema.spec.name) == full).then_some(&self.schema.spec)
-            })
+            .or_else(|| (normalize(&self.schema.spec.name) == full).then_some(&self.schema.spec))
     }
 
     /// Every type `spec` uses is defined and none contains itself.
@@ -284,11 +286,9 @@ impl Definition {
                         builtin_name(b)
                     ))
                 }
-                (Step::Field(name), Leaf::Array(..)) => {
-                    return Err(format!(
-                        "{here} is an array: pick an element before `.{name}` (e.g. `{at}[0].{name}`)"
-                    ))
-                }
+                (Step::Field(name), Leaf::Array(..)) => return Err(format!(
+                    "{here} is an array: pick an element before `.{name}` (e.g. `{at}[0].{name}`)"
+                )),
                 (Step::Index(i), _) => {
                     return Err(format!("{here} is not an array, `[{i}]` does not apply"))
                 }
@@ -493,7 +493,10 @@ mod tests {
         assert!(ok("twist.linear.x").is_ok());
         assert!(ok("header.stamp.nanosec").is_ok());
         let e = ok("twist.linear.w").unwrap_err();
-        assert!(e.contains("no field `w` in `twist.linear`") && e.contains("x, y, z"), "{e}");
+        assert!(
+            e.contains("no field `w` in `twist.linear`") && e.contains("x, y, z"),
+            "{e}"
+        );
         let e = ok("header.frame_id").unwrap_err();
         assert!(e.contains("is a string, not a number"), "{e}");
         let e = ok("twist.linear").unwrap_err();
@@ -505,7 +508,10 @@ mod tests {
     #[test]
     fn a_definition_that_lacks_a_type_or_contains_itself_is_refused() {
         let e = Definition::parse("p/msg/A", "p/B b\n").err().unwrap();
-        assert!(e.contains("p/B, which the bag's definition does not include"), "{e}");
+        assert!(
+            e.contains("p/B, which the bag's definition does not include"),
+            "{e}"
+        );
         let e = Definition::parse(
             "p/msg/A",
             "B b\n================================================================================\nMSG: p/B\np/A a\n",
