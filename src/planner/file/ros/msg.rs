@@ -286,9 +286,11 @@ impl Definition {
                         builtin_name(b)
                     ))
                 }
-                (Step::Field(name), Leaf::Array(..)) => return Err(format!(
+                (Step::Field(name), Leaf::Array(..)) => {
+                    return Err(format!(
                     "{here} is an array: pick an element before `.{name}` (e.g. `{at}[0].{name}`)"
-                )),
+                ))
+                }
                 (Step::Index(i), _) => {
                     return Err(format!("{here} is not an array, `[{i}]` does not apply"))
                 }
