@@ -367,11 +367,13 @@ fn starts_steered() {
 /// (6 rad/s on the faster, inner wheel in `models/car.urdf`), then holding
 /// it: step responses at the shipped gains (2 N·m servos), standing and
 /// rolling, to a small angle, to the limit and past it. The measured
-/// bicycle angle follows the slewed command within 0.01°, never passes the
-/// commanded angle (nor so ±max_steer) by more than 0.005°, is within
-/// 0.005° of it 10 ms after the slew ends (86 ms for a full 25° step), and
+/// bicycle angle follows the slewed command within 0.1°, never passes the
+/// commanded angle (nor so ±max_steer) by more than 0.05°, is within
+/// 0.05° of it 10 ms after the slew ends (86 ms for a full 25° step), and
 /// each wheel stays inside its joint's limits. (Measured: 0.0013° of lag,
-/// 0.0011° of overshoot. A servo whose target jumps instead overshoots a
+/// 0.0011° of overshoot, 0.0002° off after 10 ms: the bounds leave the
+/// bicycle's assumption, wheels at the commanded angle, a margin of 40x
+/// and more. A servo whose target jumps instead overshoots a
 /// full step by 21 % on the inner wheel: the 2 N·m drive cannot stop the
 /// knuckle it accelerated.)
 #[test]
@@ -430,6 +432,13 @@ fn steering_servo_step_response() {
         }
         let end = slew_end.expect("the slew ends") as f64 * sim.dt;
         let what = format!("v = {v}, step to {cmd} rad (slew {end} s)");
+        // What the guide quotes (cargo test --release --test car steering -- --nocapture).
+        eprintln!(
+            "{what}: lag {:.4} deg, overshoot {:.4} deg, {:.4} deg off 10 ms after the slew",
+            lag.to_degrees(),
+            over.to_degrees(),
+            late.to_degrees()
+        );
         assert!(lag < 0.1f64.to_radians(), "{what}: lag {lag} rad");
         assert!(over < 0.05f64.to_radians(), "{what}: overshoot {over} rad");
         assert!(
