@@ -172,3 +172,30 @@ def test_horizon_defaults_to_the_plan_and_logs_are_written(disk, tmp_path):
     assert r.sim.t[-1] == pytest.approx(disk.duration)
     assert (r.log_dir / "summary.json").is_file() and (r.log_dir / "run.mcap").is_file()
     assert r.summary["plan"]["details"]["law"] == "python"
+
+
+def test_a_car_steered_by_angle_takes_v_and_steer(tmp_path):
+    """`steering = "angle"`: the law's state is (x, y, theta) and its answer
+    (v, steer); held over each period, the ideal run ends at the closed-form
+    circles of radius L / tan(steer)."""
+    s = anholonomy.load(SCENARIOS.parent / "examples" / "ros_bags" / "ackermann_lane_change.toml")
+    steps = [(0.5, 0.0), (0.5, 0.25), (0.25, -0.375), (0.0, 0.125), (-0.375, 0.3125), (0.5, 0.0)]
+    seen = []
+
+    def law(t, q):
+        seen.append(len(q))
+        return steps[min(round(t / 0.25), 5)]
+
+    r = anholonomy.run(s, law=law, period=0.25, horizon=1.5)
+    assert set(seen) == {3}
+    x, y, th = s.start
+    for v, steer in steps:
+        w = v * math.tan(steer) / 0.32  # models/car.urdf's wheelbase
+        if w == 0.0:
+            x, y = x + v * 0.25 * math.cos(th), y + v * 0.25 * math.sin(th)
+        else:
+            th1 = th + w * 0.25
+            x, y = x + v / w * (math.sin(th1) - math.sin(th)), y - v / w * (math.cos(th1) - math.cos(th))
+            th = th1
+    np.testing.assert_allclose(r.ideal.q[-1], [x, y, th], rtol=0, atol=1e-9)
+    assert r.metrics["steer_clipped_fraction"] == 0.0

@@ -242,7 +242,7 @@ registry! {
             planners: [],
             outside: |m| Some(systems::diff_drive::build(m)),
         }
-        /// Car-like robot: kinematic bicycle (x, y, θ, φ), inputs (v, φ').
+        /// Car-like robot: kinematic bicycle (x, y, θ, φ), inputs (v, φ'); steered by angle (x, y, θ), inputs (v, φ).
         "car" => Car(CarConfig) {
             required: crate::physics::car::REQUIRED,
             planners: [],
@@ -270,7 +270,7 @@ registry! {
         "sphere_triangle" => SphereTriangle(SphereTriangleParams),
         /// Seed 004 dipolar inverse Lyapunov function, feedback law of Eq. 18.
         "dilf" => Dilf(DilfParams),
-        /// A plan read from a CSV, JSON or MCAP file (any model).
+        /// A plan read from a CSV, JSON or MCAP file, or a ROS 2 bag's command topic (any model).
         "file" => File(FilePlanParams),
         /// A feedback law in another process, spoken to over stdin/stdout (any model).
         "external" => External(ExternalParams),

@@ -1,5 +1,6 @@
 //! The car: kinematic bicycle (x, y, θ, φ; inputs v, φ') on a four-wheel
-//! Ackermann URDF (`models/car.urdf` or the user's own).
+//! Ackermann URDF (`models/car.urdf` or the user's own); with `steering =
+//! "angle"` the bicycle is steered by angle (x, y, θ; inputs v, φ).
 //!
 //! No built-in planner: plans come from a plan file or an external feedback
 //! law (`[planner] kind = "file"` or `"external"`), which wrap this system.
@@ -12,7 +13,7 @@ use super::wheeled::{slip_metrics, SLIP_METRICS};
 use super::System;
 use crate::error::SetupError;
 use crate::integrate::Trajectory;
-use crate::model::bicycle::Bicycle;
+use crate::model::bicycle::{Bicycle, Steering};
 use crate::model::{KinematicModel, State};
 use crate::physics::car::{self as phys, CarNames, CarPhysics, REQUIRED};
 use crate::physics::required::Named;
@@ -24,10 +25,10 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 
-/// A car (kinematic bicycle: x, y, θ, φ; inputs v, φ') on four wheels with
-/// Ackermann steering and rear-wheel drive; wheel radii and tracks are read
-/// from the URDF. No built-in planner: plans come from a file or an
-/// external law.
+/// A car (kinematic bicycle: x, y, θ, φ; inputs v, φ'; or steered by angle:
+/// x, y, θ; inputs v, φ) on four wheels with Ackermann steering and
+/// rear-wheel drive; wheel radii and tracks are read from the URDF. No
+/// built-in planner: plans come from a file or an external law.
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct CarConfig {
@@ -41,6 +42,12 @@ pub struct CarConfig {
     #[serde(default = "default_max_steer")]
     #[schemars(extend("exclusiveMinimum" = 0, "exclusiveMaximum" = 90))]
     pub max_steer_deg: f64,
+    /// The second input: `"rate"` (`steer_rate`, φ' in rad/s; φ is a state) or
+    /// `"angle"` (`steer`, φ in rad, as Ackermann messages and most car planners
+    /// give it; states x, y, θ; the steering joints are position-servoed to
+    /// the commanded angle).
+    #[serde(default)]
+    pub steering: Steering,
     /// The body link; its +x axis is the heading.
     #[serde(default = "default_base")]
     pub base_link: String,
@@ -119,6 +126,7 @@ pub fn build(cfg: &CarConfig) -> Result<Box<dyn System>, SetupError> {
         model: Bicycle {
             wheelbase: cfg.wheelbase,
             max_steer: cfg.max_steer_deg.to_radians(),
+            steering: cfg.steering,
         },
         names: CarNames {
             base: cfg.base_link.clone(),
@@ -142,10 +150,13 @@ impl System for Car {
     fn model(&self) -> &dyn KinematicModel {
         &self.model
     }
-    /// v in m/s, φ' in rad/s (for built-in open-loop planners; plan files
-    /// and external laws set their own).
+    /// v in m/s, φ' in rad/s or φ in rad (for built-in open-loop planners;
+    /// plan files and external laws set their own).
     fn default_max_rate(&self) -> Vec<f64> {
-        vec![0.5, 1.0]
+        match self.model.steering {
+            Steering::Rate => vec![0.5, 1.0],
+            Steering::Angle => vec![0.5, self.model.max_steer],
+        }
     }
     fn plan(&self, _start: &State, _goal: &State, _limits: &Limits) -> Result<Plan, PlanError> {
         Err(no_planner("car"))
@@ -201,7 +212,9 @@ impl System for Car {
         out
     }
     /// Slip maxima, and the fraction of the ideal run's samples at which
-    /// the plan asked to steer past the limit (the model dropped it).
+    /// the plan asked to steer past the limit (a rate pushing past it, which
+    /// the model dropped, or an angle beyond it, which the model stopped at
+    /// the limit).
     fn extra_metrics(
         &self,
         _goal: &State,
@@ -212,7 +225,7 @@ impl System for Car {
         let mut out = slip_metrics(sim);
         let n = ideal.q.len().saturating_sub(1);
         let clipped = (0..n)
-            .filter(|&k| self.model.clipped(ideal.q[k][3], ideal.u[k][1]))
+            .filter(|&k| self.model.sample_clipped(&ideal.q[k], &ideal.u[k]))
             .count();
         let frac = if n == 0 {
             0.0

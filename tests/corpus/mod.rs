@@ -152,6 +152,7 @@ pub mod faults;
 mod files;
 mod held_out;
 mod own_plan;
+mod ros_bags;
 mod runaway;
 mod studies;
 mod tables;
@@ -164,6 +165,7 @@ pub fn corpus() -> Vec<Case> {
     dilf::cases(&mut c);
     files::cases(&mut c);
     own_plan::cases(&mut c);
+    ros_bags::cases(&mut c);
     runaway::cases(&mut c);
     held_out::cases(&mut c);
     c.0

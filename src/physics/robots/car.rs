@@ -21,14 +21,20 @@
 //! scrub radius: a wheel steered in place turns about its contact point).
 //!
 //! Actuation: the bicycle angle φ commanded by integrating φ' (stopped at
-//! ±`max_steer` like the model); each steering joint servoed to its
-//! Ackermann angle of that φ, each rear wheel to its speed for the measured
-//! φ. Drive torques are capped at the joints' `<limit effort>` (`[sim]
-//! motor_max_torque` when the URDF gives none).
+//! ±`max_steer` like the model), or, steered by angle
+//! ([`SteeringInput::Angle`]), the commanded angle itself within ±`max_steer`;
+//! each steering joint servoed to its Ackermann angle of that φ (by angle:
+//! the servo's commanded φ slews to the commanded angle as fast as the
+//! joints' `<limit velocity>` allow, the faster wheel at its limit, then
+//! holds it; without a velocity limit it jumps, and the knuckle gets there
+//! as fast as the gains, its inertia and the joint's effort allow), each
+//! rear wheel to its speed for the measured φ. Drive torques are capped at the joints' `<limit
+//! effort>` (`[sim] motor_max_torque` when the URDF gives none).
 //!
 //! Read-back: (x, y) of the rear-axle midpoint, θ the body's yaw
 //! (unwrapped), φ the bicycle angle of the measured wheel angles (the mean
-//! of what each front wheel's angle implies).
+//! of what each front wheel's angle implies); steered by angle the state is
+//! (x, y, θ) and φ is read only for the differential and the channels.
 //!
 //! Channels: per wheel the contact-point velocity along and across it
 //! (`slip_<wheel>_lon`, `slip_<wheel>_lat`, m/s, wheels `rear_left`,
@@ -38,7 +44,9 @@
 //! `rim_speed_rear_right`, m/s).
 
 use crate::error::SetupError;
-use crate::model::bicycle::{ackermann, bicycle_angle, rear_speeds, Bicycle};
+use crate::model::bicycle::{
+    ackermann, ackermann_slope, bicycle_angle, rear_speeds, Bicycle, Steering as SteeringInput,
+};
 use crate::model::{Input, State};
 use crate::physics::diff_drive::effort;
 use crate::physics::rapier::prelude::*;
@@ -119,6 +127,8 @@ pub struct Steering {
     pub limits: [f64; 2],
     /// Torque limit from `<limit effort>`, N·m.
     pub effort: Option<f64>,
+    /// Speed limit from `<limit velocity>`, rad/s (`None` when not positive).
+    pub velocity: Option<f64>,
     /// The knuckle's rest orientation in the body frame.
     rest: Rotation,
 }
@@ -225,6 +235,8 @@ impl CarGeometry {
                 sign: f(up.z).signum(),
                 limits: [s.limit.lower, s.limit.upper],
                 effort: effort(robot, sj),
+                velocity: (s.limit.velocity.is_finite() && s.limit.velocity > 0.0)
+                    .then_some(s.limit.velocity),
                 rest: in_body.rotation,
             });
             pivots.push(pivot);
@@ -290,18 +302,22 @@ pub struct CarPhysics {
     knuckles: [RigidBodyHandle; 2],
     rear_drives: [Drive; 2],
     steer_drives: [Drive; 2],
-    /// The commanded bicycle angle (the integral of φ', held at the limit).
+    /// The commanded bicycle angle (the integral of φ', held at the limit;
+    /// steered by angle, the last commanded angle within the limit).
     phi_cmd: f64,
     dt: f64,
     theta: f64,
     /// Measured front wheel angles, rad.
     delta: [f64; 2],
+    /// The bicycle angle of the measured wheel angles, rad.
+    phi: f64,
     q: State,
 }
 
 impl CarPhysics {
     /// Build the car at `start` = (x, y, θ, φ) on the ground, front wheels
-    /// at the Ackermann angles of φ.
+    /// at the Ackermann angles of φ (steered by angle: `start` = (x, y, θ),
+    /// front wheels straight).
     pub fn new(
         robot: &urdf_rs::Robot,
         urdf_dir: &Path,
@@ -311,12 +327,16 @@ impl CarPhysics {
         sim: &PhysicsSettings,
     ) -> Result<Self, SetupError> {
         let geom = CarGeometry::read(robot, names, model)?;
-        if start[3].abs() > model.max_steer + 1e-12 {
+        let phi0 = match model.steering {
+            SteeringInput::Rate => start[3],
+            SteeringInput::Angle => 0.0,
+        };
+        if phi0.abs() > model.max_steer + 1e-12 {
             return Err(SetupError::key(
                 "start",
                 format!(
                     "steering angle {}° is beyond model.max_steer_deg = {}",
-                    crate::numfmt::readable(start[3].to_degrees()),
+                    crate::numfmt::readable(phi0.to_degrees()),
                     crate::numfmt::readable(model.max_steer.to_degrees())
                 ),
             ));
@@ -361,7 +381,7 @@ impl CarPhysics {
             sw.require_link(&geom.steer[1].knuckle)?,
         ];
         // Initial steering: turn each knuckle and its wheel about the steering axis.
-        let delta0 = ackermann(start[3], geom.wheelbase, geom.front_half_track);
+        let delta0 = ackermann(phi0, geom.wheelbase, geom.front_half_track);
         for i in 0..2 {
             if delta0[i] == 0.0 {
                 continue;
@@ -401,11 +421,15 @@ impl CarPhysics {
             knuckles,
             rear_drives: rear_drives.try_into().expect("two drives"),
             steer_drives: steer_drives.try_into().expect("two drives"),
-            phi_cmd: start[3],
+            phi_cmd: phi0,
             dt: sim.dt,
             theta: start[2],
             delta: delta0,
-            q: State::zeros(4),
+            phi: phi0,
+            q: State::zeros(match model.steering {
+                SteeringInput::Rate => 4,
+                SteeringInput::Angle => 3,
+            }),
             geom,
         };
         me.read_back();
@@ -416,6 +440,17 @@ impl CarPhysics {
     /// The geometry read from the URDF.
     pub fn geometry(&self) -> &CarGeometry {
         &self.geom
+    }
+
+    /// Steered by angle: the fastest the commanded bicycle angle may change
+    /// now, rad/s, so that neither wheel's Ackermann angle turns faster than
+    /// its joint's `<limit velocity>` (infinite without one).
+    pub fn max_phi_rate(&self) -> f64 {
+        let g = &self.geom;
+        let slope = ackermann_slope(self.phi_cmd, g.wheelbase, g.front_half_track);
+        (0..2)
+            .filter_map(|i| g.steer[i].velocity.map(|v| v / slope[i].abs()))
+            .fold(f64::INFINITY, f64::min)
     }
 
     fn read_back(&mut self) {
@@ -432,7 +467,10 @@ impl CarPhysics {
             self.delta[i] = angles::yaw(&rel);
             phi += 0.5 * bicycle_angle(self.delta[i], i, l, h);
         }
-        self.q.copy_from_slice(&[f(c.x), f(c.y), self.theta, phi]);
+        self.phi = phi;
+        let q = [f(c.x), f(c.y), self.theta, phi];
+        let n = self.q.len();
+        self.q.copy_from_slice(&q[..n]);
     }
 }
 
@@ -443,13 +481,27 @@ impl PhysicsSystem for CarPhysics {
 
     fn apply(&mut self, u: &Input) {
         let g = &self.geom;
-        let rate = if self.model.clipped(self.phi_cmd, u[1]) {
-            0.0
-        } else {
-            u[1]
-        };
         let m = self.model.max_steer;
-        let next = (self.phi_cmd + self.dt * rate).clamp(-m, m);
+        let next = match self.model.steering {
+            SteeringInput::Rate => {
+                let rate = if self.model.clipped(self.phi_cmd, u[1]) {
+                    0.0
+                } else {
+                    u[1]
+                };
+                (self.phi_cmd + self.dt * rate).clamp(-m, m)
+            }
+            SteeringInput::Angle => {
+                let target = u[1].clamp(-m, m);
+                let step = target - self.phi_cmd;
+                (self.phi_cmd
+                    + step.clamp(
+                        -self.dt * self.max_phi_rate(),
+                        self.dt * self.max_phi_rate(),
+                    ))
+                .clamp(-m, m)
+            }
+        };
         let now_d = ackermann(self.phi_cmd, g.wheelbase, g.front_half_track);
         let next_d = ackermann(next, g.wheelbase, g.front_half_track);
         for (i, drive) in self.steer_drives.iter_mut().enumerate() {
@@ -460,7 +512,7 @@ impl PhysicsSystem for CarPhysics {
         }
         self.phi_cmd = next;
         // The electronic differential reads the measured steering angle.
-        let v = rear_speeds(u[0], self.q[3], g.wheelbase, g.rear_half_track);
+        let v = rear_speeds(u[0], self.phi, g.wheelbase, g.rear_half_track);
         for ((wheel, drive), v) in self.geom.rear.iter().zip(&mut self.rear_drives).zip(v) {
             self.sim.drive(drive, wheel.rate(v));
         }

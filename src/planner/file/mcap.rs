@@ -5,12 +5,11 @@
 //! `{"t": <s>, "segment": "<label>", "values": {"<input>": <number>, ...}}`;
 //! the segment becomes the sample's label.
 
-use super::{At, Reader, Samples, MCAP_MAX_BYTES};
+use super::{At, Reader, Samples};
 use crate::planner::json_numbers::{walk, Step};
 use crate::planner::PlanError;
 use serde::Deserialize;
 use std::collections::BTreeMap;
-use std::io::Read;
 
 #[derive(Deserialize)]
 struct Message {
@@ -22,15 +21,7 @@ struct Message {
 
 /// Read the messages of `topic` in a run log.
 pub fn read(mut r: Reader<'_>, topic: &str) -> Result<Samples, PlanError> {
-    crate::input::check_regular(r.file, "plan file", MCAP_MAX_BYTES)
-        .map_err(|m| r.file_error(m))?;
-    let mut bytes = Vec::new();
-    std::fs::File::open(r.file)
-        .and_then(|f| f.take(MCAP_MAX_BYTES + 1).read_to_end(&mut bytes))
-        .map_err(|e| r.file_error(format!("cannot read plan file: {e}")))?;
-    if bytes.is_empty() {
-        return Err(r.file_error("empty file: expected a run.mcap"));
-    }
+    let bytes = super::ros::read_bytes(r.file)?;
     let stream = mcap::MessageStream::new(&bytes)
         .map_err(|e| r.file_error(format!("not a readable MCAP file: {e}")))?;
     let names: Vec<String> = r.input_names().iter().map(|s| s.to_string()).collect();

@@ -8,7 +8,11 @@
 //!   `"label": [...]` ([`json`]);
 //! * `.mcap`: the `/plan/command` messages of another run's `run.mcap` (or
 //!   another topic of the same form, `topic = "/sim/command"`), so a logged
-//!   plan replays on a changed model or settings ([`mcap`]).
+//!   plan replays on a changed model or settings ([`mcap`]);
+//! * a ROS 2 bag (rosbag2, MCAP storage): its directory (with
+//!   `metadata.yaml`) or its `.mcap` file; one command topic's CDR messages,
+//!   decoded through the definition the bag stores, give the inputs
+//!   ([`ros`]).
 //!
 //! Every sample is checked before anything runs: `t` starts at 0 and
 //! increases strictly, every value is finite, every input has a column and
@@ -23,13 +27,16 @@
 pub mod csv;
 pub mod json;
 pub mod mcap;
+pub mod ros;
 
 use crate::error::SetupError;
 use crate::model::Input;
 use crate::plan::{ControlLaw, Plan, Segment};
 use crate::planner::PlanError;
+pub use ros::BagTime;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
+use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
 
@@ -61,23 +68,41 @@ impl Hold {
     }
 }
 
-/// A plan read from a file (CSV, JSON or a run's MCAP log), for any model:
-/// open-loop inputs held or interpolated between samples.
+/// A plan read from a file (CSV, JSON, a run's MCAP log or a ROS 2 bag), for
+/// any model: open-loop inputs held or interpolated between samples.
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct FilePlanParams {
     /// The plan file, relative to the scenario file: `.csv` (header `t` and the
-    /// model's input names), `.json` (`{"t": [...], "u": {"name": [...]}}`) or a
-    /// run's `run.mcap`. `t` starts at 0 and increases strictly; its last value
+    /// model's input names), `.json` (`{"t": [...], "u": {"name": [...]}}`), a
+    /// run's `run.mcap`, or a ROS 2 bag (its directory with `metadata.yaml`, or
+    /// its `.mcap`). `t` starts at 0 and increases strictly; its last value
     /// is the plan's duration.
     pub path: PathBuf,
     /// What the input does between two samples.
     #[serde(default)]
     pub hold: Hold,
-    /// MCAP files only: the topic to read; unset reads `/plan/command` (the
-    /// plan), `/sim/command` holds what the physics applied.
+    /// MCAP files and ROS 2 bags only: the topic to read. Unset, a run log's
+    /// `/plan/command` (the plan; `/sim/command` holds what the physics
+    /// applied), or a bag's one topic whose type gives the model's inputs.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub topic: Option<String>,
+    /// ROS 2 bags only: where `t` comes from, `"log"` (when the recorder
+    /// logged each message) or `"header"` (the message's `header.stamp`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub time: Option<BagTime>,
+    /// ROS 2 bags only: the plan's length, s from the first message (messages
+    /// from then on are not used). Unset: one median message period after the
+    /// last message.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schemars(extend("exclusiveMinimum" = 0))]
+    pub duration: Option<f64>,
+    /// ROS 2 bags only: the message field each model input is read from, as
+    /// `input = "field.path"` (e.g. `v = "twist.linear.x"`, `omega =
+    /// "rates[2]"`). Twist and TwistStamped give `v` and `omega`,
+    /// AckermannDrive and AckermannDriveStamped `v` and `steer` by default.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub map: BTreeMap<String, String>,
     /// Directory `path` is relative to (the scenario's; set by the scenario layer).
     #[serde(skip)]
     pub base: PathBuf,
@@ -90,8 +115,10 @@ pub enum Format {
     Csv,
     /// A JSON object of arrays.
     Json,
-    /// A run log.
+    /// A run log or a ROS 2 bag's MCAP file.
     Mcap,
+    /// A ROS 2 bag directory (`metadata.yaml` and its files).
+    Bag,
 }
 
 impl FilePlanParams {
@@ -100,31 +127,64 @@ impl FilePlanParams {
         self.base.join(&self.path)
     }
 
-    /// The format from the extension; errors name `planner.path` or `planner.topic`.
+    /// The bag directory, when `path` names one (or its `metadata.yaml`).
+    pub fn bag_dir(&self) -> Option<PathBuf> {
+        let f = self.file();
+        if f.is_dir() {
+            Some(f)
+        } else if f.file_name().is_some_and(|n| n == "metadata.yaml") {
+            f.parent().map(Path::to_path_buf)
+        } else {
+            None
+        }
+    }
+
+    /// The format from the extension (or a bag directory); errors name the
+    /// `planner` key at fault.
     pub fn format(&self) -> Result<Format, SetupError> {
         let ext = self
             .path
             .extension()
             .map(|e| e.to_string_lossy().to_ascii_lowercase());
         let format = match ext.as_deref() {
+            _ if self.bag_dir().is_some() => Format::Bag,
             Some("csv") => Format::Csv,
             Some("json") => Format::Json,
             Some("mcap") => Format::Mcap,
+            Some("db3") => {
+                return Err(SetupError::key(
+                    "planner.path",
+                    format!(
+                        "{}: a rosbag2 sqlite3 file, which is not read here: {}",
+                        self.path.display(),
+                        ros::metadata::CONVERT
+                    ),
+                ))
+            }
+            // A bag directory is named without an extension: one that is
+            // not there is a missing file, not an unknown format.
+            None if !self.file().exists() => {
+                return Err(SetupError::key(
+                    "planner.path",
+                    format!("file not found: {}", self.file().display()),
+                ))
+            }
             other => {
                 return Err(SetupError::key(
                     "planner.path",
                     format!(
-                        "{}: unknown plan file format{} (use a .csv, .json or .mcap file)",
+                        "{}: unknown plan file format{} (use a .csv, .json or .mcap file, or a ROS 2 bag's directory)",
                         self.path.display(),
                         other.map(|e| format!(" `.{e}`")).unwrap_or_default()
                     ),
                 ))
             }
         };
-        if self.topic.is_some() && format != Format::Mcap {
+        let mcap = matches!(format, Format::Mcap | Format::Bag);
+        if self.topic.is_some() && !mcap {
             return Err(SetupError::key(
                 "planner.topic",
-                "only MCAP plan files have topics (drop it)",
+                "only MCAP plan files and ROS 2 bags have topics (drop it)",
             ));
         }
         if let Some(t) = &self.topic {
@@ -132,7 +192,62 @@ impl FilePlanParams {
                 return Err(SetupError::key("planner.topic", "must not be empty"));
             }
         }
+        let only_bags = |key: &str| {
+            SetupError::key(
+                key,
+                "only ROS 2 bags take it (a CSV's or JSON's times and columns are its own): drop it",
+            )
+        };
+        if !mcap {
+            if self.time.is_some() {
+                return Err(only_bags("planner.time"));
+            }
+            if self.duration.is_some() {
+                return Err(only_bags("planner.duration"));
+            }
+            if let Some(k) = self.map.keys().next() {
+                return Err(only_bags(&format!("planner.map.{k}")));
+            }
+        }
+        if let Some(d) = self.duration {
+            if !(d > 0.0 && d <= crate::plan::MAX_DURATION) {
+                return Err(SetupError::key(
+                    "planner.duration",
+                    format!(
+                        "must be in (0, {}] s",
+                        crate::numfmt::shortest(crate::plan::MAX_DURATION)
+                    ),
+                ));
+            }
+        }
+        for (k, v) in &self.map {
+            let key = format!("planner.map.{k}");
+            ros::msg::FieldPath::parse(v).map_err(|e| SetupError::key(&key, e))?;
+        }
         Ok(format)
+    }
+
+    /// The bag keys (`topic`, `time`, `map`, `duration`).
+    pub fn bag_keys(&self) -> ros::BagKeys<'_> {
+        ros::BagKeys {
+            topic: self.topic.as_deref(),
+            time: self.time.unwrap_or_default(),
+            map: &self.map,
+            duration: self.duration,
+        }
+    }
+
+    /// Whether any key only a ROS 2 bag takes is set.
+    fn has_bag_keys(&self) -> Option<&'static str> {
+        if self.time.is_some() {
+            Some("time")
+        } else if self.duration.is_some() {
+            Some("duration")
+        } else if !self.map.is_empty() {
+            Some("map")
+        } else {
+            None
+        }
     }
 
     /// The checks that need no file: format, and that the file exists.
@@ -294,6 +409,14 @@ impl<'a> Reader<'a> {
 
 /// Read and check the plan file of `params` for a model with `input_names`.
 pub fn read(params: &FilePlanParams, input_names: &[&str]) -> Result<Samples, PlanError> {
+    Ok(read_detailed(params, input_names)?.0)
+}
+
+/// [`read`], and what a ROS 2 bag's samples were read from.
+fn read_detailed(
+    params: &FilePlanParams,
+    input_names: &[&str],
+) -> Result<(Samples, Option<ros::BagInfo>), PlanError> {
     let file = params.file();
     let format = params.format().map_err(|e| PlanError::InvalidParameter {
         name: e
@@ -303,17 +426,55 @@ pub fn read(params: &FilePlanParams, input_names: &[&str]) -> Result<Samples, Pl
             .into(),
         reason: e.reason().into(),
     })?;
-    let reader = Reader::new(&file, input_names);
+    for k in params.map.keys() {
+        if !input_names.contains(&k.as_str()) {
+            return Err(PlanError::InvalidParameter {
+                name: format!("map.{k}"),
+                reason: format!(
+                    "`{k}` is not an input of this model (its inputs: {})",
+                    input_names.join(", ")
+                ),
+            });
+        }
+    }
+    let keys = params.bag_keys();
     match format {
-        Format::Csv => csv::read(reader),
-        Format::Json => json::read(reader),
-        Format::Mcap => mcap::read(reader, params.topic.as_deref().unwrap_or(DEFAULT_TOPIC)),
+        Format::Csv => Ok((csv::read(Reader::new(&file, input_names))?, None)),
+        Format::Json => Ok((json::read(Reader::new(&file, input_names))?, None)),
+        Format::Mcap => {
+            let inv = ros::Inventory::scan(std::slice::from_ref(&file))?;
+            let default = inv.has(DEFAULT_TOPIC).then_some(DEFAULT_TOPIC);
+            let topic = params.topic.as_deref().or(default);
+            let ros = inv.channels.iter().any(|c| c.encoding == "cdr");
+            if topic.is_some_and(|t| inv.is_json(t)) || !ros {
+                let topic = topic.unwrap_or(DEFAULT_TOPIC);
+                if let Some(k) = params.has_bag_keys() {
+                    return Err(PlanError::InvalidParameter {
+                        name: k.into(),
+                        reason: format!(
+                            "only ROS 2 bags take it; topic `{topic}` of {} is a run log's (JSON)",
+                            params.path.display()
+                        ),
+                    });
+                }
+                let samples = mcap::read(Reader::new(&file, input_names), topic)?;
+                return Ok((samples, None));
+            }
+            let (s, info) = ros::read_with(&file, &inv, input_names, &keys)?;
+            Ok((s, Some(info)))
+        }
+        Format::Bag => {
+            let dir = params.bag_dir().unwrap_or(file);
+            let files = ros::metadata::bag_files(&dir)?;
+            let (s, info) = ros::read(&dir, &files, input_names, &keys)?;
+            Ok((s, Some(info)))
+        }
     }
 }
 
 /// The plan of `params` for a model with `input_names`.
 pub fn plan(params: &FilePlanParams, input_names: &[&str]) -> Result<Plan, PlanError> {
-    let samples = read(params, input_names)?;
+    let (samples, bag) = read_detailed(params, input_names)?;
     let mut details = serde_json::json!({
         "file": params.path,
         "hold": params.hold.name(),
@@ -321,6 +482,13 @@ pub fn plan(params: &FilePlanParams, input_names: &[&str]) -> Result<Plan, PlanE
     });
     if let Some(t) = &params.topic {
         details["topic"] = serde_json::json!(t);
+    }
+    if let Some(b) = bag {
+        details["topic"] = serde_json::json!(b.topic);
+        details["message_type"] = serde_json::json!(b.type_name);
+        details["messages"] = serde_json::json!(b.messages);
+        details["time"] = serde_json::json!(params.time.unwrap_or_default().name());
+        details["fields"] = serde_json::json!(b.paths.into_iter().collect::<BTreeMap<_, _>>());
     }
     Ok(samples.into_plan(input_names.len(), params.hold, details))
 }
