@@ -38,6 +38,7 @@ pub fn bag_files(dir: &Path) -> Result<Vec<PathBuf>, PlanError> {
             path,
             line,
             message,
+            ..
         } => PlanError::file(path, line, message),
         other => PlanError::file(meta.clone(), None, other.to_string()),
     })?;
