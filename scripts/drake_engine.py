@@ -92,9 +92,10 @@ DEFAULT = {
     "sphere_gain": 1.0,
     "target": "end",  # desired angle at the step's end ("start": at its start)
     # Point contact: Drake's default stiffness comes from the penetration allowance
-    # (1 mm); None keeps it. Hydroelastic modulus, Pa, of the compliant geometry.
+    # (1 mm); None keeps it. Hydroelastic modulus, Pa, of the compliant geometry (1 GPa, a
+    # hard plastic: at 0.1 GPa the ball rolling at 0.5 rad/s misses r w by 1.1e-3).
     "point_stiffness": None,
-    "hydro_modulus": 1.0e8,
+    "hydro_modulus": 1.0e9,
     # Mesh resolution hint of compliant geometry, a fraction of its radius.
     "hydro_resolution": 0.1,
     "hunt_crossley": 0.0,

@@ -939,6 +939,10 @@ def main():
         FACTORS[:] = [float(f) for f in args.factors.split(",")]
     if args.table:
         results = load_results(args.out)
+        print("# Work-precision tables\n\nWritten by `scripts/work_precision.py --table` from "
+              "`docs/src/images/work_precision_*.json` (the method: [Performance](performance.md)). "
+              "Cells marked ≈ are extrapolated (a power law through the two smallest steps), the others "
+              "measured; ratios give the range over the repeats (least over most CPU time, most over least).")
         for head, text in (("Frontier (physical targets)", frontier_table(results)),
                            ("Gate-normalised (secondary)", gate_table(results)),
                            ("MuJoCo's best configuration per dt", best_table(results)),
