@@ -784,12 +784,12 @@ def frontier_cell(key, res, eng, ref, level):
     if not all(math.isfinite(v) and v > 0 for v in e) or e[1] <= e[0]:
         return None
     p = math.log(e[1] / e[0]) / math.log(rows[1]["dt"] / rows[0]["dt"])
+    # An error that falls slower than sqrt(dt), or a step 100 times below the smallest
+    # measured: no trend to extrapolate through.
+    if p < 0.5 or math.log(e[0]) / p > math.log(100):
+        return None
     dt = rows[0]["dt"] * e[0] ** (-1 / p)
     scale = rows[0]["dt"] / dt
-    if p < 0.5 or scale > 100:
-        # An error that falls slower than sqrt(dt), or a step 100 times below the smallest
-        # measured: no trend to extrapolate through.
-        return None
     return {"cpu_s": rows[0][eng]["cpu_s"] * scale, "dt": dt,
             "cpu_all": [c * scale for c in rows[0][eng]["cpu_all"]], "measured": False, "p": p}
 
