@@ -115,18 +115,25 @@ TARGETS = {
     # alignment. The arm's joints are driven and followed by every engine's servo.
     "space": ([("base attitude", "tracking_theta0_deg_max", "deg")],
               [("0.1°", {"base attitude": 0.1}), ("0.01°", {"base attitude": 0.01})]),
-    # 88.7 s of open-loop driving over ~20 m: 10 cm is the task's own tolerance (the planner's
-    # epsilon = 0.1), 1 cm and 1 mm the general position targets; headings as for the disk.
+    # 88.7 s of open-loop driving over ~20 m: 1 m (5 % of the path) and 10 deg is what dead
+    # reckoning over such a drive is asked for, 10 cm and 5 deg the task's own tolerance (the
+    # planner's epsilon = 0.1 m and 0.1 rad), 1 cm and 1 deg the general targets.
     "rover": ([("position", "tracking_position_max", "m"), ("heading", "tracking_theta_deg_max", "deg")],
-              [("10 cm, 5°", {"position": 0.1, "heading": 5.0}),
-               ("1 cm, 1°", {"position": 0.01, "heading": 1.0}),
-               ("1 mm, 0.1°", {"position": 0.001, "heading": 0.1})]),
+              [("1 m, 10°", {"position": 1.0, "heading": 10.0}),
+               ("10 cm, 5°", {"position": 0.1, "heading": 5.0}),
+               ("1 cm, 1°", {"position": 0.01, "heading": 1.0})]),
     # A 1 m ball: its task is a reorientation; 1 deg of orientation is 1.7 cm of surface arc,
     # 0.1 deg 1.7 mm, matched with the position targets.
     "sphere": ([("position", "tracking_position_max", "m"), ("orientation", "tracking_orientation_deg_max", "deg")],
                [("1 cm, 1°", {"position": 0.01, "orientation": 1.0}),
                 ("1 mm, 0.1°", {"position": 0.001, "orientation": 0.1})]),
 }
+
+
+# No extrapolation for the rover: against the ideal run its error is the wheels' slip (17 m on
+# every engine at every dt), and its converged runs are themselves unsettled at the targets
+# (the harness's run at 0.5 ms ends 0.24 m from its run at 0.125 ms); no power law holds there.
+NO_TREND = {"rover"}
 
 
 def goal_metric(metric):
@@ -779,6 +786,8 @@ def frontier_cell(key, res, eng, ref, level):
     if ok:
         best = min(ok, key=lambda r: r[eng]["cpu_s"])
         return {"cpu_s": best[eng]["cpu_s"], "dt": best["dt"], "cpu_all": best[eng]["cpu_all"], "measured": True}
+    if key in NO_TREND:
+        return None
     rows = sorted(res["rows"], key=lambda r: r["dt"])[:2]
     e = [error_of(key, r[eng], ref, level) for r in rows]
     if not all(math.isfinite(v) and v > 0 for v in e) or e[1] <= e[0]:
@@ -857,8 +866,15 @@ def best_table(results):
         for e in res["mujoco_sweep"]:
             if e.get("best"):
                 lines.append(f"| {res['system']} | {e['dt'] * 1e3:g} ms | {mj_label(e['config'], key)} | "
-                             f"{e['objective']:.3g} | {e['cpu_s'] * 1e3:.3g} ms |")
+                             f"{objective_of(key, e):.3g} | {e['cpu_s'] * 1e3:.3g} ms |")
     return "\n".join(lines)
+
+
+def objective_of(key, e):
+    """A search row's error / the system's tightest target, from its stored errors."""
+    if any(v is None for v in e["errors"].values()):
+        return math.inf
+    return max(e["errors"][q] / b for q, b in tight(key).items())
 
 
 def fmt_err(v, unit):
@@ -885,7 +901,7 @@ def sweep_table(results):
             b = "**" if e.get("best") else ""
             out.append(f"| {e['dt'] * 1e3:g} ms | {b}{what}{b} | "
                        + " | ".join(fmt_err(e["errors"][n], u) for n, _m, u in q)
-                       + f" | {e['objective']:.3g} | {e['cpu_s'] * 1e3:.3g} ms |")
+                       + f" | {objective_of(key, e):.3g} | {e['cpu_s'] * 1e3:.3g} ms |")
     return "\n".join(out)
 
 
