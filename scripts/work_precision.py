@@ -912,8 +912,8 @@ def sweep_table(results):
 
 def plot(key, res, out_dir):
     quantities, levels = TARGETS[key]
-    fig, axes = plt.subplots(2, len(quantities), figsize=(6.2 * len(quantities), 8.2), constrained_layout=True,
-                             squeeze=False)
+    fig, axes = plt.subplots(2, len(quantities), figsize=(max(6.2 * len(quantities), 8.5), 8.2),
+                             constrained_layout=True, squeeze=False)
     for row_i, (ref, rname) in enumerate((("ideal", "ideal run"),
                                           ("converged", f"own run at {res['reference_dt'] * 1e3:g} ms"))):
         for col, (qn, metric, unit) in enumerate(quantities):
@@ -942,7 +942,8 @@ def plot(key, res, out_dir):
             ax.set_ylabel(f"{what} {qn} error vs {rname}, {'mm' if unit == 'm' else 'deg'}")
             ax.grid(True, which="both", alpha=0.3)
     axes[0][0].legend(fontsize=7)
-    fig.suptitle(f"{res['system']} ({res['scenario']}): points labelled with dt in ms; dotted: the targets")
+    fig.suptitle(f"{res['system']} ({res['scenario']}): points labelled with dt in ms; dotted: the targets",
+                 fontsize=10)
     path = os.path.join(out_dir, f"work_precision_{key}.png")
     fig.savefig(path, dpi=100)
     plt.close(fig)
