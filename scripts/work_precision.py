@@ -1,46 +1,54 @@
 #!/usr/bin/env python3
-"""Work-precision diagrams: accuracy per CPU-second, the harness (Rapier) against MuJoCo.
+"""Work-precision in physical units: the harness (Rapier), MuJoCo and Drake on the same tasks.
 
 For each system (rolling disk, space robot, rover, rolling sphere) one shipped
-scenario runs at several physics steps dt, from the scenario's own dt to 8x it:
+scenario runs at several physics steps dt, from a quarter of the scenario's own
+dt to 8x it, on three engines:
 
 * the harness runs a copy of the scenario with `[sim] dt` changed
-  (`anholonomy run`, logs to a temporary directory); its metrics come from
-  summary.json and its CPU time from `wall_time_s.physics_cpu` (the CPU time
-  of the replay's thread: building the world, stepping, read-back, channels);
+  (`anholonomy run`, logs to a temporary directory); its CPU time is
+  `wall_time_s.physics_cpu` of summary.json (the CPU time of the replay's
+  thread: building the world, stepping, read-back);
 * MuJoCo (its URDF importer, a floating base, a ground plane with the
-  scenario's friction on every geom, `implicitfast`, the same dt) replays the
-  same task: servo drives on the same joints track the joint angles of the
-  harness's ideal run (the rover: the integral of its recorded commands),
-  with the per-step mean rate as velocity target (the sphere: world-frame
-  angular velocity servos, as in the harness); `mujoco.rollout` on one thread,
-  CPU time of that call (`time.thread_time`).
+  scenario's friction, the same dt) replays the same task: servo drives on
+  the same joints track the joint angles of the harness's ideal run (the
+  rover: the integral of its recorded commands), with the per-step mean rate
+  as velocity target (the sphere: world-frame angular velocity servos, as in
+  the harness); `mujoco.rollout` on one thread, CPU time of that call
+  (`time.thread_time`). At every dt a coordinate-wise search over the
+  settings MuJoCo documents for contact and servo accuracy (MJ_SWEEP:
+  integrator, friction cone, condim, impratio, noslip_iterations, the contact
+  time constant, servo gains) picks the configuration with the least error;
+  the frontier uses it;
+* Drake (scripts/drake_engine.py: MultibodyPlant from the same URDFs, a
+  discrete plant at the same dt, SAP, point contact, and hydroelastic contact
+  where there is a ground) with the same commands through implicit joint PD
+  controllers; CPU time of `Simulator.AdvanceTo` (`time.thread_time`).
 
-Both runs are compared with the same ideal kinematic run (the harness's, at
-that dt, from run.mcap) by the harness's own metric definitions (this script
-recomputes them for MuJoCo and checks its recomputation against the harness's
-summary on the harness's own trajectory). Reported per run: the goal errors
-and the maximum tracking errors the shipped scenario gates on, each divided by
-its gate (1 = at the gate), and the CPU time (median of --repeats).
+Every run is compared with the harness's ideal kinematic run at that dt (from
+run.mcap) by the harness's own metric definitions (recomputed here and checked
+against summary.json on the harness's own runs), and with the same engine's
+own converged run (its run at 1/16 of the shipped dt). Errors are in the
+systems' units (m, degrees) and set against physical targets (TARGETS),
+chosen for each system's use, not from any engine's results. The frontier is
+the least CPU time of a measured run that meets a target; where no measured
+run does, a power law through the two smallest steps, marked as extrapolated.
 
-Each engine is also compared with its own converged run (the same engine at
-1/16 of the shipped dt, once): the end state's deviation from it, divided by
-the goal gate, is the error that comes from the step size alone (the classic
-work-precision measure), apart from what each engine's model of the contact
-adds.
-
-Writes one PNG per system (error against CPU-seconds, both engines) and a
-JSON of every number per system to --out (default docs/src/images), and prints the
-frontier: per engine, the least CPU time of a run that meets every gate of the
-shipped scenario, and the least CPU time whose end state is within the goal
-gates of the engine's own converged run.
+Writes per system a PNG (error against CPU-seconds, three engines, targets as
+lines) and a JSON of every number to --out (default docs/src/images);
+`--table` prints the tables page from them (the frontier, the README's ratio
+table, the gate-normalised table (secondary), MuJoCo's best configuration per
+dt and its whole settings sweep) and redraws the figures. The targets, the
+frontier, the tables and the figures are scripts/work_precision_report.py
+(matplotlib only); scripts/test_work_precision.py checks the docs
+against the JSONs, and a short rerun against the committed errors.
 
 Usage (from the repository root, after `cargo build --release`):
 
+    scripts/work_precision_env.sh            # fresh venv, pinned packages, the whole study
     python3 scripts/work_precision.py [--repeats 3] [--systems disk,space,rover,sphere]
 
-Installs `mujoco`, `mcap`, `numpy` and `matplotlib` with pip (--user) when
-they are missing. Not run by .ci/run.
+Not run by .ci/run.
 """
 
 import argparse
@@ -59,51 +67,53 @@ import xml.etree.ElementTree as ET
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 sys.path.insert(0, os.path.join(ROOT, "scripts"))
 
-# Installs mujoco, mcap and numpy when missing; the URDF-to-MJCF helpers.
-import mujoco_compare as mc  # noqa: E402
+# The yardstick, the tables and the figures (matplotlib only).
+from work_precision_report import (  # noqa: E402
+    ENGINES, MJ_SKIP, SYSTEMS, TARGETS, frontier_table, goal_metric, load_results, mj_label, plot,
+    tables_page, target_error, tight)
 
-mc.ensure([("matplotlib", "matplotlib")])
+try:
+    # The URDF-to-MJCF helpers (installs mujoco, mcap and numpy with pip --user when missing).
+    import mujoco_compare as mc  # noqa: E402
+    import drake_engine as de  # noqa: E402
+except ImportError as e:
+    sys.exit(f"{e}: run scripts/work_precision_env.sh (a venv with the pinned packages)")
 
-import matplotlib  # noqa: E402
-
-matplotlib.use("Agg")
-import matplotlib.pyplot as plt  # noqa: E402
 import mujoco  # noqa: E402
 import numpy as np  # noqa: E402
 from mcap.reader import make_reader  # noqa: E402
 from mujoco import rollout  # noqa: E402
 
-# key, title, scenario, URDF root link
-SYSTEMS = [
-    ("disk", "rolling disk", "disk_paper", "yoke"),
-    ("space", "space robot", "space_robot_paper", "vehicle"),
-    ("rover", "rover (open-loop replay)", "rover_open_loop", "chassis"),
-    ("sphere", "rolling sphere", "sphere_triangle_paper", "ball"),
-]
 # dt as multiples of the shipped one, up to 8x.
-# Below 1: where an engine misses a gate at the shipped step, how small a step it needs.
+# Below 1: where an engine misses a target at the shipped step, how small a step it needs.
 FACTORS = [0.25, 0.5, 1, 1.5, 2, 3, 4, 6, 8]
-# The rover's MuJoCo run only approaches its own converged run below a quarter of the
-# shipped dt: one step more.
-FACTORS_OF = {"rover": [0.125] + FACTORS}
 # The converged reference run of each engine: this multiple of the shipped dt.
 REF_FACTOR = 1 / 16
-# The rover's end state after 88 s of open-loop slip does not settle to a goal gate (0.1 m)
-# as dt shrinks: the harness's own runs at 1/32 and 1/16 of its dt end 0.96 gates apart,
-# those at 1/16 and 1/8 2.3 gates apart (not chaos: 1e-6 more friction moves the end by
-# ~1 mm). The frontier table adds these looser accuracies.
-LOOSER_OF = {"rover": (3, 10, 30)}
-# Servo gains of the MuJoCo drives: damping (implicit in implicitfast) large
-# against the links' inertia, stiffness so that an angle error halves per step
-# (kp dt / kv = 0.5; the stiffness is explicit, the damping keeps it stable).
-KV = 1.0e4
-# The rover's servos are far softer: MuJoCo's contact solver sees the servo's force
-# before its implicit damping, so a step in the commanded steering rate (the rover's
-# telegraph commands) throws the rover off the ground. Measured at dt 0.5-16 ms:
-# kv 1e4 and 1e3 diverge where the rate first drops to zero (t = 0.5 s), 100 and 30 lift the
-# chassis by 0.1-0.8 m, 10 and 3 by 0.03-1.4 m at 8-16 ms; kv 1 keeps it within
-# 7 mm of wheel height at every dt, its wheel angle within 0.04 rad of the target at 2 ms.
-KV_OF = {"rover": 1.0}
+
+
+# MuJoCo's settings: the configuration the earlier study used (the start of the search) and
+# the values the coordinate-wise search tries. Velocity servos (kv) with a position term
+# kp = ratio * kv / dt on the driven joints (the sphere: world-frame angular velocity
+# servos, kv only).
+MJ_BASE = {"integrator": "implicitfast", "cone": "elliptic", "condim": 3, "impratio": 10,
+           "noslip_iterations": 0, "solref_tc": "max(4ms,2dt)", "kv": 1.0e4, "kp_ratio": 0.5}
+# The rover's servos start far softer (earlier study: at kv 1e4 and 1e3 a step in the
+# commanded steering rate throws the rover off the ground).
+MJ_BASE_OF = {"rover": {"kv": 1.0}}
+MJ_SWEEP = [
+    ("integrator", ["implicitfast", "Euler", "RK4"]),
+    ("cone", ["elliptic", "pyramidal"]),
+    ("condim", [3, 4, 6]),
+    ("impratio", [1, 10, 100]),
+    ("noslip_iterations", [0, 10, 100]),
+    ("solref_tc", ["2dt", "max(4ms,2dt)", "20ms"]),
+    ("kv", ["/1000", "/100", "/10", "x1", "x10", "x100"]),
+    ("kp_ratio", [0, 0.25, 0.5, 1.0]),
+    # The integrator once more, with the servo gains found: RK4 and Euler integrate a
+    # velocity servo's damping explicitly, so with the start's stiff servos they diverge
+    # (a separate check found RK4 with kv 10 best on the disk at 0.25 ms).
+    ("integrator", ["implicitfast", "Euler", "RK4"]),
+]
 
 
 # ---------------------------------------------------------------- harness
@@ -123,7 +133,7 @@ def scenario_copy(scenario, dt, tmp):
 
 
 def harness_runs(binary, scenario, dt, tmp, repeats):
-    """Summary and MCAP path of the harness at dt, with the median physics CPU time."""
+    """Summary, the physics CPU time of each repeat and the MCAP path of the harness at dt."""
     path = scenario_copy(scenario, dt, tmp)
     logs = os.path.join(tmp, "logs")
     cpu = []
@@ -143,7 +153,7 @@ def harness_runs(binary, scenario, dt, tmp, repeats):
             summary = json.load(f)
         wt = summary["wall_time_s"]
         cpu.append(wt.get("physics_cpu", wt["physics"]))
-    return summary, statistics.median(cpu), os.path.join(logs, scenario, "run.mcap")
+    return summary, cpu, os.path.join(logs, scenario, "run.mcap")
 
 
 def read_topics(mcap_path, topics):
@@ -273,7 +283,18 @@ def metrics(system, names, goal, t_i, q_i, t_s, q_s, dt):
 # ---------------------------------------------------------------- MuJoCo
 
 
-def mujoco_model(system, summary, root, dt):
+def mj_config(key, dt, **over):
+    """The MuJoCo configuration of `key` at dt: MJ_BASE, the system's changes, `over`."""
+    cfg = {**MJ_BASE, **MJ_BASE_OF.get(key, {})}
+    cfg.update(over)
+    return cfg
+
+
+def solref_tc(spec, dt):
+    return {"2dt": 2 * dt, "max(4ms,2dt)": max(0.004, 2 * dt), "20ms": 0.02}[spec]
+
+
+def mujoco_model(system, summary, root, dt, cfg):
     """MJCF from MuJoCo's URDF import plus the harness's additions and servo drives."""
     urdf = os.path.normpath(os.path.join(ROOT, "scenarios", summary["model"]["urdf"]))
     m = mujoco.MjModel.from_xml_string(mc.floating_urdf(urdf, root))
@@ -285,13 +306,10 @@ def mujoco_model(system, summary, root, dt):
     option = ET.SubElement(mjcf, "option")
     option.set("timestep", repr(dt))
     option.set("gravity", " ".join(repr(g) for g in sim["gravity"]))
-    option.set("integrator", "implicitfast")
-    # Contact settings for accuracy rather than speed: elliptic friction cones with a
-    # high impedance ratio (less creep), and contacts as stiff as MuJoCo advises
-    # (time constant 4 ms, at least twice the step); the defaults (pyramidal, 20 ms)
-    # let the disk hop on its rim and slip by centimetres.
-    option.set("cone", "elliptic")
-    option.set("impratio", "10")
+    option.set("integrator", cfg["integrator"])
+    option.set("cone", cfg["cone"])
+    option.set("impratio", repr(float(cfg["impratio"])))
+    option.set("noslip_iterations", str(int(cfg["noslip_iterations"])))
     world = mjcf.find("worldbody")
     body = world.find(f".//body[@name='{root}']")
     free = body.find("freejoint")
@@ -301,27 +319,34 @@ def mujoco_model(system, summary, root, dt):
     for j in mjcf.iter("joint"):
         j.attrib.pop("actuatorfrcrange", None)
     mu = repr(sim["friction"])
-    # MuJoCo takes the larger friction of two geoms: every geom gets the scenario's.
-    solref = f"{max(0.004, 2 * dt)!r} 1"
+    # MuJoCo takes the larger friction of two geoms: every geom gets the scenario's
+    # (torsional and rolling friction as MuJoCo's defaults; they act with condim 4 and 6).
+    solref = f"{solref_tc(cfg['solref_tc'], dt)!r} 1"
     for g in mjcf.iter("geom"):
         g.set("friction", f"{mu} 0.005 0.0001")
         g.set("solref", solref)
+        g.set("condim", str(cfg["condim"]))
     actuators = ET.SubElement(mjcf, "actuator")
-    kv = KV_OF.get(system, KV)
-    kp = kv * 0.5 / dt
+    kv = cfg["kv"]
+    kp = kv * cfg["kp_ratio"] / dt
 
     # No force limits: MuJoCo integrates a force-limited actuator's damping explicitly,
     # which this stiff a servo does not survive.
     def servo(joint, gear="1"):
         # Velocity target first, then angle target (ctrl columns in this order).
         ET.SubElement(actuators, "velocity", joint=joint, kv=repr(kv), gear=gear)
-        ET.SubElement(actuators, "position", joint=joint, kp=repr(kp), gear=gear)
+        if kp > 0:
+            ET.SubElement(actuators, "position", joint=joint, kp=repr(kp), gear=gear)
+        else:
+            # kp 0: a zero-gain placeholder keeps the ctrl columns.
+            ET.SubElement(actuators, "general", joint=joint, gear=gear, gainprm="0", biasprm="0 0 0")
 
     if system != "space":
         ET.SubElement(world, "geom", type="plane", size="0 0 1", friction=f"{mu} 0.005 0.0001",
-                      solref=solref)
+                      solref=solref, condim=str(cfg["condim"]))
     model = summary["model"]
     if system == "disk":
+        # Balance controller: translation free, yaw driven, roll and pitch locked.
         body.remove(free)
         for i, axis in enumerate(["1 0 0", "0 1 0", "0 0 1"]):
             body.insert(i, ET.Element("joint", name=f"slide{i}", type="slide", axis=axis))
@@ -343,13 +368,14 @@ def mujoco_model(system, summary, root, dt):
         ET.SubElement(world, "site", name="world_frame")
         # World-frame angular velocity servos, as the harness's.
         for gear in ["0 0 0 1 0 0", "0 0 0 0 1 0", "0 0 0 0 0 1"]:
-            ET.SubElement(actuators, "velocity", site="centre", refsite="world_frame", kv=repr(KV),
+            ET.SubElement(actuators, "velocity", site="centre", refsite="world_frame", kv=repr(kv),
                           gear=gear)
     return mujoco.MjModel.from_xml_string(ET.tostring(mjcf, encoding="unicode"))
 
 
 def controls(system, summary, ideal, cmd, dt, steps):
-    """Per-step ctrl rows for the drives of `mujoco_model`."""
+    """Per-step command rows: per driven joint (rate, angle at the step's start); the sphere:
+    world-frame angular velocity (x, y, z)."""
     t_i, q_i = ideal
     grid = np.arange(steps + 1) * dt
     q = sample(t_i, q_i, grid)
@@ -402,58 +428,37 @@ def set_start(m, d, system, scenario, summary):
 
 
 def to_model_states(system, m, states, summary, start_state):
-    """MuJoCo states (one row per sample) as the harness's model coordinates."""
-    d = mujoco.MjData(m)
-    rows = []
+    """MuJoCo states (one row per sample) as the harness's model coordinates (vectorised)."""
+    qpos = states[:, 1 : 1 + m.nq]
     jq = lambda name: m.jnt_qposadr[mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_JOINT, name)]  # noqa: E731
-    if system == "rover":
-        # Straight from qpos (the state's columns after time), no kinematics: the rover's
-        # reference run has 7e5 samples, too many for a Python loop.
-        qpos = states[:, 1 : 1 + m.nq]
-        f = jq("world_to_root")
-        w, x, y, z = (qpos[:, f + 3 + i] for i in range(4))
-        # Unwrapped continuously, as the harness's read-back does.
-        yaw = np.unwrap(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
-        return np.stack([qpos[:, f], qpos[:, f + 1], yaw, qpos[:, jq("steer_joint")]], axis=1)
-    prev = None
-    for s in states:
-        mujoco.mj_setState(m, d, s, mujoco.mjtState.mjSTATE_FULLPHYSICS)
-        mujoco.mj_kinematics(m, d)
-        if system == "disk":
-            wid = mujoco.mj_name2id(m, mujoco.mjtObj.mjOBJ_BODY, "wheel")
-            x, y = d.xpos[wid][:2]
-            row = [x, y, start_state[2] + d.qpos[jq("wheel_joint")], math.pi / 2 - d.qpos[jq("yaw")]]
-        elif system == "sphere":
-            f = jq("world_to_root")
-            qw = d.qpos[f + 3 : f + 7].copy()
-            if prev is not None and np.dot(qw, prev[2:6]) < 0:
-                qw = -qw
-            row = [d.qpos[f], d.qpos[f + 1], *qw]
-        else:
-            f = jq("world_to_root")
-            w, x, y, z = d.qpos[f + 3 : f + 7]
-            yaw = math.atan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z))
-            if system == "space":
-                row = [yaw, d.qpos[jq("joint1")], d.qpos[jq("joint2")]]
-            else:
-                row = [d.qpos[f], d.qpos[f + 1], yaw, d.qpos[jq("steer_joint")]]
-        if prev is not None and system != "sphere":
-            # Unwrap the angles continuously, as the harness's read-back does.
-            for i in {"disk": [3], "space": [0], "rover": [2]}[system]:
-                row[i] = prev[i] + wrap(row[i] - prev[i])
-        rows.append(row)
-        prev = row
-    return np.array(rows)
+    if system == "disk":
+        # The wheel's centre is the yoke's origin: (slide0, slide1) from the body's start (0, 0).
+        return np.stack([qpos[:, jq("slide0")], qpos[:, jq("slide1")], start_state[2] + qpos[:, jq("wheel_joint")],
+                         math.pi / 2 - np.unwrap(qpos[:, jq("yaw")])], axis=1)
+    f = jq("world_to_root")
+    w, x, y, z = (qpos[:, f + 3 + i] for i in range(4))
+    if system == "sphere":
+        q = np.stack([w, x, y, z], axis=1)
+        flips = np.sign(np.sum(q[1:] * q[:-1], axis=1))
+        q[1:] *= np.cumprod(np.where(flips == 0, 1.0, flips))[:, None]
+        return np.stack([qpos[:, f], qpos[:, f + 1], *q.T], axis=1)
+    # Unwrapped continuously, as the harness's read-back does.
+    yaw = np.unwrap(np.arctan2(2 * (w * z + x * y), 1 - 2 * (y * y + z * z)))
+    if system == "space":
+        return np.stack([yaw, qpos[:, jq("joint1")], qpos[:, jq("joint2")]], axis=1)
+    return np.stack([qpos[:, f], qpos[:, f + 1], yaw, qpos[:, jq("steer_joint")]], axis=1)
 
 
-def mujoco_runs(system, scenario, summary, root, ideal, cmd, dt, steps, repeats):
-    m = mujoco_model(system, summary, root, dt)
-    ctrl = controls(system, summary, ideal, cmd, dt, steps)
+def mujoco_runs(system, scenario, summary, root, ctrl, dt, steps, repeats, cfg, start_state):
+    """MuJoCo at dt with `cfg`: (model states, CPU time of each repeat, stable)."""
+    kv = cfg["kv"]
+    m = mujoco_model(system, summary, root, dt, cfg)
     d = mujoco.MjData(m)
     set_start(m, d, system, scenario, summary)
     mujoco.mj_forward(m, d)
     s0 = np.empty(mujoco.mj_stateSize(m, mujoco.mjtState.mjSTATE_FULLPHYSICS))
     mujoco.mj_getState(m, d, s0, mujoco.mjtState.mjSTATE_FULLPHYSICS)
+    del kv
     cpu = []
     for _ in range(repeats):
         c0 = time.thread_time()
@@ -463,7 +468,46 @@ def mujoco_runs(system, scenario, summary, root, ideal, cmd, dt, steps, repeats)
     # state's time column then no longer counts steps.
     stable = bool(np.all(np.isfinite(states[0])) and np.allclose(states[0][:, 0], dt * np.arange(1, steps + 1)))
     states = np.concatenate([s0[None, :], states[0]], axis=0)
-    return states, m, statistics.median(cpu), stable
+    return to_model_states(system, m, states, summary, start_state), cpu, stable
+
+
+def resolve_kv(key, cfg):
+    """The sweep's relative kv values ('/10', 'x1', 'x10') against the system's base kv."""
+    v = cfg["kv"]
+    if isinstance(v, str):
+        base = mj_config(key, 0)["kv"]
+        cfg = {**cfg, "kv": base * {"/1000": 1e-3, "/100": 0.01, "/10": 0.1, "x1": 1.0, "x10": 10.0,
+                                    "x100": 100.0}[v]}
+    return cfg
+
+
+# ---------------------------------------------------------------- Drake
+
+
+def drake_runs(key, urdf, summary, start, ctrl, dt, steps, repeats, start_state, settings=None):
+    """Drake at dt: (model states, CPU time of each repeat, finite)."""
+    run = de.DrakeRun(key, urdf, summary, start, dt, steps, settings)
+    run.build(drake_desired(key, run, ctrl, dt))
+    x, cpu, ok = run.run(repeats)
+    if x is None:
+        return np.full((steps + 1, 6), np.nan), cpu, False
+    return run.model_states(x, start_state), cpu, ok
+
+
+def drake_desired(key, run, ctrl, dt):
+    """Per-step rows for Drake's command port from `controls`' rows."""
+    if key == "sphere":
+        return ctrl @ run._sphere_K().T
+    rates, start = ctrl[:, 0::2], ctrl[:, 1::2]
+    if run.s["target"] == "end":
+        # Drake's PD acts on the next step's angle: the commanded angle at the step's end.
+        ang = np.concatenate([start[1:], start[-1:] + rates[-1:] * dt], axis=0)
+        if key == "rover":
+            lo, hi = steer_limits(run.summary)
+            ang[:, 1] = np.clip(ang[:, 1], lo, hi)
+    else:
+        ang = start
+    return np.concatenate([ang, rates], axis=1)
 
 
 # ---------------------------------------------------------------- study
@@ -482,210 +526,183 @@ def normalised(metric_values, gates):
     return max(metric_values[k] / g for k, g in gates.items())
 
 
-def study(args, key, title, scenario, root, tmp):
+def start_of(scenario):
+    with open(os.path.join(ROOT, "scenarios", f"{scenario}.toml"), "rb") as f:
+        return tomllib.load(f)["start"]
+
+
+def harness_at(args, key, scenario, dt, tmp, repeats, gates):
+    """The harness at dt: its run, the ideal run, the commands, the CPU times."""
+    summary, h_cpu, mcap_path = harness_runs(args.bin, scenario, dt, tmp, repeats)
+    topics = read_topics(mcap_path, ["/ideal/state", "/sim/state", "/plan/command"])
+    t_i, v_i = topics["/ideal/state"]
+    names = list(v_i[0].keys())
+    q_i = state_array(v_i, names)
+    t_s, v_s = topics["/sim/state"]
+    q_s = state_array(v_s, names)
+    t_c, v_c = topics["/plan/command"]
+    u = state_array(v_c, list(v_c[0].keys()))
+    goal = q_i[-1].copy()
+    goal_file = summary["goal"]
+    # The goal in model coordinates (display units in summary.json: degrees).
+    for i, n in enumerate(names):
+        if f"{n}_deg" in goal_file:
+            goal[i] = math.radians(goal_file[f"{n}_deg"])
+        elif n in goal_file:
+            goal[i] = goal_file[n]
+    # Check the recomputation on the harness's own run.
+    mine = metrics(key, names, goal, t_i, q_i, t_s, q_s, dt)
+    for k, gate in gates.items():
+        h = summary["metrics"][k]
+        # abs_tol: an angle near 0 from arccos is good to ~1e-8 rad only.
+        assert math.isclose(mine[k], h, rel_tol=1e-6, abs_tol=1e-4 * gate), f"{scenario} dt {dt}: {k} {mine[k]} vs {h}"
+    steps = summary["sim_steps"]
+    ctrl = controls(key, summary, (t_i, q_i), (t_c, u), dt, steps)
+    return {"dt": dt, "names": names, "goal": goal, "ideal": (t_i, q_i), "summary": summary, "steps": steps,
+            "ctrl": ctrl, "harness": ((t_s, q_s), h_cpu, True)}
+
+
+def mujoco_search(key, scenario, root, r, start, against, log):
+    """Coordinate-wise search over MJ_SWEEP at r's dt: every run's row, the best configuration.
+
+    One run per configuration (one CPU time); the objective is the error against `against`
+    ((t, q), goal) in units of the system's tightest target."""
+    dt = r["dt"]
+    (t_a, q_a), goal_a = against
+    entries, seen = [], {}
+
+    def evaluate(cfg, setting, value):
+        k = tuple(sorted(cfg.items()))
+        if k in seen:
+            return seen[k]
+        (q, cpu, ok) = mujoco_runs(key, scenario, r["summary"], root, r["ctrl"], dt, r["steps"], 1,
+                                   resolve_kv(key, cfg), r["ideal"][1][0])
+        t = np.arange(len(q)) * dt
+        if ok and np.all(np.isfinite(q)):
+            vals = metrics(key, r["names"], goal_a, t_a, q_a, t, q, dt)
+            obj = target_error(key, vals, tight(key), end=key == "rover")
+        else:
+            vals, obj = None, math.inf
+        e = {"dt": dt, "setting": setting, "value": value, "config": dict(resolve_kv(key, cfg)),
+             "cpu_s": cpu[0], "stable": ok, "objective": obj,
+             "errors": {qn: (vals[goal_metric(m) if key == "rover" else m] if vals else None)
+                        for qn, m, _u in TARGETS[key][0]}}
+        entries.append(e)
+        seen[k] = e
+        return e
+
+    best = mj_config(key, dt)
+    best_e = evaluate(best, "start", "")
+    for setting, values in MJ_SWEEP:
+        if setting in MJ_SKIP.get(key, ()):
+            continue
+        cur = best[setting]
+        for v in values:
+            if v == cur or (setting == "kv" and v == "x1"):
+                continue
+            cand = {**best, setting: v}
+            e = evaluate(cand, setting, v)
+            if e["objective"] < best_e["objective"]:
+                best, best_e = cand, e
+        if setting == "kv" and isinstance(best["kv"], str):
+            best = resolve_kv(key, best)
+    best = resolve_kv(key, best)
+    best_e["best"] = True
+    log(f"    MuJoCo dt {dt * 1e3:g} ms: {len(entries)} configurations; best {mj_label(best, key)}: "
+        f"{best_e['objective']:.3g} × the tightest target")
+    return entries, best
+
+
+def study(args, key, title, scenario, root, tmp, log=print):
     goal_gates, track_gates = gates_of(scenario)
     tracking_gated = bool(track_gates)
     if not track_gates:
         # A sanity gate only (the rover's open-loop replay): report the position tracking.
         track_gates = {"tracking_position_max": 1.0}
+    all_gates = {**goal_gates, **track_gates}
     with open(os.path.join(ROOT, "scenarios", f"{scenario}.toml"), "rb") as f:
         dt0 = tomllib.load(f)["sim"]["dt"]
-    def run_at(dt, repeats):
-        """Both engines at dt: the harness's summary and trajectories, MuJoCo's trajectory, CPU times."""
-        summary, h_cpu, mcap_path = harness_runs(args.bin, scenario, dt, tmp, repeats)
-        topics = read_topics(mcap_path, ["/ideal/state", "/sim/state", "/plan/command"])
-        t_i, v_i = topics["/ideal/state"]
-        state_names = list(v_i[0].keys())
-        q_i = state_array(v_i, state_names)
-        t_s, v_s = topics["/sim/state"]
-        q_s = state_array(v_s, state_names)
-        t_c, v_c = topics["/plan/command"]
-        u = state_array(v_c, list(v_c[0].keys()))
-        goal = q_i[-1].copy()
-        goal_file = summary["goal"]
-        # The goal in model coordinates (display units in summary.json: degrees).
-        for i, n in enumerate(state_names):
-            if f"{n}_deg" in goal_file:
-                goal[i] = math.radians(goal_file[f"{n}_deg"])
-            elif n in goal_file:
-                goal[i] = goal_file[n]
-        # Check the recomputation on the harness's own run.
-        mine = metrics(key, state_names, goal, t_i, q_i, t_s, q_s, dt)
-        for k, gate in {**goal_gates, **track_gates}.items():
-            h = summary["metrics"][k]
-            # abs_tol: an angle near 0 from arccos is good to ~1e-8 rad only.
-            assert math.isclose(mine[k], h, rel_tol=1e-6, abs_tol=1e-4 * gate), f"{scenario} dt {dt}: {k} {mine[k]} vs {h}"
-        steps = summary["sim_steps"]
-        states, m, k_cpu, stable = mujoco_runs(key, scenario, summary, root, (t_i, q_i), (t_c, u), dt, steps,
-                                               repeats)
-        q_m = to_model_states(key, m, states, summary, q_i[0])
-        t_m = np.arange(len(q_m)) * dt
-        return {"names": state_names, "goal": goal, "ideal": (t_i, q_i), "summary": summary, "steps": steps,
-                "harness": ((t_s, q_s), h_cpu), "mujoco": ((t_m, q_m), k_cpu), "mujoco_stable": stable}
+    start = start_of(scenario)
+    urdf = None
+    # Hydroelastic contact: the disk and the sphere (one run per dt: a secondary line). The
+    # rover's 88 s runs are left to point contact, for the study's time.
+    hydro = key in ("disk", "sphere") and not args.no_hydro
 
-    # The converged reference of each engine: its own run at REF_FACTOR x the shipped dt
-    # (classic work-precision: the error that comes from the step alone), run once.
-    ref = run_at(dt0 * REF_FACTOR, 1)
-    rows = []
-    for factor in FACTORS_OF.get(key, FACTORS):
+    def drake(r, repeats, settings=None):
+        nonlocal urdf
+        urdf = os.path.normpath(os.path.join(ROOT, "scenarios", r["summary"]["model"]["urdf"]))
+        q, cpu, ok = drake_runs(key, urdf, r["summary"], start, r["ctrl"], r["dt"], r["steps"], repeats,
+                                r["ideal"][1][0], settings)
+        return (np.arange(len(q)) * r["dt"], q), cpu, ok
+
+    def mj(r, repeats, cfg):
+        q, cpu, ok = mujoco_runs(key, scenario, r["summary"], root, r["ctrl"], r["dt"], r["steps"], repeats, cfg,
+                                 r["ideal"][1][0])
+        return (np.arange(len(q)) * r["dt"], q), cpu, ok
+
+    # The converged reference of each engine: its own run at REF_FACTOR x the shipped dt.
+    ref = harness_at(args, key, scenario, dt0 * REF_FACTOR, tmp, 1, all_gates)
+    log(f"  {title}: harness reference at {dt0 * REF_FACTOR * 1e3:g} ms done", flush=True)
+    refs = {"harness": ref["harness"]}
+    ref_cfg = {}
+    if key == "rover":
+        # The rover's ideal run is no yardstick for its physics (17 m of slip on every engine):
+        # its MuJoCo configurations are ranked against MuJoCo's own converged run at the start
+        # configuration.
+        base_ref = mj(ref, 1, resolve_kv(key, mj_config(key, ref["dt"])))
+    rows, sweep, best_of = [], [], {}
+    engines = list(ENGINES) + (["drake_hydro"] if hydro else [])
+    for factor in FACTORS:
         dt = dt0 * factor
-        r = run_at(dt, args.repeats)
-        t_i, q_i = r["ideal"]
-        row = {"dt": dt, "steps": r["steps"]}
-        for eng in ("harness", "mujoco"):
-            (t_e, q_e), cpu = r[eng]
-            vals = metrics(key, r["names"], r["goal"], t_i, q_i, t_e, q_e, dt)
-            (t_r, q_r), _ = ref[eng]
-            # Against the converged run: its trajectory as the ideal, its end as the goal.
-            conv = metrics(key, r["names"], q_r[-1], t_r, q_r, t_e, q_e, dt)
-            row[eng] = {
-                "cpu_s": cpu,
-                "goal": float(normalised(vals, goal_gates)),
-                "tracking": float(normalised(vals, track_gates)),
-                "converged_goal": float(normalised(conv, goal_gates)),
-                "converged_tracking": float(normalised(conv, track_gates)),
-                "metrics": {k: float(vals[k]) for k in list(goal_gates) + list(track_gates)},
-            }
-            if eng == "mujoco" and not (r["mujoco_stable"] and ref["mujoco_stable"]):
-                # A diverged run (or reference) has no error to speak of: it meets no gate.
-                row[eng]["unstable"] = not r["mujoco_stable"]
-                for what in ("goal", "tracking") if not r["mujoco_stable"] else ():
-                    row[eng][what] = math.inf
-                for what in ("converged_goal", "converged_tracking"):
-                    row[eng][what] = math.inf
-            row[eng]["meets_gates"] = bool(row[eng]["goal"] <= 1) and bool(
-                row[eng]["tracking"] <= 1 or "tracking_position_max" in track_gates and len(track_gates) == 1
-            )
+        r = harness_at(args, key, scenario, dt, tmp, args.repeats, all_gates)
+        against = ((base_ref[0], base_ref[0][1][-1]) if key == "rover" else (r["ideal"], r["goal"]))
+        entries, best = mujoco_search(key, scenario, root, r, start, against, log)
+        sweep += entries
+        best_of[dt] = best
+        runs = {"harness": r["harness"], "mujoco": mj(r, args.repeats, best), "drake": drake(r, args.repeats)}
+        if hydro:
+            runs["drake_hydro"] = drake(r, 1, {"contact": "hydroelastic"})
+        row = {"dt": dt, "steps": r["steps"], "mujoco_config": best, "_runs": runs, "_r": r}
         rows.append(row)
-        h, k = row["harness"], row["mujoco"]
-        print(f"  {title:<26} dt {dt * 1e3:6.2f} ms | harness cpu {h['cpu_s'] * 1e3:8.2f} ms vs ideal: goal "
-              f"{h['goal']:8.3g} track {h['tracking']:8.3g}, vs converged: goal {h['converged_goal']:8.3g}"
-              f" | MuJoCo cpu {k['cpu_s'] * 1e3:8.2f} ms vs ideal: goal {k['goal']:8.3g} track "
-              f"{k['tracking']:8.3g}, vs converged: goal {k['converged_goal']:8.3g}", flush=True)
+        cells = []
+        for eng in engines:
+            (t_e, q_e), cpu, ok = runs[eng]
+            vals = metrics(key, r["names"], r["goal"], *r["ideal"], t_e, q_e, dt) if ok else None
+            cells.append(f"{eng} {statistics.median(cpu) * 1e3:.1f} ms "
+                         + (f"{target_error(key, vals, tight(key)):.3g}" if vals else "diverged"))
+        log(f"  {title:<26} dt {dt * 1e3:6.3f} ms | " + " | ".join(cells) + "  (CPU, error / tightest target)",
+            flush=True)
+    # References of MuJoCo (the best configuration at the shipped dt) and Drake.
+    ref_cfg = best_of[dt0]
+    refs["mujoco"] = mj(ref, 1, ref_cfg)
+    refs["drake"] = drake(ref, 1)
+    if hydro:
+        refs["drake_hydro"] = drake(ref, 1, {"contact": "hydroelastic"})
+    for eng in engines:
+        if not refs[eng][2]:
+            log(f"  {title}: the {eng} reference diverged")
+    out_rows = []
+    for row in rows:
+        r, runs, dt = row.pop("_r"), row.pop("_runs"), row["dt"]
+        for eng in engines:
+            (t_e, q_e), cpu, ok = runs[eng]
+            (t_r, q_r), _c, ref_ok = refs[eng]
+            cell = {"cpu_s": statistics.median(cpu), "cpu_all": cpu, "stable": ok}
+            if ok:
+                vals = metrics(key, r["names"], r["goal"], *r["ideal"], t_e, q_e, dt)
+                cell["ideal"] = {k: float(v) for k, v in vals.items()}
+                cell["goal"] = float(normalised(vals, goal_gates))
+                cell["tracking"] = float(normalised(vals, track_gates))
+            if ok and ref_ok:
+                conv = metrics(key, r["names"], q_r[-1], t_r, q_r, t_e, q_e, dt)
+                cell["converged"] = {k: float(v) for k, v in conv.items()}
+                cell["converged_goal"] = float(normalised(conv, goal_gates))
+            row[eng] = cell
+        out_rows.append(row)
     return {"system": title, "scenario": scenario, "goal_gates": goal_gates, "tracking_gates": track_gates,
-            "tracking_gated": tracking_gated, "reference_dt": dt0 * REF_FACTOR, "rows": rows}
-
-
-def plot(res, out_dir, key):
-    fig, axes = plt.subplots(1, 3, figsize=(15, 4.2), constrained_layout=True)
-    for ax, what, label in ((axes[0], "goal", "goal error vs ideal run / gate"),
-                            (axes[1], "tracking", "max tracking error vs ideal run / gate"
-                             if res.get("tracking_gated", True) else "max position tracking error vs ideal run, m"),
-                            (axes[2], "converged_goal",
-                             f"end-state deviation from own run at {res['reference_dt'] * 1e3:g} ms / goal gate")):
-        for eng, color, name in (("harness", "tab:orange", "harness (Rapier)"), ("mujoco", "tab:blue", "MuJoCo")):
-            # Diverged runs (MuJoCo's, error inf) are left out and named in the legend.
-            rows = [r for r in res["rows"] if math.isfinite(r[eng][what])]
-            lost = [f"{r['dt'] * 1e3:g}" for r in res["rows"] if r[eng].get("unstable")]
-            x = [r[eng]["cpu_s"] for r in rows]
-            y = [max(r[eng][what], 1e-6) for r in rows]
-            ax.plot(x, y, "o-", color=color, label=name + (f" (diverged at {', '.join(lost)} ms)" if lost else ""))
-            for r, xi, yi in zip(rows, x, y):
-                ax.annotate(f"{r['dt'] * 1e3:g}", (xi, yi), textcoords="offset points", xytext=(4, 4),
-                            fontsize=7, color=color)
-        if what != "tracking" or res.get("tracking_gated", True):
-            ax.axhline(1.0, color="k", lw=0.8, ls="--")
-        ax.set_xscale("log")
-        ax.set_yscale("log")
-        ax.set_xlabel("CPU time of the physics run, s")
-        ax.set_ylabel(label)
-        ax.grid(True, which="both", alpha=0.3)
-    axes[0].legend()
-    fig.suptitle(f"{res['system']} ({res['scenario']}): points labelled with dt in ms; dashed: the shipped gate")
-    path = os.path.join(out_dir, f"work_precision_{key}.png")
-    fig.savefig(path, dpi=110)
-    plt.close(fig)
-    return path
-
-
-def frontier(res, converged=False):
-    """Per engine: the cheapest run meeting every gate (CPU s, dt), or None.
-
-    converged: the goal gates applied to the end state's deviation from the engine's own
-    converged run (the step's share of the error) instead of the error against the ideal
-    run. (Not the tracking gates: on driven joints both engines follow the commanded angle,
-    and between two step sizes that differs by the commands' own sampling.)"""
-    out = {}
-    for eng in ("harness", "mujoco"):
-        if converged:
-            ok = [r for r in res["rows"] if r[eng]["converged_goal"] <= 1]
-        else:
-            ok = [r for r in res["rows"] if r[eng]["meets_gates"]]
-        best = min(ok, key=lambda r: r[eng]["cpu_s"]) if ok else None
-        out[eng] = (best[eng]["cpu_s"], best["dt"]) if best else None
-    return out
-
-
-def extrapolated(res, eng, what):
-    """(CPU s, dt) where a power law through the two smallest-dt runs reaches the gate.
-
-    For an engine that misses a gate at every measured dt: error ~ dt^p and CPU ~ 1/dt
-    from the two smallest steps measured."""
-    rows = sorted(res["rows"], key=lambda r: r["dt"])[:2]
-    e = [max(r[eng][w] for w in what) for r in rows]
-    if e[0] <= 1 or e[1] <= e[0]:
-        return None
-    p = math.log(e[1] / e[0]) / math.log(rows[1]["dt"] / rows[0]["dt"])
-    dt = rows[0]["dt"] * e[0] ** (-1 / p)
-    return rows[0][eng]["cpu_s"] * rows[0]["dt"] / dt, dt
-
-
-def cpu_cell(cpu_s, dt, approx=""):
-    """'35.4 ms (1.5 ms)', '6.7 s (0.25 ms)', '≈ 79 s (≈ 0.55 µs)'."""
-    t = f"{cpu_s:.2g} s" if cpu_s >= 1 else f"{cpu_s * 1e3:.3g} ms"
-    if approx:
-        sig2 = lambda v: f"{float(f'{v:.2g}'):g}"  # noqa: E731
-        t = f"{sig2(cpu_s)} s" if cpu_s >= 1 else f"{sig2(cpu_s * 1e3)} ms"
-    d = f"{dt * 1e3:.2g} ms" if dt >= 1e-4 else f"{dt * 1e6:.2g} µs"
-    return f"{approx}{t} ({approx}{d})"
-
-
-def ratio_cell(cpu, approx):
-    if not all(cpu):
-        return "–"
-    r = cpu[1] / cpu[0]
-    text = f"{r:.2g}" if r < 100 else f"{float(f'{r:.2g}'):.0f}"
-    return ("≈ " if approx else "") + text
-
-
-def table(out_dir):
-    """The frontier table (markdown) from the per-system JSONs in out_dir."""
-    print("| system | gates against | harness CPU (dt) | MuJoCo CPU (dt) | MuJoCo / harness |")
-    print("|---|---|---|---|---|")
-    for key, *_ in SYSTEMS:
-        path = os.path.join(out_dir, f"work_precision_{key}.json")
-        if not os.path.exists(path):
-            continue
-        res = json.load(open(path))
-        for which, against, what in (("frontier", "ideal run", ("goal", "tracking")),
-                                     ("frontier_converged", "own converged run (goal gates)",
-                                      ("converged_goal",))):
-            if key == "rover" and which == "frontier":
-                what = ("goal",)
-            cells, cpu, approx = [], [], False
-            for eng in ("harness", "mujoco"):
-                f = res[which][eng]
-                if f:
-                    cells.append(cpu_cell(*f))
-                    cpu.append(f[0])
-                else:
-                    # No power law for the rover: its converged run is itself unsettled by
-                    # about a goal gate (LOOSER_OF), below which no trend can be read.
-                    x = extrapolated(res, eng, what) if key not in LOOSER_OF else None
-                    cells.append(cpu_cell(*x, approx="≈ ") + ", extrapolated" if x else "never")
-                    cpu.append(x[0] if x else None)
-                    approx = approx or bool(x)
-            ratio = ratio_cell(cpu, approx)
-            print(f"| {res['system']} | {against} | {cells[0]} | {cells[1]} | {ratio} |")
-        for k in LOOSER_OF.get(key, ()):
-            cells, cpu = [], []
-            for eng in ("harness", "mujoco"):
-                ok = [r for r in res["rows"] if r[eng]["converged_goal"] <= k]
-                best = min(ok, key=lambda r: r[eng]["cpu_s"]) if ok else None
-                cells.append(cpu_cell(best[eng]["cpu_s"], best["dt"]) if best else "never")
-                cpu.append(best[eng]["cpu_s"] if best else None)
-            ratio = ratio_cell(cpu, False)
-            print(f"| {res['system']} | own converged run ({k:g} × goal gates) | {cells[0]} | {cells[1]} | {ratio} |")
+            "tracking_gated": tracking_gated, "reference_dt": dt0 * REF_FACTOR, "shipped_dt": dt0,
+            "engines": engines, "rows": out_rows, "mujoco_sweep": sweep, "mujoco_reference_config": ref_cfg,
+            "drake_settings": de.DEFAULT, "repeats": args.repeats}
 
 
 def main():
@@ -693,46 +710,42 @@ def main():
     ap.add_argument("--bin", default=os.path.join(ROOT, "target", "release", "anholonomy"))
     ap.add_argument("--repeats", type=int, default=3)
     ap.add_argument("--systems", default="disk,space,rover,sphere")
+    ap.add_argument("--factors", default=None, help="dt factors (comma-separated), default " + ",".join(map(str, FACTORS)))
     ap.add_argument("--out", default=os.path.join(ROOT, "docs", "src", "images"))
+    ap.add_argument("--no-hydro", action="store_true", help="skip Drake's hydroelastic runs")
     ap.add_argument("--table", action="store_true",
-                    help="only print the frontier table (markdown) from the JSONs in --out")
+                    help="only print the tables (markdown) from the JSONs in --out")
     args = ap.parse_args()
+    if args.factors:
+        FACTORS[:] = [float(f) for f in args.factors.split(",")]
     if args.table:
-        table(args.out)
+        results = load_results(args.out)
+        for key, res in results.items():
+            plot(key, res, args.out)
+        sys.stdout.write(tables_page(results))
         return
     if not os.path.exists(args.bin):
         sys.exit(f"{args.bin} not found: run `cargo build --release` first (or pass --bin)")
     os.makedirs(args.out, exist_ok=True)
-    print(f"MuJoCo {mujoco.__version__}; CPU times are medians of {args.repeats}")
+    print(f"MuJoCo {mujoco.__version__}, Drake {de.VERSION}; CPU times are medians of {args.repeats}")
     print("load average (1, 5, 15 min): %.2f %.2f %.2f" % os.getloadavg())
     want = args.systems.split(",")
     results = {}
     for key, title, scenario, root in SYSTEMS:
         if key not in want:
             continue
+        t0 = time.time()
         with tempfile.TemporaryDirectory() as tmp:
             res = study(args, key, title, scenario, root, tmp)
-        res["png"] = os.path.relpath(plot(res, args.out, key), ROOT)
-        res["frontier"] = frontier(res)
-        res["frontier_converged"] = frontier(res, converged=True)
+        res["png"] = os.path.relpath(plot(key, res, args.out), ROOT)
+        res["wall_s"] = time.time() - t0
+        res["load_average_end"] = os.getloadavg()
         results[key] = res
-    print("load average at the end: %.2f %.2f %.2f" % os.getloadavg())
-    for which, head in (("frontier", "every gate of the shipped scenario (against the ideal run)"),
-                        ("frontier_converged", "the goal gates applied to the end state's deviation from "
-                                               "the engine's own converged run")):
-        print(f"\nFrontier: least CPU time of a run meeting {head}")
-        print(f"{'system':<26} {'harness':>22} {'MuJoCo':>22} {'MuJoCo/harness':>15}")
-        for key, res in results.items():
-            cells = []
-            for eng in ("harness", "mujoco"):
-                f = res[which][eng]
-                cells.append(f"{f[0] * 1e3:8.2f} ms at {f[1] * 1e3:g} ms" if f else "never")
-            h, k = res[which]["harness"], res[which]["mujoco"]
-            ratio = f"{k[0] / h[0]:.2f}" if h and k else "-"
-            print(f"{res['system']:<26} {cells[0]:>22} {cells[1]:>22} {ratio:>15}")
-    for key, res in results.items():
         with open(os.path.join(args.out, f"work_precision_{key}.json"), "w") as f:
-            json.dump(res, f, indent=1)
+            json.dump(res, f, indent=1, default=float)
+        print(f"  {title}: {res['wall_s']:.0f} s wall", flush=True)
+    print("load average at the end: %.2f %.2f %.2f" % os.getloadavg())
+    print("\n" + frontier_table(results))
 
 
 if __name__ == "__main__":

@@ -99,12 +99,28 @@ pub struct Timings {
     pub physics_cpu: Option<f64>,
 }
 
-/// CPU time the calling thread has used so far, s: Linux's per-thread
-/// scheduler statistics (nanoseconds on the CPU); `None` elsewhere.
+/// CPU time the calling thread has used so far, s: `CLOCK_THREAD_CPUTIME_ID`
+/// (what Python's `time.thread_time` reads); `None` where it is missing.
+///
+/// Not `/proc/thread-self/schedstat`: the kernel brings a running thread's
+/// sum there up to date only at scheduler ticks, so a run of a few
+/// milliseconds read 0 or a whole tick (the work-precision study measured a
+/// 0.0 s replay).
+#[cfg(unix)]
 pub fn thread_cpu_s() -> Option<f64> {
-    let text = std::fs::read_to_string("/proc/thread-self/schedstat").ok()?;
-    let ns: u64 = text.split_whitespace().next()?.parse().ok()?;
-    Some(ns as f64 * 1e-9)
+    let mut ts = libc::timespec {
+        tv_sec: 0,
+        tv_nsec: 0,
+    };
+    // SAFETY: `ts` is a valid, writable timespec for the duration of the call.
+    let rc = unsafe { libc::clock_gettime(libc::CLOCK_THREAD_CPUTIME_ID, &mut ts) };
+    (rc == 0).then_some(ts.tv_sec as f64 + ts.tv_nsec as f64 * 1e-9)
+}
+
+/// CPU time the calling thread has used so far: not measured off Unix.
+#[cfg(not(unix))]
+pub fn thread_cpu_s() -> Option<f64> {
+    None
 }
 
 /// Result of one scenario run.

@@ -221,14 +221,11 @@ pub struct Run {
     pub cpu_s: f64,
 }
 
-/// CPU time of the calling thread so far, s (Linux: `/proc/thread-self/schedstat`;
-/// NaN elsewhere). A run executes on one thread, so the difference across
-/// it is the run's own CPU time, whatever else the machine runs.
+/// CPU time of the calling thread so far, s ([`crate::runner::thread_cpu_s`];
+/// NaN where it is not measured). A run executes on one thread, so the
+/// difference across it is the run's own CPU time, whatever else the machine runs.
 pub fn thread_cpu_s() -> f64 {
-    std::fs::read_to_string("/proc/thread-self/schedstat")
-        .ok()
-        .and_then(|s| s.split_whitespace().next()?.parse::<f64>().ok())
-        .map_or(f64::NAN, |ns| ns * 1e-9)
+    crate::runner::thread_cpu_s().unwrap_or(f64::NAN)
 }
 
 /// Run the scenario of `ctx` under `p`.
