@@ -121,17 +121,19 @@ fn module_of(src: &Path, file: &Path) -> Vec<String> {
 
 /// Every module path a line names: `crate::a::b`, `super::c` (resolved from
 /// `module`), and the items of a `use P::{x, y::z}` group.
-fn paths_in(line: &str, module: &[String], is_mod_rs: bool) -> Vec<Vec<String>> {
+fn paths_in(line: &str, module: &[String], _is_mod_rs: bool) -> Vec<Vec<String>> {
     let ident = |c: char| c.is_ascii_alphanumeric() || c == '_';
     let mut out = Vec::new();
     let mut rest = line;
-    while let Some(i) = rest.find(|c: char| c == 'c' || c == 's') {
+    while let Some(i) = rest.find(['c', 's']) {
         let tail = &rest[i..];
         let before_ok = i == 0 || !rest[..i].ends_with(|c: char| ident(c) || c == ':');
         let (base, skip) = if before_ok && tail.starts_with("crate::") {
             (Vec::new(), "crate::".len())
         } else if before_ok && tail.starts_with("super::") {
-            // `super` of a mod.rs is its directory's parent; of a file, its directory.
+            // `super` of a mod.rs is its directory's parent; of a file, its
+            // directory: `module_of` names a mod.rs by its directory, so
+            // both drop one component per `super`.
             let mut b = module.to_vec();
             let mut t = tail;
             let mut n = 0;
@@ -139,7 +141,7 @@ fn paths_in(line: &str, module: &[String], is_mod_rs: bool) -> Vec<Vec<String>> 
                 t = &t["super::".len()..];
                 n += 1;
             }
-            let up = if is_mod_rs { n } else { n };
+            let up = n;
             for _ in 0..up {
                 b.pop();
             }

@@ -71,6 +71,20 @@ pub fn to_spatial(p: &RPose) -> SPose<f64> {
     }
 }
 
+/// URDF `<origin>` (xyz, fixed-axis roll-pitch-yaw) as an engine pose:
+/// R = Rz(yaw) Ry(pitch) Rx(roll).
+pub fn origin(p: &urdf_rs::Pose) -> RPose {
+    RPose::from_parts(
+        vector(p.xyz[0], p.xyz[1], p.xyz[2]),
+        Rotation::from_euler(
+            super::super::rapier::glamx::EulerRot::ZYX,
+            r(p.rpy[2]),
+            r(p.rpy[1]),
+            r(p.rpy[0]),
+        ),
+    )
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -89,18 +103,4 @@ mod tests {
             }
         }
     }
-}
-
-/// URDF `<origin>` (xyz, fixed-axis roll-pitch-yaw) as an engine pose:
-/// R = Rz(yaw) Ry(pitch) Rx(roll).
-pub fn origin(p: &urdf_rs::Pose) -> RPose {
-    RPose::from_parts(
-        vector(p.xyz[0], p.xyz[1], p.xyz[2]),
-        Rotation::from_euler(
-            super::super::rapier::glamx::EulerRot::ZYX,
-            r(p.rpy[2]),
-            r(p.rpy[1]),
-            r(p.rpy[0]),
-        ),
-    )
 }
