@@ -112,6 +112,18 @@ pub(crate) enum Cmd {
     /// run's logs plus LOGS/<scenario>/margins.json (every level, plotted
     /// by `report`). Exit 0, 2 bad input (nothing run), 3 runtime failure.
     Margin(anholonomy::margin::cli::MarginArgs),
+    /// Write a starter repository into DIR that works with this binary
+    /// alone: a `diff_drive` scenario on a plan file and one driven by a
+    /// Python feedback law (standard library only), the URDF, baselines made
+    /// on the spot, a GitHub Actions workflow and a GitLab CI job pinned to
+    /// this version, and a .gitignore for logs.
+    ///
+    /// Then `cd DIR && anholonomy check scenarios/ --baseline baselines/`
+    /// passes. Exit 2 when DIR exists and is not empty (nothing written).
+    Init(anholonomy::init::InitArgs),
+    /// List the shipped models (URDFs embedded in the binary); `models
+    /// export DIR [NAME...]` writes them.
+    Models(anholonomy::init::ModelsArgs),
     /// Print every key of a model's or planner's table, or of the scenario file's own
     /// tables, with its default, type and range, and description.
     ///

@@ -14,6 +14,7 @@ pub mod cancel;
 pub mod compare;
 pub mod error;
 pub mod gate;
+pub mod init;
 pub mod input;
 pub mod integrate;
 pub mod junit;

@@ -705,6 +705,8 @@ fn main() -> ExitCode {
         } => keys_cmd(name.as_deref(), *markdown, out.as_deref()),
         Cmd::Merge { paths, out } => merge_cmd(paths, out.as_deref()),
         Cmd::Margin(a) => anholonomy::margin::cli::margin_cmd(a),
+        Cmd::Init(a) => anholonomy::init::init_cmd(a),
+        Cmd::Models(a) => anholonomy::init::models_cmd(a),
     };
     match res {
         Ok(code) => ExitCode::from(code),

@@ -333,27 +333,17 @@ fn a_csv_of_the_same_commands_gives_identical_metrics() {
 
 /// The committed bags are what `make_bags.py` writes with rosbags, byte
 /// for byte (so the tests above read bags of a standard rosbag2 writer,
-/// and a change to the script shows in the bags). Needs python3 with
-/// rosbags and numpy; .ci/run installs them (and sets CI, where the test
-/// must run).
+/// and a change to the script shows in the bags). Python with rosbags and
+/// numpy comes from `common::python` (a venv under target/ when python3
+/// lacks them).
 #[test]
 fn bags_are_what_make_bags_writes() {
-    let python = std::process::Command::new("python3")
-        .args(["-c", "import rosbags.rosbag2, numpy"])
-        .output();
-    if !python.is_ok_and(|o| o.status.success()) {
-        assert!(
-            std::env::var_os("CI").is_none(),
-            "CI needs python3 with rosbags and numpy (pip install rosbags numpy)"
-        );
-        eprintln!("skipped: no python3 with rosbags (pip install rosbags numpy)");
-        return;
-    }
+    let python = python::python_with("rosbags");
     let dir = tempfile::tempdir().unwrap();
     let script = dir.path().join("examples/ros_bags/make_bags.py");
     std::fs::create_dir_all(script.parent().unwrap()).unwrap();
     std::fs::copy(root().join("examples/ros_bags/make_bags.py"), &script).unwrap();
-    let out = std::process::Command::new("python3")
+    let out = std::process::Command::new(&python)
         .arg(&script)
         .output()
         .unwrap();

@@ -199,7 +199,17 @@ impl KeyIndex {
             // The span is the unknown key itself.
             let expected = raw.split_once(", ").map(|(_, e)| e).unwrap_or("");
             let key = at.clone().unwrap_or_else(|| field.to_string());
-            (key, format!("unknown key ({expected})"))
+            // The nearest expected name, as for metric names.
+            let hint = expected
+                .split('`')
+                .skip(1)
+                .step_by(2)
+                .map(|k| (strsim::jaro_winkler(field, k), k))
+                .max_by(|a, b| a.0.total_cmp(&b.0))
+                .filter(|(score, _)| *score >= 0.85)
+                .map(|(_, k)| format!("did you mean `{k}`? "))
+                .unwrap_or_default();
+            (key, format!("unknown key ({hint}{expected})"))
         } else {
             (at.unwrap_or_default(), raw.clone())
         };

@@ -3,6 +3,7 @@
 
 #[path = "../../src/prop_config.rs"]
 pub mod prop_config;
+pub mod python;
 
 use anholonomy::runner::{run, Prepared, RunOptions, RunOutcome};
 use anholonomy::scenario::Scenario;

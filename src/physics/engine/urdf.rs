@@ -257,7 +257,9 @@ pub fn require_radius(
         return Err(SetupError::key(
             "model.radius",
             format!(
-                "URDF radius of {what} ({} m) differs from the scenario's model.radius ({} m)",
+                "URDF radius of {what} ({} m) differs from the scenario's model.radius ({} m): \
+                 the physics body comes from the URDF, so change the radius of link `{link}`'s \
+                 collision (and its inertia) in a copy of the URDF too",
                 crate::numfmt::shortest(r),
                 crate::numfmt::shortest(radius)
             ),

@@ -1,0 +1,254 @@
+//! `anholonomy init DIR` (a starter repository that works with the installed
+//! binary alone) and `anholonomy models` (the shipped URDFs, embedded in the
+//! binary, since `cargo install` installs no `models/` directory).
+
+use crate::baseline::{self, Baseline};
+use crate::error::Error;
+use crate::runner::RunOptions;
+use crate::validate::{prepare_all, Call};
+use std::path::PathBuf;
+
+/// The shipped models, by kind, as the repository's `models/` holds them.
+pub const MODELS: &[(&str, &str)] = &[
+    ("car", include_str!("../../models/car.urdf")),
+    ("diff_drive", include_str!("../../models/diff_drive.urdf")),
+    (
+        "mobile_manipulator",
+        include_str!("../../models/mobile_manipulator.urdf"),
+    ),
+    (
+        "rolling_disk",
+        include_str!("../../models/rolling_disk.urdf"),
+    ),
+    ("rover", include_str!("../../models/rover.urdf")),
+    ("space_robot", include_str!("../../models/space_robot.urdf")),
+    ("sphere", include_str!("../../models/sphere.urdf")),
+];
+
+/// The version written into the CI files (the install is pinned to it).
+pub const VERSION: &str = env!("CARGO_PKG_VERSION");
+
+/// Arguments of `anholonomy init`.
+#[derive(clap::Args, Debug)]
+pub struct InitArgs {
+    /// The new repository's directory (created; it must not exist or be empty).
+    pub dir: PathBuf,
+    /// Install anholonomy in CI from this git repository (tag `vVERSION`)
+    /// instead of crates.io (`cargo install anholonomy --version =VERSION`).
+    #[arg(long, value_name = "URL")]
+    pub git: Option<String>,
+}
+
+/// Arguments of `anholonomy models`.
+#[derive(clap::Args, Debug)]
+pub struct ModelsArgs {
+    #[command(subcommand)]
+    pub cmd: Option<ModelsCmd>,
+}
+
+/// `anholonomy models export`.
+#[derive(clap::Subcommand, Debug)]
+pub enum ModelsCmd {
+    /// Write shipped URDFs into DIR as NAME.urdf (all of them without NAME).
+    ///
+    /// An existing file is left alone and reported (exit 2, nothing
+    /// written) unless --force.
+    Export {
+        /// Directory to write into (created if needed).
+        dir: PathBuf,
+        /// Models to write (see `anholonomy models`); default: every one.
+        names: Vec<String>,
+        /// Overwrite existing files.
+        #[arg(long)]
+        force: bool,
+    },
+}
+
+/// The URDF text of a shipped model.
+pub fn model(name: &str) -> Option<&'static str> {
+    MODELS.iter().find(|(n, _)| *n == name).map(|(_, t)| *t)
+}
+
+fn names() -> String {
+    MODELS
+        .iter()
+        .map(|(n, _)| *n)
+        .collect::<Vec<_>>()
+        .join(", ")
+}
+
+/// `anholonomy models [export DIR [NAME...]]`.
+pub fn models_cmd(a: &ModelsArgs) -> Result<u8, Vec<Error>> {
+    let Some(ModelsCmd::Export {
+        dir,
+        names: want,
+        force,
+    }) = &a.cmd
+    else {
+        for (n, text) in MODELS {
+            crate::say!("{n:<20} {n}.urdf ({} bytes)", text.len());
+        }
+        crate::say!("`anholonomy models export DIR [NAME...]` writes them.");
+        return Ok(0);
+    };
+    let mut errors = Vec::new();
+    let mut files = Vec::new();
+    let chosen: Vec<&str> = if want.is_empty() {
+        MODELS.iter().map(|(n, _)| *n).collect()
+    } else {
+        want.iter().map(String::as_str).collect()
+    };
+    for n in chosen {
+        let Some(text) = model(n) else {
+            errors.push(Error::input(
+                n,
+                format!("no shipped model `{n}` (there are {})", names()),
+            ));
+            continue;
+        };
+        let path = dir.join(format!("{n}.urdf"));
+        if path.exists() && !force {
+            errors.push(Error::input(&path, "exists: give --force to overwrite it"));
+        }
+        files.push((path, text.to_string()));
+    }
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    write_files(&files)?;
+    for (p, _) in &files {
+        crate::say!("wrote {}", p.display());
+    }
+    Ok(0)
+}
+
+fn write_files(files: &[(PathBuf, String)]) -> Result<(), Vec<Error>> {
+    for (path, text) in files {
+        let res = path
+            .parent()
+            .map_or(Ok(()), std::fs::create_dir_all)
+            .and_then(|_| std::fs::write(path, text));
+        if let Err(e) = res {
+            return Err(vec![Error::Log {
+                path: path.clone(),
+                message: e.to_string(),
+            }]);
+        }
+    }
+    Ok(())
+}
+
+/// The starter repository's files (without the baselines, which are run).
+pub fn starter_files(git: Option<&str>) -> Vec<(&'static str, String)> {
+    let install = match git {
+        Some(url) => format!(
+            "cargo install --locked --force --git {url} --tag \"v$ANHOLONOMY_VERSION\" anholonomy"
+        ),
+        None => {
+            "cargo install --locked --force anholonomy --version \"=$ANHOLONOMY_VERSION\"".into()
+        }
+    };
+    let fill = |t: &str| {
+        t.replace("@VERSION@", VERSION)
+            .replace("@INSTALL@", &install)
+    };
+    vec![
+        ("README.md", fill(include_str!("starter/README.md"))),
+        (".gitignore", include_str!("starter/gitignore").into()),
+        (
+            ".github/workflows/anholonomy.yml",
+            fill(include_str!("starter/github.yml")),
+        ),
+        (".gitlab-ci.yml", fill(include_str!("starter/gitlab.yml"))),
+        (
+            "models/diff_drive.urdf",
+            model("diff_drive").unwrap().into(),
+        ),
+        (
+            "plans/s_curve.csv",
+            include_str!("starter/s_curve.csv").into(),
+        ),
+        (
+            "scenarios/s_curve.toml",
+            include_str!("starter/s_curve.toml").into(),
+        ),
+        (
+            "laws/go_to_pose.py",
+            include_str!("../../examples/diff_drive_law/law.py").into(),
+        ),
+        (
+            "scenarios/go_to_pose.toml",
+            include_str!("starter/go_to_pose.toml").into(),
+        ),
+    ]
+}
+
+/// `anholonomy init DIR`: write the starter repository, run its scenarios
+/// and write their baselines, so `check` passes in it at once.
+pub fn init_cmd(a: &InitArgs) -> Result<u8, Vec<Error>> {
+    let dir = &a.dir;
+    if dir.exists() {
+        let empty = std::fs::read_dir(dir).map(|mut d| d.next().is_none());
+        if !matches!(empty, Ok(true)) {
+            return Err(vec![Error::input(
+                dir,
+                "exists and is not an empty directory: `init` writes a new repository",
+            )]);
+        }
+    }
+    let files: Vec<(PathBuf, String)> = starter_files(a.git.as_deref())
+        .into_iter()
+        .map(|(p, t)| (dir.join(p), t))
+        .collect();
+    write_files(&files)?;
+    let call = Call {
+        log_root: None,
+        sharded: false,
+        max_steps: None,
+    };
+    let preps = prepare_all(&[dir.join("scenarios")], &call)?;
+    let opts = RunOptions {
+        log_root: None,
+        progress: false,
+        pose_rate: crate::runner::DEFAULT_POSE_RATE,
+        cancel: Default::default(),
+        keep: crate::log::Keep::All,
+        batch: true,
+    };
+    let base = dir.join("baselines");
+    let mut errors = Vec::new();
+    for (res, _) in crate::suite::run_all(&preps, &opts, None, &[]) {
+        match res {
+            Ok(o) if o.verdict.ok() => {
+                let path = baseline::path_for(&base, &o.name);
+                if let Err(m) = Baseline::from_outcome(&o).write(&path) {
+                    errors.push(Error::Log { path, message: m });
+                }
+                crate::say!(
+                    "{}: {} (baseline written)",
+                    o.name,
+                    o.verdict.describe(&o.failures, None)
+                );
+            }
+            // The starter's gates hold on every platform the tests run on:
+            // a failure here is worth a report, not a silent baseline.
+            Ok(o) => errors.push(Error::input(
+                dir.join("scenarios").join(format!("{}.toml", o.name)),
+                format!(
+                    "the starter scenario does not pass here ({}): no baseline written",
+                    o.failures.join("; ")
+                ),
+            )),
+            Err(e) => errors.push(e),
+        }
+    }
+    if !errors.is_empty() {
+        return Err(errors);
+    }
+    crate::say!(
+        "wrote a starter repository in {} (anholonomy {VERSION}); try:\n  cd {} && anholonomy check scenarios/ --baseline baselines/ --report",
+        dir.display(),
+        dir.display()
+    );
+    Ok(0)
+}
