@@ -83,6 +83,13 @@ pub enum DipoleProduct {
     GeometricMean,
     /// Π_r γ_r as printed (identical for one robot).
     Printed,
+    /// Ours: one dipole for the whole formation, γ = |(1/k) Σ_r x_r| with
+    /// x_r the signed coordinate of robot r's platform point along its goal
+    /// heading (after H2). For a formation whose goal headings agree it is
+    /// the dipole of the platforms' centroid: V's zero set is the one plane
+    /// through the goal centroid across the goal heading, and no robot is
+    /// asked to approach along its own axis (identical for one robot).
+    Formation,
 }
 
 /// Singular sets of each arm (zeros of the three factors of det J, see
@@ -227,6 +234,74 @@ impl<T: Scalar> Evaluation<T> {
     }
 }
 
+/// ln V split into its factors: ln V = dipole − d + obstacles + robots +
+/// beam_parts + beam_obstacles + singular + admissible, the numerator's
+/// factors already divided by k_v (for diagnostics: which factor's gradient
+/// drives or holds a robot).
+#[derive(Debug, Clone)]
+pub struct Terms<T> {
+    /// ln of the dipole factor (Π γ_r, or its geometric mean).
+    pub dipole: T,
+    /// ln Σ_p ‖h2^p‖² (enters ln V with a minus sign).
+    pub d: T,
+    /// Robot parts against the static obstacles, / k_v.
+    pub obstacles: T,
+    /// Robot parts against the other robot's parts, / k_v.
+    pub robots: T,
+    /// Robot parts against the beam's segments, / k_v.
+    pub beam_parts: T,
+    /// The beam's segments against the static obstacles, / k_v.
+    pub beam_obstacles: T,
+    /// The singularity enclosures, / k_v.
+    pub singular: T,
+    /// ln b_f, the beam's admissible set, / k_v.
+    pub admissible: T,
+    /// Each robot's dipole γ_r.
+    pub gammas: Vec<T>,
+}
+
+impl<T: Scalar> Default for Terms<T> {
+    fn default() -> Self {
+        Terms {
+            dipole: k(0.0),
+            d: k(0.0),
+            obstacles: k(0.0),
+            robots: k(0.0),
+            beam_parts: k(0.0),
+            beam_obstacles: k(0.0),
+            singular: k(0.0),
+            admissible: k(0.0),
+            gammas: Vec::new(),
+        }
+    }
+}
+
+impl<T: Scalar> Terms<T> {
+    /// (name, contribution to ln V): they sum to ln V.
+    pub fn named(&self) -> Vec<(&'static str, T)> {
+        vec![
+            ("dipole", self.dipole),
+            ("goal", -self.d),
+            ("obstacles", self.obstacles),
+            ("robots", self.robots),
+            ("beam_parts", self.beam_parts),
+            ("beam_obstacles", self.beam_obstacles),
+            ("singular", self.singular),
+            ("admissible", self.admissible),
+        ]
+    }
+}
+
+/// ln V's factors at one configuration with their gradients
+/// ([`Scene::term_gradients`]).
+#[derive(Debug, Clone)]
+pub struct TermGradients {
+    /// (name, value, ∂/∂q) of each contribution to ln V ([`Terms::named`]).
+    pub terms: Vec<(&'static str, f64, Vec<f64>)>,
+    /// Each robot's dipole γ_r.
+    pub gammas: Vec<f64>,
+}
+
 /// Which pair is closest (for messages).
 #[derive(Debug, Clone, PartialEq)]
 pub struct Closest {
@@ -288,6 +363,21 @@ impl Scene {
         Ok(s)
     }
 
+    /// The same scene (obstacles, beam, parameters) with another goal.
+    pub fn with_goal(&self, goal: Vec<f64>) -> Result<Scene, String> {
+        let s = Scene::new(
+            self.robots,
+            self.parts.clone(),
+            self.obstacles.clone(),
+            goal,
+            self.params,
+        )?;
+        Ok(match &self.object {
+            Some(o) => s.with_object(o.clone()),
+            None => s,
+        })
+    }
+
     /// The scene with a carried beam (two robots).
     pub fn with_object(mut self, object: Carried) -> Scene {
         self.object = Some(object);
@@ -341,7 +431,21 @@ impl Scene {
         measured: Option<&GraspCorrection>,
         warm: &mut Warm,
     ) -> Result<Evaluation<T>, ContactError> {
+        self.evaluate_terms(q, measured, warm).map(|(e, _)| e)
+    }
+
+    /// As [`Scene::evaluate_with`], with ln V split into its factors
+    /// ([`Terms`]; for diagnostics).
+    pub fn evaluate_terms<T: Scalar>(
+        &self,
+        q: &[T],
+        measured: Option<&GraspCorrection>,
+        warm: &mut Warm,
+    ) -> Result<(Evaluation<T>, Terms<T>), ContactError> {
         let n = self.parts.len();
+        let n_static = self.obstacles.len();
+        let n_robots = (self.robots - 1) * n;
+        let mut terms = Terms::<T>::default();
         let placed = self.placed_parts(q);
         let beam = self.object.as_ref().map(|o| {
             let st = match measured {
@@ -362,6 +466,7 @@ impl Scene {
         let mut ln_num = k::<T>(0.0);
         let mut d = k::<T>(0.0);
         let mut gamma = k::<T>(1.0);
+        let mut x_sum = k::<T>(0.0);
         let mut min_beta = f64::INFINITY;
         let mut slot = 0;
         let mut collided = false;
@@ -438,16 +543,26 @@ impl Scene {
                         shift = spatial::add(shift, spatial::scale(*delta, *s * (sqrt_b - 1.0)));
                     }
                 }
-                for (_, delta) in &seen {
+                for (j, (_, delta)) in seen.iter().enumerate() {
                     let moved = spatial::add(*delta, shift);
-                    ln_num +=
-                        (spatial::dot(moved, moved) / spatial::dot(*delta, *delta)).ln() * 0.5;
+                    let l = (spatial::dot(moved, moved) / spatial::dot(*delta, *delta)).ln() * 0.5;
+                    ln_num += l;
+                    if j < n_static {
+                        terms.obstacles += l;
+                    } else if j < n_static + n_robots {
+                        terms.robots += l;
+                    } else {
+                        terms.beam_parts += l;
+                    }
                 }
                 let h2 = spatial::add(h, spatial::mul_mtv(&rot, shift));
                 d += spatial::dot(h2, h2);
                 if i == 0 {
                     // The dipole: |x| in the goal frame, with sign(0) = +1 (App. G).
-                    gamma *= if h2[0].re() >= 0.0 { h2[0] } else { -h2[0] };
+                    let g = if h2[0].re() >= 0.0 { h2[0] } else { -h2[0] };
+                    gamma *= g;
+                    x_sum += h2[0];
+                    terms.gammas.push(g);
                 }
             }
         }
@@ -467,7 +582,9 @@ impl Scene {
                     if !collided {
                         // Envelope theorem: the obstacle is fixed, the segment moves.
                         let b = seg.value(spatial::lift(sol.x)) * sol.mu + sol.value;
-                        ln_num += (b / (b + 1.0)).ln();
+                        let l = (b / (b + 1.0)).ln();
+                        ln_num += l;
+                        terms.beam_obstacles += l;
                     }
                 }
             }
@@ -481,7 +598,9 @@ impl Scene {
             {
                 min_singular = min_singular.min(s.re());
                 if s.re() > 0.0 {
-                    ln_num += (s / (s + 1.0)).ln();
+                    let l = (s / (s + 1.0)).ln();
+                    ln_num += l;
+                    terms.singular += l;
                 }
             }
         }
@@ -489,6 +608,7 @@ impl Scene {
             Some((_, ln_bf, m, margin)) => {
                 if let Some(l) = ln_bf {
                     ln_num += *l;
+                    terms.admissible = *l;
                 }
                 (*m, *margin)
             }
@@ -503,18 +623,91 @@ impl Scene {
                 DipoleProduct::GeometricMean if self.robots > 1 => {
                     gamma.powf(1.0 / self.robots as f64)
                 }
+                DipoleProduct::Formation => {
+                    let m = x_sum * (1.0 / self.robots as f64);
+                    if m.re() >= 0.0 {
+                        m
+                    } else {
+                        -m
+                    }
+                }
                 _ => gamma,
             };
             gamma * (ln_num * (1.0 / self.params.kv)).exp() / d
         };
-        Ok(Evaluation {
-            v,
-            d: d.re(),
-            min_beta,
-            min_singular,
-            max_deformation,
-            admissible,
-        })
+        let inv_kv = 1.0 / self.params.kv;
+        let inv_k = match self.params.dipole {
+            DipoleProduct::GeometricMean => 1.0 / self.robots as f64,
+            _ => 1.0,
+        };
+        terms.dipole = match self.params.dipole {
+            DipoleProduct::Formation => {
+                let m = x_sum * (1.0 / self.robots as f64);
+                (if m.re() >= 0.0 { m } else { -m }).ln()
+            }
+            _ => terms
+                .gammas
+                .iter()
+                .fold(k::<T>(0.0), |acc, g| acc + g.ln() * inv_k),
+        };
+        terms.d = d.ln();
+        for t in [
+            &mut terms.obstacles,
+            &mut terms.robots,
+            &mut terms.beam_parts,
+            &mut terms.beam_obstacles,
+            &mut terms.singular,
+            &mut terms.admissible,
+        ] {
+            *t = *t * inv_kv;
+        }
+        Ok((
+            Evaluation {
+                v,
+                d: d.re(),
+                min_beta,
+                min_singular,
+                max_deformation,
+                admissible,
+            },
+            terms,
+        ))
+    }
+
+    /// ln V's factors at q and their gradients (forward dual numbers; for
+    /// diagnostics, [`Terms::named`] order). `None` in collision, outside
+    /// the beam's admissible set or inside a singularity enclosure (V = 0).
+    pub fn term_gradients(&self, q: &[f64]) -> Result<Option<TermGradients>, ContactError> {
+        match self.robots {
+            1 => self.term_gradients_n::<9>(q),
+            _ => self.term_gradients_n::<18>(q),
+        }
+    }
+
+    fn term_gradients_n<const N: usize>(
+        &self,
+        q: &[f64],
+    ) -> Result<Option<TermGradients>, ContactError> {
+        let qd: Vec<DualSVec64<N>> = q
+            .iter()
+            .enumerate()
+            .map(|(i, &x)| DualSVec64::<N>::from_re(x).derivative(i))
+            .collect();
+        let (e, t) = self.evaluate_terms(&qd, None, &mut self.warm())?;
+        if e.v.re <= 0.0 {
+            return Ok(None);
+        }
+        let grad = |x: &DualSVec64<N>| match &x.eps.0 {
+            Some(g) => g.iter().copied().collect(),
+            None => vec![0.0; N],
+        };
+        let terms = t
+            .named()
+            .into_iter()
+            .map(|(name, x)| (name, x.re, grad(&x)))
+            .collect();
+        let gammas = t.gammas.iter().map(|g| g.re).collect();
+        Ok(Some(TermGradients { terms, gammas }))
     }
 
     pub(super) fn solve(
