@@ -64,11 +64,21 @@ fn main() {
         match a.as_str() {
             "--set" => {
                 let kv = it.next().unwrap_or_else(|| fail("--set needs KEY=VALUE"));
-                let (k, v) = kv.split_once('=').unwrap_or_else(|| fail("--set KEY=VALUE"));
-                let v: f64 = v.parse().unwrap_or_else(|e| fail(format!("--set {kv}: {e}")));
+                let (k, v) = kv
+                    .split_once('=')
+                    .unwrap_or_else(|| fail("--set KEY=VALUE"));
+                let v: f64 = v
+                    .parse()
+                    .unwrap_or_else(|e| fail(format!("--set {kv}: {e}")));
                 set.insert(k.to_string(), v);
             }
-            "--out" => out = Some(it.next().unwrap_or_else(|| fail("--out needs a file")).into()),
+            "--out" => {
+                out = Some(
+                    it.next()
+                        .unwrap_or_else(|| fail("--out needs a file"))
+                        .into(),
+                )
+            }
             f if !f.starts_with("--") && file.is_none() => file = Some(PathBuf::from(f)),
             other => fail(format!("unknown argument `{other}`")),
         }

@@ -34,8 +34,8 @@ use crate::planner::{check_param, PlanError};
 pub use control::SpeedLaw;
 use control::{Branch, Gains};
 use potential::{DipoleProduct, GoalFrame, GraspCorrection, Scene, SingularityEnclosure, Warm};
-pub use sequence::{SequenceMode, SequenceParams};
 use schemars::JsonSchema;
+pub use sequence::{SequenceMode, SequenceParams};
 use serde::{Deserialize, Serialize};
 use stall::{Progress, StallParams, Verdict};
 use std::sync::Arc;
@@ -137,7 +137,8 @@ pub struct DilfParams {
     #[serde(default)]
     pub goal_frame: GoalFrame,
     /// How several robots' dipole factors combine in V (Eq. 15; see
-    /// [`DipoleProduct`]): `"geometric_mean"` (default) or `"printed"`.
+    /// [`DipoleProduct`]): `"geometric_mean"` (default), `"printed"` or
+    /// `"formation"` (ours).
     #[serde(default)]
     pub dipole: DipoleProduct,
     /// p of the field f = (Σ‖h2‖²)^p ∂V/∂q; Eq. 17 prints p = 2 (the research notes on seed 004 discuss it).
@@ -431,8 +432,7 @@ impl DilfController {
         let p = self.policy.clone();
         let mut moved = false;
         while self.phase < p.phases.len()
-            && p
-                .sequence
+            && p.sequence
                 .reached(&p.tolerance, q, &p.phases[self.phase].goal)
         {
             self.phase += 1;
@@ -757,8 +757,7 @@ fn choose_sequence(
     );
     let mut tried = 1;
     for psi in headings {
-        let goals =
-            sequence::phase_goals(start, &scene.goal, psi, sq.max_turn_deg.to_radians());
+        let goals = sequence::phase_goals(start, &scene.goal, psi, sq.max_turn_deg.to_radians());
         let phases: Option<Vec<Arc<Scene>>> = goals[..goals.len() - 1]
             .iter()
             .map(|g| {
