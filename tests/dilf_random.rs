@@ -353,7 +353,7 @@ fn ideal(prep: &Prepared) -> Outcome {
         String::new()
     } else {
         let mut v: Vec<_> = tally.into_iter().collect();
-        v.sort_by(|a, b| b.1.cmp(&a.1));
+        v.sort_by_key(|x| std::cmp::Reverse(x.1));
         v.iter()
             .take(2)
             .map(|(l, c)| format!("{l} {:.0}%", 100.0 * *c as f64 / n.max(1) as f64))

@@ -659,7 +659,7 @@ impl Scene {
             &mut terms.singular,
             &mut terms.admissible,
         ] {
-            *t = *t * inv_kv;
+            *t *= inv_kv;
         }
         Ok((
             Evaluation {
