@@ -26,6 +26,7 @@ pub mod potential;
 mod scratch;
 pub mod sequence;
 pub mod stall;
+pub mod terms;
 
 use crate::model::mobile_manipulator::{self as mm, DOF, INPUTS};
 use crate::model::{Input, State};
@@ -691,8 +692,8 @@ pub fn plan(
     };
     let mut chosen = Arc::new(policy(Vec::new()));
     if params.sequence.mode == SequenceMode::Auto {
-        let run = |p: &Arc<Policy>| ideal_time_to_goal(p, start, params, step);
-        let (picked, found) = choose_sequence(&scene, q, params, &chosen, policy, run);
+        let run = |p: &Arc<Policy>| sequence::ideal_time_to_goal(p, start, params, step);
+        let (picked, found) = sequence::choose_sequence(&scene, q, params, &chosen, policy, run);
         details["sequence"] = found;
         if let Some(p) = picked {
             chosen = p;
@@ -712,91 +713,4 @@ fn feedback_plan(policy: Arc<Policy>, params: &DilfParams, details: serde_json::
         },
         details,
     }
-}
-
-/// When the ideal run of `policy` from `start` converges (s; the harness's
-/// ideal run: [`crate::integrate::simulate`] with step `step`), or `None` if
-/// it stops otherwise or reaches the horizon.
-fn ideal_time_to_goal(
-    policy: &Arc<Policy>,
-    start: &State,
-    params: &DilfParams,
-    step: f64,
-) -> Option<f64> {
-    let robots = policy.scene.robots;
-    let plan = feedback_plan(policy.clone(), params, serde_json::Value::Null);
-    let tr = crate::integrate::simulate(&mm::MobileManipulator { robots }, &plan, start, step);
-    let converged = 2 * 3usize.pow(robots as u32);
-    (tr.label.last() == Some(&converged)).then(|| *tr.t.last().unwrap_or(&f64::NAN))
-}
-
-/// `[planner.sequence] mode = "auto"` ([`sequence`]): the paper's law if its
-/// ideal run converges (`Ok(None)`: keep `direct`), else the first approach
-/// heading whose sequence converges, with what was tried (for the plan's
-/// details).
-fn choose_sequence(
-    scene: &Arc<Scene>,
-    start: &[f64],
-    params: &DilfParams,
-    direct: &Arc<Policy>,
-    policy: impl Fn(Vec<Arc<Scene>>) -> Policy,
-    run: impl Fn(&Arc<Policy>) -> Option<f64>,
-) -> (Option<Arc<Policy>>, serde_json::Value) {
-    if let Some(t) = run(direct) {
-        return (
-            None,
-            serde_json::json!({"chosen": "direct", "tried": 1, "ideal_time": t}),
-        );
-    }
-    let sq = &params.sequence;
-    let headings = sequence::candidate_headings(
-        start,
-        &scene.goal,
-        sq.step_deg.to_radians(),
-        params.tolerance.position,
-    );
-    let mut tried = 1;
-    for psi in headings {
-        let goals = sequence::phase_goals(start, &scene.goal, psi, sq.max_turn_deg.to_radians());
-        let phases: Option<Vec<Arc<Scene>>> = goals[..goals.len() - 1]
-            .iter()
-            .map(|g| {
-                let s = scene.with_goal(g.clone()).ok()?;
-                // An intermediate goal with a part in an obstacle (V = 0
-                // there) cannot be reached.
-                check_configuration(&s, g, "goal").ok()?;
-                Some(Arc::new(s))
-            })
-            .collect();
-        let Some(phases) = phases else {
-            continue;
-        };
-        tried += 1;
-        let p = Arc::new(policy(phases));
-        if let Some(t) = run(&p) {
-            let deg = |x: f64| (x.to_degrees() * 1e3).round() / 1e3;
-            let goals: Vec<Vec<f64>> = goals
-                .iter()
-                .map(|g| {
-                    g.chunks(DOF)
-                        .flat_map(|r| [r[0], r[1], deg(r[2])])
-                        .collect()
-                })
-                .collect();
-            return (
-                Some(p),
-                serde_json::json!({
-                    "chosen": "sequence",
-                    "approach_heading_deg": deg(psi),
-                    "goals_x_y_theta_deg": goals,
-                    "tried": tried,
-                    "ideal_time": t,
-                }),
-            );
-        }
-    }
-    (
-        None,
-        serde_json::json!({"chosen": "direct", "tried": tried, "converged": false}),
-    )
 }

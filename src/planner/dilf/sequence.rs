@@ -32,12 +32,16 @@
 //! phase's goal has the task goal's joints). If no candidate converges the
 //! plan is the paper's law, which then stalls and says so.
 
-use super::Tolerance;
+use super::potential::Scene;
+use super::{check_configuration, feedback_plan, DilfParams, Policy, Tolerance};
 use crate::compare::wrap_angle;
+use crate::model::mobile_manipulator as mm;
 use crate::model::mobile_manipulator::DOF;
+use crate::model::State;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::f64::consts::PI;
+use std::sync::Arc;
 
 /// Whether the planner sequences the law through intermediate goals.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
@@ -211,6 +215,93 @@ pub fn candidate_headings(start: &[f64], goal: &[f64], step: f64, position: f64)
         }
     }
     out
+}
+
+/// When the ideal run of `policy` from `start` converges (s; the harness's
+/// ideal run: [`crate::integrate::simulate`] with step `step`), or `None` if
+/// it stops otherwise or reaches the horizon.
+pub(super) fn ideal_time_to_goal(
+    policy: &Arc<Policy>,
+    start: &State,
+    params: &DilfParams,
+    step: f64,
+) -> Option<f64> {
+    let robots = policy.scene.robots;
+    let plan = feedback_plan(policy.clone(), params, serde_json::Value::Null);
+    let tr = crate::integrate::simulate(&mm::MobileManipulator { robots }, &plan, start, step);
+    let converged = 2 * 3usize.pow(robots as u32);
+    (tr.label.last() == Some(&converged)).then(|| *tr.t.last().unwrap_or(&f64::NAN))
+}
+
+/// `[planner.sequence] mode = "auto"` (the module docs): the paper's law if its
+/// ideal run converges (`Ok(None)`: keep `direct`), else the first approach
+/// heading whose sequence converges, with what was tried (for the plan's
+/// details).
+pub(super) fn choose_sequence(
+    scene: &Arc<Scene>,
+    start: &[f64],
+    params: &DilfParams,
+    direct: &Arc<Policy>,
+    policy: impl Fn(Vec<Arc<Scene>>) -> Policy,
+    run: impl Fn(&Arc<Policy>) -> Option<f64>,
+) -> (Option<Arc<Policy>>, serde_json::Value) {
+    if let Some(t) = run(direct) {
+        return (
+            None,
+            serde_json::json!({"chosen": "direct", "tried": 1, "ideal_time": t}),
+        );
+    }
+    let sq = &params.sequence;
+    let headings = candidate_headings(
+        start,
+        &scene.goal,
+        sq.step_deg.to_radians(),
+        params.tolerance.position,
+    );
+    let mut tried = 1;
+    for psi in headings {
+        let goals = phase_goals(start, &scene.goal, psi, sq.max_turn_deg.to_radians());
+        let phases: Option<Vec<Arc<Scene>>> = goals[..goals.len() - 1]
+            .iter()
+            .map(|g| {
+                let s = scene.with_goal(g.clone()).ok()?;
+                // An intermediate goal with a part in an obstacle (V = 0
+                // there) cannot be reached.
+                check_configuration(&s, g, "goal").ok()?;
+                Some(Arc::new(s))
+            })
+            .collect();
+        let Some(phases) = phases else {
+            continue;
+        };
+        tried += 1;
+        let p = Arc::new(policy(phases));
+        if let Some(t) = run(&p) {
+            let deg = |x: f64| (x.to_degrees() * 1e3).round() / 1e3;
+            let goals: Vec<Vec<f64>> = goals
+                .iter()
+                .map(|g| {
+                    g.chunks(DOF)
+                        .flat_map(|r| [r[0], r[1], deg(r[2])])
+                        .collect()
+                })
+                .collect();
+            return (
+                Some(p),
+                serde_json::json!({
+                    "chosen": "sequence",
+                    "approach_heading_deg": deg(psi),
+                    "goals_x_y_theta_deg": goals,
+                    "tried": tried,
+                    "ideal_time": t,
+                }),
+            );
+        }
+    }
+    (
+        None,
+        serde_json::json!({"chosen": "direct", "tried": tried, "converged": false}),
+    )
 }
 
 #[cfg(test)]
