@@ -50,6 +50,16 @@ const FACTORS: [&str; 8] = [
     "admissible",
 ];
 
+const HELP: &str = "\
+Trace the ideal run of a dilf scenario at every policy sample: one CSV row
+per sample with ln V and its factors, each factor's gradient along and
+across each platform's heading and in theta, the branches, the hold
+guard's scale and the rod's wrench ratio (columns: the file's docs).
+
+usage: dilf_trace SCENARIO [--set KEY=VALUE]... [--out FILE.csv]
+  --set KEY=VALUE  any numeric scenario key, e.g. goal[0]=-9.1, planner.kv_gain=3
+  --out FILE       write the CSV there (default: stdout); a summary goes to stderr";
+
 fn fail(msg: impl std::fmt::Display) -> ! {
     eprintln!("error: {msg}");
     std::process::exit(2);
@@ -79,12 +89,17 @@ fn main() {
                         .into(),
                 )
             }
+            "-h" | "--help" => {
+                println!("{HELP}");
+                return;
+            }
             f if !f.starts_with("--") && file.is_none() => file = Some(PathBuf::from(f)),
             other => fail(format!("unknown argument `{other}`")),
         }
     }
     let file = file.unwrap_or_else(|| fail("usage: dilf_trace SCENARIO [--set K=V]... [--out F]"));
-    let text = std::fs::read_to_string(&file).unwrap_or_else(|e| fail(e));
+    let text =
+        std::fs::read_to_string(&file).unwrap_or_else(|e| fail(format!("{}: {e}", file.display())));
     let base = Scenario::parse(&file, &text).unwrap_or_else(|e| fail(e));
     let v = Variant {
         index: 0,
