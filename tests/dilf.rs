@@ -176,7 +176,7 @@ fn open_field_task(start: [f64; 9], goal: [f64; 9]) -> (f64, f64, usize) {
     )
     .unwrap();
     let start = State::from_vec(start.to_vec());
-    let plan = dilf::plan(Arc::new(scene), &start, &params).unwrap();
+    let plan = dilf::plan(Arc::new(scene), &start, &params, 0.004).unwrap();
     let dt = 0.002;
     let tr = simulate(&MobileManipulator { robots: 1 }, &plan, &start, dt);
     // Re-integrate the recorded (held) inputs exactly.

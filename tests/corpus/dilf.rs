@@ -117,6 +117,26 @@ pub fn cases(c: &mut Corpus) {
         Some("planner.approach.heading_deg"),
     );
     c.sc(
+        "sequence turn zero",
+        edit(
+            &po,
+            "grasps = \"measured\"",
+            "grasps = \"measured\"\n\n[planner.sequence]\nmode = \"auto\"\nmax_turn_deg = 0.0",
+        ),
+        Some("max_turn_deg = 0.0"),
+        Some("planner.sequence.max_turn_deg"),
+    );
+    c.sc(
+        "unknown sequence mode",
+        edit(
+            &po,
+            "grasps = \"measured\"",
+            "grasps = \"measured\"\n\n[planner.sequence]\nmode = \"always\"",
+        ),
+        Some("mode = \"always\""),
+        Some("planner.sequence.mode"),
+    );
+    c.sc(
         "unknown grasps source",
         edit(&po, "grasps = \"measured\"", "grasps = \"sensed\""),
         Some("grasps = \"sensed\""),

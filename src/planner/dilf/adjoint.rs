@@ -420,9 +420,16 @@ impl Scene {
             return Ok((evaluation(0.0), vec![0.0; DOF * k]));
         }
         let geometric = self.params.dipole == DipoleProduct::GeometricMean && k > 1;
+        let formation = self.params.dipole == DipoleProduct::Formation;
         let inv_k = 1.0 / k as f64;
         let decay = (ln_num * (1.0 / self.params.kv)).exp();
-        let dipole = if geometric { gamma.powf(inv_k) } else { gamma };
+        // The formation's dipole: |mean of the platforms' signed x|.
+        let x_mean = s.parts.iter().step_by(n).map(|st| st.h2[0]).sum::<f64>() * inv_k;
+        let dipole = match (formation, geometric) {
+            (true, _) => x_mean.abs(),
+            (false, true) => gamma.powf(inv_k),
+            (false, false) => gamma,
+        };
         let v = dipole * decay / d;
 
         // Reverse: V's adjoints, then each part's stage.
@@ -462,7 +469,11 @@ impl Scene {
             let (r, i) = (pid / n, pid % n);
             let (sn, cs) = q[DOF * r + 2].sin_cos();
             let mut h2_bar = spatial::scale(st.h2, 2.0 * d_bar);
-            if i == 0 {
+            if i == 0 && formation {
+                // ∂|x̄|/∂x_r = sign(x̄)/k, sign(0) = +1.
+                let gb = inv_k * decay / d;
+                h2_bar[0] += if x_mean >= 0.0 { gb } else { -gb };
+            } else if i == 0 {
                 let gb = gamma_bar(r);
                 h2_bar[0] += if st.h2[0] >= 0.0 { gb } else { -gb };
             }
@@ -646,7 +657,11 @@ mod tests {
 
     #[test]
     fn two_robots_match_dual_numbers() {
-        for dipole in [DipoleProduct::GeometricMean, DipoleProduct::Printed] {
+        for dipole in [
+            DipoleProduct::GeometricMean,
+            DipoleProduct::Printed,
+            DipoleProduct::Formation,
+        ] {
             let mut s = scene(2, GoalFrame::Platform);
             s.params = PotentialParams { dipole, ..s.params };
             let mut rng = ChaCha8Rng::seed_from_u64(3);

@@ -90,6 +90,9 @@ pub struct Gains {
     pub approach_heading: f64,
     /// Eq. 18a's speed law, or our continuous alternative.
     pub speed: SpeedLaw,
+    /// θ_d's side of the dipole plane from the formation's mean goal-frame
+    /// x rather than each platform's own (with `dipole = "formation"`).
+    pub formation_side: bool,
 }
 
 /// How v_r follows the field (Eq. 18a or ours).
@@ -171,6 +174,13 @@ pub fn control_aligning(
     let norm_f = f.iter().map(|x| x * x).sum::<f64>().sqrt();
     let mut u = vec![0.0; INPUTS * robots];
     let mut branches = Vec::with_capacity(robots);
+    let x_mean = (0..robots)
+        .map(|r| {
+            let i = DOF * r;
+            let (c, s) = (goal[i + 2].cos(), goal[i + 2].sin());
+            (q[i] - goal[i]) * c + (q[i + 1] - goal[i + 1]) * s
+        })
+        .sum::<f64>();
     for r in 0..robots {
         let (i, j) = (DOF * r, INPUTS * r);
         let (th, th_goal) = (q[i + 2], goal[i + 2]);
@@ -185,7 +195,7 @@ pub fn control_aligning(
         let (c, s) = (th_goal.cos(), th_goal.sin());
         let x_goal = (q[i] - goal[i]) * c + (q[i + 1] - goal[i + 1]) * s;
         let (gx, gy) = (fx * c + fy * s, -fx * s + fy * c);
-        let sx = sign(x_goal);
+        let sx = sign(if g.formation_side { x_mean } else { x_goal });
         let dist = (q[i] - goal[i]).hypot(q[i + 1] - goal[i + 1]);
         let y_goal = -(q[i] - goal[i]) * s + (q[i + 1] - goal[i + 1]) * c;
         // The band next to the goal where the field points away from it
@@ -286,6 +296,7 @@ mod tests {
             approach_radius: 0.0,
             approach_heading: 0.0,
             speed: SpeedLaw::Sign,
+            formation_side: false,
         }
     }
 

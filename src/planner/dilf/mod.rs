@@ -24,7 +24,9 @@ pub mod object;
 pub mod point_world;
 pub mod potential;
 mod scratch;
+pub mod sequence;
 pub mod stall;
+pub mod terms;
 
 use crate::model::mobile_manipulator::{self as mm, DOF, INPUTS};
 use crate::model::{Input, State};
@@ -34,6 +36,7 @@ pub use control::SpeedLaw;
 use control::{Branch, Gains};
 use potential::{DipoleProduct, GoalFrame, GraspCorrection, Scene, SingularityEnclosure, Warm};
 use schemars::JsonSchema;
+pub use sequence::{SequenceMode, SequenceParams};
 use serde::{Deserialize, Serialize};
 use stall::{Progress, StallParams, Verdict};
 use std::sync::Arc;
@@ -135,7 +138,8 @@ pub struct DilfParams {
     #[serde(default)]
     pub goal_frame: GoalFrame,
     /// How several robots' dipole factors combine in V (Eq. 15; see
-    /// [`DipoleProduct`]): `"geometric_mean"` (default) or `"printed"`.
+    /// [`DipoleProduct`]): `"geometric_mean"` (default), `"printed"` or
+    /// `"formation"` (ours).
     #[serde(default)]
     pub dipole: DipoleProduct,
     /// p of the field f = (Σ‖h2‖²)^p ∂V/∂q; Eq. 17 prints p = 2 (the research notes on seed 004 discuss it).
@@ -168,6 +172,10 @@ pub struct DilfParams {
     /// The platform's speed law; both saturate at `max_speed`.
     #[serde(default)]
     pub speed: SpeedLaw,
+    /// Intermediate goals: turn, translate, turn (ours; off by default,
+    /// the paper's law straight to the goal; [`sequence`]).
+    #[serde(default)]
+    pub sequence: SequenceParams,
 }
 
 /// `[planner.approach]`: near its goal a platform's heading stays within
@@ -312,6 +320,12 @@ impl DilfParams {
                 .all(|v| pos(*v)),
             "every tolerance must be > 0",
         )?;
+        if let Err((name, reason)) = self.sequence.check() {
+            return Err(PlanError::InvalidParameter {
+                name: name.into(),
+                reason: reason.into(),
+            });
+        }
         if let Err((name, reason)) = self.stall.check() {
             return Err(PlanError::InvalidParameter {
                 name: name.into(),
@@ -335,6 +349,7 @@ impl DilfParams {
             approach_radius: self.approach.radius,
             approach_heading: self.approach.heading_deg.to_radians(),
             speed: self.speed,
+            formation_side: self.dipole == DipoleProduct::Formation,
         }
     }
 }
@@ -373,7 +388,12 @@ pub fn label_index(robots: usize, name: &str) -> Option<usize> {
 }
 
 struct Policy {
+    /// The task: V on the task's goal.
     scene: Arc<Scene>,
+    /// The intermediate goals' scenes, in order (empty: straight to the
+    /// goal), and when one counts as reached.
+    phases: Vec<Arc<Scene>>,
+    sequence: SequenceParams,
     gains: Gains,
     tolerance: Tolerance,
     /// Hold period, s, and whether the hold guard acts.
@@ -395,9 +415,44 @@ struct DilfController {
     progress: Progress,
     /// Per robot: turning in place to its goal heading (Eq. 18 suspended).
     aligning: Vec<bool>,
+    /// Index of the current intermediate goal (`phases.len()`: the task's).
+    phase: usize,
 }
 
 impl DilfController {
+    /// The scene of the current phase.
+    fn scene(&self) -> &Arc<Scene> {
+        let p = &self.policy;
+        p.phases.get(self.phase).unwrap_or(&p.scene)
+    }
+
+    /// Move on past every intermediate goal that `q` has reached: the law's
+    /// progress restarts, and a platform already within the position
+    /// tolerance of the new goal turns in place to its heading.
+    fn advance(&mut self, t: f64, q: &[f64]) {
+        let p = self.policy.clone();
+        let mut moved = false;
+        while self.phase < p.phases.len()
+            && p.sequence
+                .reached(&p.tolerance, q, &p.phases[self.phase].goal)
+        {
+            self.phase += 1;
+            moved = true;
+        }
+        if moved {
+            self.progress = Progress::new(p.stall);
+            self.progress.restart(t);
+            let goal = &self.scene().goal;
+            let within: Vec<bool> = (0..self.aligning.len())
+                .map(|r| {
+                    let i = DOF * r;
+                    (q[i] - goal[i]).hypot(q[i + 1] - goal[i + 1]) <= p.tolerance.position
+                })
+                .collect();
+            self.aligning = within;
+        }
+    }
+
     /// Which robots turn in place from this sample on: those within half the
     /// position tolerance; those already turning, while within the whole
     /// tolerance; and, when the law has made no progress for
@@ -405,7 +460,7 @@ impl DilfController {
     /// has made none for `stall.time`: the run ends.
     fn hand_over(&mut self, t: f64, q: &[f64], v: f64) -> Result<(), ()> {
         let p = &self.policy;
-        let goal = &p.scene.goal;
+        let goal = &p.phases.get(self.phase).unwrap_or(&p.scene).goal;
         let dist = |r: usize| {
             let i = DOF * r;
             (q[i] - goal[i]).hypot(q[i + 1] - goal[i + 1])
@@ -465,7 +520,7 @@ impl Controller for DilfController {
 
 impl DilfController {
     fn decide(&mut self, t: f64, q: &[f64], measured: Option<&GraspCorrection>) -> Command {
-        let p = &self.policy;
+        let p = self.policy.clone();
         let robots = p.scene.robots;
         let stop = |label: usize| Command {
             u: Input::zeros(INPUTS * robots),
@@ -476,7 +531,9 @@ impl DilfController {
         if p.tolerance.reached(q, &p.scene.goal) {
             return stop(done);
         }
-        let (e, f) = match p.scene.field_with(q, measured, &mut self.warm) {
+        self.advance(t, q);
+        let scene = self.scene().clone();
+        let (e, f) = match scene.field_with(q, measured, &mut self.warm) {
             Ok(x) => x,
             Err(_) => return stop(done + 3),
         };
@@ -495,9 +552,8 @@ impl DilfController {
         if self.hand_over(t, q, e.v).is_err() {
             return stop(done + 5);
         }
-        let p = &self.policy;
         let (mut u, branches) =
-            control::control_aligning(q, &f, &p.scene.goal, &p.gains, &self.aligning);
+            control::control_aligning(q, &f, &scene.goal, &p.gains, &self.aligning);
         let mut label = branches
             .iter()
             .enumerate()
@@ -506,7 +562,7 @@ impl DilfController {
         if p.hold_guard {
             let now = guard::Barriers::of(&e);
             let warm = &mut self.guard_warm;
-            if guard::guard(&p.scene, q, measured, &now, &mut u, p.period, warm) > 0 {
+            if guard::guard(&scene, q, measured, &now, &mut u, p.period, warm) > 0 {
                 label += self.combos;
             }
         }
@@ -529,6 +585,7 @@ impl PolicyFactory for Factory {
             combos: 3usize.pow(self.0.scene.robots as u32),
             progress: Progress::new(self.0.stall),
             aligning: vec![false; self.0.scene.robots],
+            phase: 0,
         })
     }
 }
@@ -595,8 +652,16 @@ pub fn check_configuration(scene: &Scene, q: &[f64], what: &str) -> Result<(), P
     Ok(())
 }
 
-/// The feedback plan for `scene` (whose goal is the task's goal) from `start`.
-pub fn plan(scene: Arc<Scene>, start: &State, params: &DilfParams) -> Result<Plan, PlanError> {
+/// The feedback plan for `scene` (whose goal is the task's goal) from
+/// `start`. `step`: the ideal run's integration step (the scenario's
+/// `sim.dt`), with which `[planner.sequence]` runs its candidates, so that
+/// its choice is the ideal run's outcome.
+pub fn plan(
+    scene: Arc<Scene>,
+    start: &State,
+    params: &DilfParams,
+    step: f64,
+) -> Result<Plan, PlanError> {
     params.validate()?;
     let q = start.as_slice();
     check_configuration(&scene, q, "start")?;
@@ -604,7 +669,7 @@ pub fn plan(scene: Arc<Scene>, start: &State, params: &DilfParams) -> Result<Pla
     let e = scene
         .evaluate::<f64>(q, &mut scene.warm())
         .map_err(|e| PlanError::NoConvergence(e.to_string()))?;
-    let details = serde_json::json!({
+    let mut details = serde_json::json!({
         "robots": scene.robots,
         "parts_per_robot": scene.parts.iter().map(|p| p.name).collect::<Vec<_>>(),
         "obstacles": scene.obstacles.iter().map(|o| o.name.clone()).collect::<Vec<_>>(),
@@ -614,9 +679,10 @@ pub fn plan(scene: Arc<Scene>, start: &State, params: &DilfParams) -> Result<Pla
         "start_sum_h2": e.d,
         "start_max_deformation": e.max_deformation,
     });
-    let labels = labels(scene.robots);
-    let policy = Policy {
-        scene,
+    let policy = |phases: Vec<Arc<Scene>>| Policy {
+        scene: scene.clone(),
+        phases,
+        sequence: params.sequence,
         gains: params.gains(),
         tolerance: params.tolerance,
         period: params.period,
@@ -624,14 +690,27 @@ pub fn plan(scene: Arc<Scene>, start: &State, params: &DilfParams) -> Result<Pla
         stall: params.stall,
         grasps: params.grasps,
     };
-    Ok(Plan {
-        labels,
+    let mut chosen = Arc::new(policy(Vec::new()));
+    if params.sequence.mode == SequenceMode::Auto {
+        let run = |p: &Arc<Policy>| sequence::ideal_time_to_goal(p, start, params, step);
+        let (picked, found) = sequence::choose_sequence(&scene, q, params, &chosen, policy, run);
+        details["sequence"] = found;
+        if let Some(p) = picked {
+            chosen = p;
+        }
+    }
+    Ok(feedback_plan(chosen, params, details))
+}
+
+fn feedback_plan(policy: Arc<Policy>, params: &DilfParams, details: serde_json::Value) -> Plan {
+    Plan {
+        labels: labels(policy.scene.robots),
         segments: Vec::new(),
         duration: params.horizon,
         law: ControlLaw::Feedback {
-            factory: Arc::new(Factory(Arc::new(policy))),
+            factory: Arc::new(Factory(policy)),
             period: params.period,
         },
         details,
-    })
+    }
 }

@@ -745,7 +745,7 @@ pub(crate) mod tests {
             "field_power = 1.75\nhorizon = 40.0\nka = [50.0, 50.0, 50.0, 300.0, 300.0, 3000.0]",
         )
         .unwrap();
-        let plan = dilf::plan(s.clone(), &State::from_vec(q0.clone()), &params).unwrap();
+        let plan = dilf::plan(s.clone(), &State::from_vec(q0.clone()), &params, 0.004).unwrap();
         let model = MobileManipulator { robots: 2 };
         let tr = crate::integrate::simulate(&model, &plan, &State::from_vec(q0.clone()), 0.01);
         let dist = |q: &[f64]| {

@@ -50,6 +50,8 @@ use num_dual::DualSVec64;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
+pub use super::terms::{TermGradients, Terms};
+
 /// Where the arm parts' goal points live (the paper: "in an appropriate
 /// coordinate system the desired configuration of every h_p is the origin").
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
@@ -83,6 +85,13 @@ pub enum DipoleProduct {
     GeometricMean,
     /// Π_r γ_r as printed (identical for one robot).
     Printed,
+    /// Ours: one dipole for the whole formation, γ = |(1/k) Σ_r x_r| with
+    /// x_r the signed coordinate of robot r's platform point along its goal
+    /// heading (after H2). For a formation whose goal headings agree it is
+    /// the dipole of the platforms' centroid: V's zero set is the one plane
+    /// through the goal centroid across the goal heading, and no robot is
+    /// asked to approach along its own axis (identical for one robot).
+    Formation,
 }
 
 /// Singular sets of each arm (zeros of the three factors of det J, see
@@ -288,6 +297,21 @@ impl Scene {
         Ok(s)
     }
 
+    /// The same scene (obstacles, beam, parameters) with another goal.
+    pub fn with_goal(&self, goal: Vec<f64>) -> Result<Scene, String> {
+        let s = Scene::new(
+            self.robots,
+            self.parts.clone(),
+            self.obstacles.clone(),
+            goal,
+            self.params,
+        )?;
+        Ok(match &self.object {
+            Some(o) => s.with_object(o.clone()),
+            None => s,
+        })
+    }
+
     /// The scene with a carried beam (two robots).
     pub fn with_object(mut self, object: Carried) -> Scene {
         self.object = Some(object);
@@ -341,7 +365,21 @@ impl Scene {
         measured: Option<&GraspCorrection>,
         warm: &mut Warm,
     ) -> Result<Evaluation<T>, ContactError> {
+        self.evaluate_terms(q, measured, warm).map(|(e, _)| e)
+    }
+
+    /// As [`Scene::evaluate_with`], with ln V split into its factors
+    /// ([`Terms`]; for diagnostics).
+    pub fn evaluate_terms<T: Scalar>(
+        &self,
+        q: &[T],
+        measured: Option<&GraspCorrection>,
+        warm: &mut Warm,
+    ) -> Result<(Evaluation<T>, Terms<T>), ContactError> {
         let n = self.parts.len();
+        let n_static = self.obstacles.len();
+        let n_robots = (self.robots - 1) * n;
+        let mut terms = Terms::<T>::default();
         let placed = self.placed_parts(q);
         let beam = self.object.as_ref().map(|o| {
             let st = match measured {
@@ -362,6 +400,7 @@ impl Scene {
         let mut ln_num = k::<T>(0.0);
         let mut d = k::<T>(0.0);
         let mut gamma = k::<T>(1.0);
+        let mut x_sum = k::<T>(0.0);
         let mut min_beta = f64::INFINITY;
         let mut slot = 0;
         let mut collided = false;
@@ -438,16 +477,26 @@ impl Scene {
                         shift = spatial::add(shift, spatial::scale(*delta, *s * (sqrt_b - 1.0)));
                     }
                 }
-                for (_, delta) in &seen {
+                for (j, (_, delta)) in seen.iter().enumerate() {
                     let moved = spatial::add(*delta, shift);
-                    ln_num +=
-                        (spatial::dot(moved, moved) / spatial::dot(*delta, *delta)).ln() * 0.5;
+                    let l = (spatial::dot(moved, moved) / spatial::dot(*delta, *delta)).ln() * 0.5;
+                    ln_num += l;
+                    if j < n_static {
+                        terms.obstacles += l;
+                    } else if j < n_static + n_robots {
+                        terms.robots += l;
+                    } else {
+                        terms.beam_parts += l;
+                    }
                 }
                 let h2 = spatial::add(h, spatial::mul_mtv(&rot, shift));
                 d += spatial::dot(h2, h2);
                 if i == 0 {
                     // The dipole: |x| in the goal frame, with sign(0) = +1 (App. G).
-                    gamma *= if h2[0].re() >= 0.0 { h2[0] } else { -h2[0] };
+                    let g = if h2[0].re() >= 0.0 { h2[0] } else { -h2[0] };
+                    gamma *= g;
+                    x_sum += h2[0];
+                    terms.gammas.push(g);
                 }
             }
         }
@@ -467,7 +516,9 @@ impl Scene {
                     if !collided {
                         // Envelope theorem: the obstacle is fixed, the segment moves.
                         let b = seg.value(spatial::lift(sol.x)) * sol.mu + sol.value;
-                        ln_num += (b / (b + 1.0)).ln();
+                        let l = (b / (b + 1.0)).ln();
+                        ln_num += l;
+                        terms.beam_obstacles += l;
                     }
                 }
             }
@@ -481,7 +532,9 @@ impl Scene {
             {
                 min_singular = min_singular.min(s.re());
                 if s.re() > 0.0 {
-                    ln_num += (s / (s + 1.0)).ln();
+                    let l = (s / (s + 1.0)).ln();
+                    ln_num += l;
+                    terms.singular += l;
                 }
             }
         }
@@ -489,6 +542,7 @@ impl Scene {
             Some((_, ln_bf, m, margin)) => {
                 if let Some(l) = ln_bf {
                     ln_num += *l;
+                    terms.admissible = *l;
                 }
                 (*m, *margin)
             }
@@ -503,18 +557,55 @@ impl Scene {
                 DipoleProduct::GeometricMean if self.robots > 1 => {
                     gamma.powf(1.0 / self.robots as f64)
                 }
+                DipoleProduct::Formation => {
+                    let m = x_sum * (1.0 / self.robots as f64);
+                    if m.re() >= 0.0 {
+                        m
+                    } else {
+                        -m
+                    }
+                }
                 _ => gamma,
             };
             gamma * (ln_num * (1.0 / self.params.kv)).exp() / d
         };
-        Ok(Evaluation {
-            v,
-            d: d.re(),
-            min_beta,
-            min_singular,
-            max_deformation,
-            admissible,
-        })
+        let inv_kv = 1.0 / self.params.kv;
+        let inv_k = match self.params.dipole {
+            DipoleProduct::GeometricMean => 1.0 / self.robots as f64,
+            _ => 1.0,
+        };
+        terms.dipole = match self.params.dipole {
+            DipoleProduct::Formation => {
+                let m = x_sum * (1.0 / self.robots as f64);
+                (if m.re() >= 0.0 { m } else { -m }).ln()
+            }
+            _ => terms
+                .gammas
+                .iter()
+                .fold(k::<T>(0.0), |acc, g| acc + g.ln() * inv_k),
+        };
+        terms.d = d.ln();
+        for t in [
+            &mut terms.obstacles,
+            &mut terms.robots,
+            &mut terms.beam_parts,
+            &mut terms.beam_obstacles,
+            &mut terms.singular,
+            &mut terms.admissible,
+        ] {
+            *t *= inv_kv;
+        }
+        Ok((
+            Evaluation {
+                v,
+                d: d.re(),
+                min_beta,
+                min_singular,
+                max_deformation,
+                admissible,
+            },
+            terms,
+        ))
     }
 
     pub(super) fn solve(

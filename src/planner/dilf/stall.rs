@@ -147,6 +147,12 @@ impl Progress {
         }
     }
 
+    /// Count the time without progress from `t` on (a new goal: V is
+    /// another function).
+    pub fn restart(&mut self, t: f64) {
+        self.since = t;
+    }
+
     /// Time of the last progress, s.
     pub fn since(&self) -> f64 {
         self.since
@@ -191,6 +197,8 @@ mod tests {
             stall: params.stall,
             grasps: params.grasps,
             scene: scene.clone(),
+            phases: Vec::new(),
+            sequence: params.sequence,
         });
         let c = DilfController {
             warm: scene.warm(),
@@ -198,6 +206,7 @@ mod tests {
             combos: 3,
             progress: Progress::new(params.stall),
             aligning: vec![false],
+            phase: 0,
             policy,
         };
         (c, goal)

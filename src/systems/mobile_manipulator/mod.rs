@@ -420,14 +420,14 @@ impl System for Dilf {
     fn default_max_rate(&self) -> Vec<f64> {
         vec![1.0; 8 * self.model.robots]
     }
-    fn plan(&self, start: &State, goal: &State, _limits: &Limits) -> Result<Plan, PlanError> {
+    fn plan(&self, start: &State, goal: &State, limits: &Limits) -> Result<Plan, PlanError> {
         let scene =
             self.scene(start.as_slice(), goal)
                 .map_err(|e| PlanError::InvalidParameter {
                     name: e.key_name().unwrap_or("planner").into(),
                     reason: e.reason().into(),
                 })?;
-        dilf::plan(Arc::new(scene), start, &self.params)
+        dilf::plan(Arc::new(scene), start, &self.params, limits.step)
     }
     fn urdf_names(&self) -> Vec<crate::physics::required::Named> {
         crate::physics::required::defaults(&crate::physics::mobile_manipulator::REQUIRED)
