@@ -10,7 +10,7 @@ use anholonomy::validate::{prepare_all, Call, Prepared};
 use criterion::{criterion_group, criterion_main, Criterion};
 use std::path::Path;
 
-#[path = "../tests/common/log_fixture.rs"]
+#[path = "../tests/it/common/log_fixture.rs"]
 mod log_fixture;
 
 fn validation(c: &mut Criterion) {

@@ -1,0 +1,559 @@
+//! Seed 004 on goals nobody picked (issue 40): seeded random tasks for the
+//! pair carrying the beam and for one robot behind a wall, run with the
+//! shipped scenarios' settings.
+//!
+//! * **Pairs** (`dilf_pair_open`'s model, gains and gates): the start is
+//!   Table I's formation turned about its centroid by a heading uniform over
+//!   the circle; the goal is that formation turned by a further φ uniform
+//!   in ±90° about its centroid and moved by a displacement of length
+//!   uniform in [0, 4] m in a direction uniform over the circle (sideways
+//!   included). Every goal is a rigid motion of the start, so a solid
+//!   object fits both.
+//! * **One robot** (`dilf_single_door`'s wall, door, table and gains): the
+//!   start uniform in x ∈ [−4, −2] m, y ∈ [−3, 3] m, heading over the circle;
+//!   the goal behind the wall, x ∈ [2, 4] m, y ∈ [−1.5, 1.5] m, heading
+//!   uniform over the circle (drawn again while it puts the robot in the
+//!   table).
+//!
+//! The ideal run's recorded inputs are integrated again in closed form (the
+//! unicycle's arcs): that end must match the RK4 run within 1e-6 and lie
+//! within the task's tolerance for a case to count as converged.
+//!
+//! Each case either converges (ideal run) and passes every gate of its
+//! scenario (physics), or ends `stalled`, and the table gives the reason
+//! (the law's labels over the stall window). The tests gate the issue's
+//! goals with `[planner.sequence] mode = "auto"`; the paper's law alone is
+//! tabled by the ignored `*_paper_law` tests (the "before" table of
+//! `docs/src/research/seed-004.md`).
+//!
+//! ```text
+//! cargo test --release --test it dilf_random:: -- --nocapture              # ideal runs (CI)
+//! cargo test --release --test it -- --ignored dilf_random:: --nocapture   # physics, and the paper's law
+//! ```
+//!
+//! Each table is also written to `$CARGO_TARGET_TMPDIR/dilf_random/`
+//! (`target/tmp/dilf_random/`).
+
+use crate::common::*;
+use anholonomy::compare::wrap_angle;
+use anholonomy::integrate::simulate;
+use anholonomy::model::mobile_manipulator::{DOF, INPUTS};
+use anholonomy::planner::dilf::sequence::rigid;
+use anholonomy::scenario::{PlannerConfig, Scenario};
+use anholonomy::validate::Prepared;
+use rand::{Rng, SeedableRng};
+use rand_chacha::ChaCha8Rng;
+use std::collections::BTreeMap;
+use std::fmt::Write as _;
+
+/// The seed of both sets (fixed: the goals are the test's data).
+const SEED: u64 = 40;
+/// Cases per set.
+const CASES: usize = 20;
+/// Physics floors: regression guards at the counts measured when the
+/// sequence was added (10 and 15 of 20), NOT the issue's goal (16 pairs):
+/// in physics the formation's turn in place stalls in 4 pair cases, the
+/// paper's law itself breaks a gate in 4 more it converges on ideally, and
+/// 5 single-robot cases end at the goal pose with wrist joint 4 or 6 up to
+/// 2.8° off against the 2° tolerance (`docs/src/research/seed-004.md`).
+const PAIR_PHYSICS_FLOOR: usize = 10;
+const SINGLE_PHYSICS_FLOOR: usize = 15;
+
+/// One random task.
+struct Case {
+    /// Short description (the draw).
+    what: String,
+    start: Vec<f64>,
+    goal: Vec<f64>,
+}
+
+/// Which scenario a set is drawn for.
+#[derive(Clone, Copy, PartialEq)]
+enum Set {
+    Pair,
+    Single,
+}
+
+impl Set {
+    fn base(self) -> &'static str {
+        match self {
+            Set::Pair => "dilf_pair_open.toml",
+            Set::Single => "dilf_single_door.toml",
+        }
+    }
+    fn name(self) -> &'static str {
+        match self {
+            Set::Pair => "pair",
+            Set::Single => "single",
+        }
+    }
+}
+
+/// The scenario text of `case` on `set`'s shipped file: its start and goal,
+/// a horizon long enough for a sequenced run, and the sequence on or off.
+fn scenario_text(set: Set, case: &Case, sequence: bool) -> String {
+    let path = scenario(set.base());
+    let mut v: toml::Value = toml::from_str(&std::fs::read_to_string(&path).unwrap()).unwrap();
+    let deg = |q: &[f64]| -> toml::Value {
+        toml::Value::Array(
+            q.chunks(DOF)
+                .flat_map(|r| {
+                    let mut out = vec![r[0], r[1]];
+                    out.extend(r[2..].iter().map(|a| a.to_degrees()));
+                    out
+                })
+                .map(toml::Value::Float)
+                .collect(),
+        )
+    };
+    let t = v.as_table_mut().unwrap();
+    t.insert("name".into(), format!("dilf_random_{}", set.name()).into());
+    t.insert("start".into(), deg(&case.start));
+    t.insert("goal".into(), deg(&case.goal));
+    let horizon = match set {
+        Set::Pair => 150.0,
+        Set::Single => 90.0,
+    };
+    let planner = t["planner"].as_table_mut().unwrap();
+    planner.insert("horizon".into(), horizon.into());
+    if sequence {
+        let mut s = toml::map::Map::new();
+        s.insert("mode".into(), "auto".into());
+        planner.insert("sequence".into(), toml::Value::Table(s));
+    }
+    // The time gates are the shipped tasks' own; a random goal's are the horizon.
+    let th = t["thresholds"].as_table_mut().unwrap();
+    for k in ["ideal_time_to_goal", "sim_time_to_goal"] {
+        if th.contains_key(k) {
+            th.insert(k.into(), horizon.into());
+        }
+    }
+    toml::to_string(&v).unwrap()
+}
+
+fn prepare(set: Set, case: &Case, sequence: bool) -> Result<Prepared, String> {
+    let text = scenario_text(set, case, sequence);
+    // A path beside the shipped files: the URDF path resolves as theirs.
+    let path = scenario(&format!("dilf_random_{}.toml", set.name()));
+    let sc = Scenario::parse(&path, &text).map_err(|e| e.to_string())?;
+    Prepared::new(sc).map_err(|e| e.to_string())
+}
+
+/// Table I's start formation (rad) with its centroid at the origin.
+fn table_i_formation() -> Vec<f64> {
+    let mut q = anholonomy::planner::dilf::object::table_i_start();
+    for r in 0..2 {
+        q[DOF * r] += 9.5;
+        q[DOF * r + 1] -= 3.0;
+    }
+    q
+}
+
+fn pair_cases() -> Vec<Case> {
+    let mut rng = ChaCha8Rng::seed_from_u64(SEED);
+    let base = table_i_formation();
+    (0..CASES)
+        .map(|_| {
+            let heading = rng.random_range(-180.0f64..180.0);
+            let turn = rng.random_range(-90.0f64..90.0);
+            let length = rng.random_range(0.0f64..4.0);
+            let dir = rng.random_range(-180.0f64..180.0);
+            let start = rigid(&base, [0.0, 0.0], heading.to_radians(), [0.0, 0.0]);
+            let shift = [
+                length * dir.to_radians().cos(),
+                length * dir.to_radians().sin(),
+            ];
+            let goal = rigid(&start, [0.0, 0.0], turn.to_radians(), shift);
+            // The displacement's direction against the start formation's
+            // heading (the platforms' −90° in Table I, turned by `heading`):
+            // 0° ahead, ±90° sideways.
+            let rel = wrap_angle((dir - (heading - 90.0)).to_radians()).to_degrees();
+            Case {
+                what: format!(
+                    "start {heading:+.0}°, turn {turn:+.0}°, {length:.2} m at {rel:+.0}°"
+                ),
+                start,
+                goal,
+            }
+        })
+        .collect()
+}
+
+fn single_cases() -> Vec<Case> {
+    let mut rng = ChaCha8Rng::seed_from_u64(SEED);
+    let base = prepared(&scenario("dilf_single_door.toml"));
+    let (s0, g0) = base.start_goal();
+    let mut out = Vec::new();
+    while out.len() < CASES {
+        let mut start = s0.as_slice().to_vec();
+        start[0] = rng.random_range(-4.0..-2.0);
+        start[1] = rng.random_range(-3.0..3.0);
+        start[2] = rng.random_range(-180.0f64..180.0).to_radians();
+        // Draw the goal again while the planner refuses it (in the table).
+        loop {
+            let mut goal = g0.as_slice().to_vec();
+            goal[0] = rng.random_range(2.0..4.0);
+            goal[1] = rng.random_range(-1.5..1.5);
+            goal[2] = rng.random_range(-180.0f64..180.0).to_radians();
+            let case = Case {
+                what: format!(
+                    "({:+.2}, {:+.2}, {:+.0}°) to ({:.2}, {:+.2}, {:+.0}°)",
+                    start[0],
+                    start[1],
+                    start[2].to_degrees(),
+                    goal[0],
+                    goal[1],
+                    goal[2].to_degrees()
+                ),
+                start: start.clone(),
+                goal,
+            };
+            if scenario_free(&case) {
+                out.push(case);
+                break;
+            }
+        }
+    }
+    out
+}
+
+/// Whether the single-robot scenario accepts the case's start and goal.
+fn scenario_free(case: &Case) -> bool {
+    let text = scenario_text(Set::Single, case, false);
+    let path = scenario("dilf_random_single.toml");
+    let sc = Scenario::parse(&path, &text).unwrap();
+    match Prepared::new(sc) {
+        Ok(_) => true,
+        Err(e) => {
+            let e = e.to_string();
+            assert!(e.contains("inside obstacle"), "unexpected refusal: {e}");
+            false
+        }
+    }
+}
+
+/// How one run ended.
+struct Outcome {
+    converged: bool,
+    /// `converged`, `stalled`, a stop (`collision`, ...), or `horizon`.
+    ended: String,
+    /// Worse robot's distance from its goal (m) and heading error (deg).
+    position: f64,
+    heading: f64,
+    /// Time to goal, s (NaN if never).
+    time: f64,
+    /// Why it did not converge: the labels of the stall window, or the
+    /// broken gates.
+    reason: String,
+    /// The plan's sequence choice ("direct", or the approach heading).
+    plan: String,
+}
+
+fn worse_error(q: &[f64], goal: &[f64]) -> (f64, f64) {
+    (0..q.len() / DOF)
+        .map(|r| {
+            let i = DOF * r;
+            (
+                (q[i] - goal[i]).hypot(q[i + 1] - goal[i + 1]),
+                wrap_angle(q[i + 2] - goal[i + 2]).abs().to_degrees(),
+            )
+        })
+        .fold((0.0f64, 0.0f64), |a, b| (a.0.max(b.0), a.1.max(b.1)))
+}
+
+fn plan_choice(prep: &Prepared) -> String {
+    let d = &prep.planned.details["sequence"];
+    match d["chosen"].as_str() {
+        Some("sequence") => format!(
+            "ψ {:+.0}° ({} tried)",
+            d["approach_heading_deg"].as_f64().unwrap_or(f64::NAN),
+            d["tried"]
+        ),
+        Some(c) => format!("{c} ({} tried)", d["tried"]),
+        None => "paper".into(),
+    }
+}
+
+/// The exact motion of one robot (unicycle + arm) under a held input.
+fn exact_step(q: &mut [f64], u: &[f64], h: f64) {
+    let (v, w) = (u[0], u[1]);
+    let th = q[2];
+    if w.abs() < 1e-12 {
+        q[0] += v * th.cos() * h;
+        q[1] += v * th.sin() * h;
+    } else {
+        q[0] += v / w * ((th + w * h).sin() - th.sin());
+        q[1] -= v / w * ((th + w * h).cos() - th.cos());
+    }
+    q[2] += w * h;
+    for a in 0..6 {
+        q[3 + a] += u[2 + a] * h;
+    }
+}
+
+/// The independent integrator: the run's recorded (held) inputs integrated
+/// in closed form (arcs), and how far its end lies from the harness's RK4
+/// end (largest coordinate difference).
+fn exact_gap(start: &[f64], tr: &anholonomy::integrate::Trajectory) -> (Vec<f64>, f64) {
+    let mut q = start.to_vec();
+    for k in 0..tr.t.len() - 1 {
+        let h = tr.t[k + 1] - tr.t[k];
+        for (r, qr) in q.chunks_mut(DOF).enumerate() {
+            exact_step(qr, &tr.u[k].as_slice()[INPUTS * r..], h);
+        }
+    }
+    let last = tr.last();
+    let gap = q
+        .iter()
+        .zip(last.as_slice())
+        .map(|(a, b)| (a - b).abs())
+        .fold(0.0, f64::max);
+    (q, gap)
+}
+
+/// The ideal run of a prepared case. A converged run counts only if the
+/// independent integrator lands within the task's tolerance too.
+fn ideal(prep: &Prepared) -> Outcome {
+    let (start, goal) = prep.start_goal();
+    let plan = &prep.planned;
+    let tr = simulate(prep.model(), plan, &start, prep.scenario.sim.dt);
+    let (exact_end, gap) = exact_gap(start.as_slice(), &tr);
+    assert!(gap < 1e-6, "exact re-integration ends {gap} from RK4");
+    let ended = plan.label_name(*tr.label.last().unwrap()).to_string();
+    let PlannerConfig::Dilf(p) = &prep.scenario.planner else {
+        panic!("not dilf")
+    };
+    let converged = ended == "converged" && p.tolerance.reached(&exact_end, goal.as_slice());
+    let end_t = *tr.t.last().unwrap();
+    const STOPS: [&str; 6] = [
+        "converged",
+        "collision",
+        "singular",
+        "solver failure",
+        "overstrained",
+        "stalled",
+    ];
+    let ended = if STOPS.contains(&ended.as_str()) {
+        ended
+    } else {
+        "horizon".into()
+    };
+    let (position, heading) = worse_error(tr.last().as_slice(), goal.as_slice());
+    // The labels over the stall window (the last `stall.time` seconds).
+    let mut tally: BTreeMap<&str, usize> = BTreeMap::new();
+    let mut n = 0;
+    for (l, t) in tr.label.iter().zip(&tr.t) {
+        if *t >= end_t - p.stall.time && *t < end_t {
+            *tally.entry(plan.label_name(*l)).or_default() += 1;
+            n += 1;
+        }
+    }
+    let reason = if converged {
+        String::new()
+    } else {
+        let mut v: Vec<_> = tally.into_iter().collect();
+        v.sort_by_key(|x| std::cmp::Reverse(x.1));
+        v.iter()
+            .take(2)
+            .map(|(l, c)| format!("{l} {:.0}%", 100.0 * *c as f64 / n.max(1) as f64))
+            .collect::<Vec<_>>()
+            .join(", ")
+    };
+    Outcome {
+        converged,
+        ended,
+        position,
+        heading,
+        time: if converged { end_t } else { f64::NAN },
+        reason,
+        plan: plan_choice(prep),
+    }
+}
+
+/// The physics replay (and the ideal run) of a prepared case: passes when
+/// every gate of the scenario holds.
+fn physics(prep: &Prepared, set: Set) -> Outcome {
+    let o = run_prepared(prep, None);
+    let m = |n: &str| o.metric(n).unwrap_or(f64::NAN);
+    let heading = match set {
+        Set::Pair => m("sim_goal_theta1_deg").max(m("sim_goal_theta2_deg")),
+        Set::Single => m("sim_goal_theta_deg"),
+    };
+    let stall = m("sim_stall_time");
+    let ended = if o.passed {
+        "passed".to_string()
+    } else if stall.is_finite() {
+        format!("stalled at {stall:.1} s")
+    } else {
+        "failed".to_string()
+    };
+    Outcome {
+        converged: o.passed,
+        ended,
+        position: m("sim_goal_position"),
+        heading,
+        time: m("sim_time_to_goal"),
+        reason: o
+            .failures
+            .iter()
+            .map(|f| f.split(" (").next().unwrap_or(f).to_string())
+            .collect::<Vec<_>>()
+            .join("; "),
+        plan: plan_choice(prep),
+    }
+}
+
+/// Run every case of a set (ideal only, or with physics), table it, and
+/// return the outcomes (ideal, physics).
+fn run_set(set: Set, sequence: bool, with_physics: bool) -> Vec<(Outcome, Option<Outcome>)> {
+    let cases = match set {
+        Set::Pair => pair_cases(),
+        Set::Single => single_cases(),
+    };
+    let mut table = format!(
+        "| case | task | plan | ideal | ideal error | ideal time | {}stall reason |\n|---|---|---|---|---|---|{}---|\n",
+        if with_physics {
+            "physics | sim error | sim time | "
+        } else {
+            ""
+        },
+        if with_physics { "---|---|---|" } else { "" }
+    );
+    let t0 = std::time::Instant::now();
+    let mut out = Vec::new();
+    for (i, case) in cases.iter().enumerate() {
+        let prep = prepare(set, case, sequence).unwrap_or_else(|e| panic!("case {i}: {e}"));
+        let id = ideal(&prep);
+        let sim = with_physics.then(|| physics(&prep, set));
+        let err = |o: &Outcome| format!("{:.3} m, {:.1}°", o.position, o.heading);
+        let time = |t: f64| {
+            if t.is_finite() {
+                format!("{t:.1} s")
+            } else {
+                "–".into()
+            }
+        };
+        write!(
+            table,
+            "| {i} | {} | {} | {} | {} | {} |",
+            case.what,
+            id.plan,
+            id.ended,
+            err(&id),
+            time(id.time)
+        )
+        .unwrap();
+        if let Some(s) = &sim {
+            write!(table, " {} | {} | {} |", s.ended, err(s), time(s.time)).unwrap();
+        }
+        let mut reason = id.reason.clone();
+        if let Some(s) = sim.as_ref().filter(|s| !s.converged) {
+            if !reason.is_empty() {
+                reason.push_str("; ");
+            }
+            write!(reason, "physics: {}", s.reason).unwrap();
+        }
+        writeln!(table, " {reason} |").unwrap();
+        out.push((id, sim));
+    }
+    let ideal_ok = out.iter().filter(|(i, _)| i.converged).count();
+    write!(
+        table,
+        "\n{} of {} converge in the ideal run",
+        ideal_ok,
+        out.len()
+    )
+    .unwrap();
+    if with_physics {
+        let sim_ok = out
+            .iter()
+            .filter(|(_, s)| s.as_ref().is_some_and(|s| s.converged))
+            .count();
+        write!(table, ", {sim_ok} pass every gate in physics").unwrap();
+    }
+    writeln!(
+        table,
+        " ({} s wall).",
+        (t0.elapsed().as_secs_f64() * 10.0).round() / 10.0
+    )
+    .unwrap();
+    eprintln!("{table}");
+    let dir = std::path::Path::new(env!("CARGO_TARGET_TMPDIR")).join("dilf_random");
+    std::fs::create_dir_all(&dir).unwrap();
+    let file = format!(
+        "{}_{}_{}.md",
+        set.name(),
+        if sequence { "sequence" } else { "paper" },
+        if with_physics { "physics" } else { "ideal" }
+    );
+    std::fs::write(dir.join(file), &table).unwrap();
+    out
+}
+
+/// Every ideal run converges or ends `stalled` (none reaches the horizon,
+/// none stops for another reason), at least `min` of them converged.
+fn assert_ideal(out: &[(Outcome, Option<Outcome>)], min: usize) {
+    for (i, (o, _)) in out.iter().enumerate() {
+        assert!(
+            o.converged || o.ended == "stalled",
+            "case {i} ended {} ({})",
+            o.ended,
+            o.reason
+        );
+    }
+    let n = out.iter().filter(|(o, _)| o.converged).count();
+    assert!(n >= min, "{n} of {} converged, {min} required", out.len());
+}
+
+/// 20 random rigid-consistent goals for the pair: at least 18 converge in
+/// the ideal run with the sequence, the others end `stalled`.
+#[test]
+fn random_pair_goals_converge_in_the_ideal_run() {
+    let out = run_set(Set::Pair, true, false);
+    assert_ideal(&out, 18);
+}
+
+/// 20 random goals behind the wall for one robot: at least 19 converge.
+#[test]
+fn random_goals_behind_a_wall_converge_in_the_ideal_run() {
+    let out = run_set(Set::Single, true, false);
+    assert_ideal(&out, 19);
+}
+
+/// The physics half of the pair set: every case converges in the ideal run,
+/// and at least `PAIR_PHYSICS_FLOOR` pass every gate of `dilf_pair_open` in
+/// physics.
+#[test]
+#[ignore = "physics replays: minutes; run with --ignored (documented in the seed-004 note)"]
+fn random_pair_goals_pass_in_physics() {
+    let out = run_set(Set::Pair, true, true);
+    assert_ideal(&out, 18);
+    let n = out
+        .iter()
+        .filter(|(_, s)| s.as_ref().unwrap().converged)
+        .count();
+    assert!(n >= PAIR_PHYSICS_FLOOR, "{n} of 20 pass in physics");
+}
+
+/// The single robot's physics half: every case converges in the ideal run,
+/// at least `SINGLE_PHYSICS_FLOOR` pass every gate in physics.
+#[test]
+#[ignore = "physics replays: minutes; run with --ignored (documented in the seed-004 note)"]
+fn random_goals_behind_a_wall_pass_in_physics() {
+    let out = run_set(Set::Single, true, true);
+    assert_ideal(&out, 19);
+    let n = out
+        .iter()
+        .filter(|(_, s)| s.as_ref().unwrap().converged)
+        .count();
+    assert!(n >= SINGLE_PHYSICS_FLOOR, "{n} of 20 pass in physics");
+}
+
+/// The "before" tables: the paper's law alone on the same goals (ideal
+/// runs and physics), for the research note; nothing gated.
+#[test]
+#[ignore = "the paper's law on the random goals: the note's before table"]
+fn random_goals_paper_law() {
+    run_set(Set::Pair, false, true);
+    run_set(Set::Single, false, true);
+}
