@@ -35,9 +35,9 @@ fn shades(sf: &SeriesFile) -> (Vec<Shade>, String) {
     // The simulated run's own segments when it has them (a feedback policy
     // switches modes on the simulated state, and may run past the ideal run's end).
     let (segments, whose) = if sf.sim_segments.is_empty() {
-        (&sf.segments, "plan segments")
+        (&sf.segments, "Plan segments")
     } else {
-        (&sf.sim_segments, "segments of the simulated run")
+        (&sf.sim_segments, "Plan segments of the simulated run")
     };
     for s in segments {
         let k = match names.iter().position(|n| *n == s.label) {
@@ -52,7 +52,7 @@ fn shades(sf: &SeriesFile) -> (Vec<Shade>, String) {
     if out.len() > MAX_SHADES {
         out = bin_shades(&out, MAX_SHADES);
     }
-    let mut legend = format!("<p>Shaded in every time plot, the {whose}: ");
+    let mut legend = format!("<p>{whose} (shaded in every time plot): ");
     for (k, n) in names.iter().enumerate() {
         let c = plots::label_color(k);
         let _ = write!(

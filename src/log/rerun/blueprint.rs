@@ -312,7 +312,7 @@ fn blueprint(rec: &RunRecord<'_>) -> (Blueprint, Vec<Property>) {
             let [lo, hi] = value_range(values);
             // The legend sits in the top right corner, over this headroom, not on the data.
             let head = if legend > 1 && legend <= MAX_LEGEND {
-                (0.08 + 0.1 * legend as f64).min(0.6)
+                (0.1 + 0.15 * legend as f64).min(0.8)
             } else {
                 0.0
             };
