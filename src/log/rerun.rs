@@ -219,6 +219,23 @@ fn log_all(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrError>
     // URDF's sizes).
     let thick = scene.radius() / 150.0;
     log_robot(stream, rec, thick)?;
+    if let Some((link, r)) = blueprint::follow_frame(rec) {
+        // A faint ring around the followed link: the follow view frames what
+        // it shows, so the ring sets its scale to a few robot sizes (the
+        // overview hides it).
+        let ring: Vec<[f32; 3]> = (0..=48)
+            .map(|k| {
+                let a = k as f64 * std::f64::consts::TAU / 48.0;
+                [(r * a.cos()) as f32, (r * a.sin()) as f32, 0.0]
+            })
+            .collect();
+        stream.log_static(
+            ep(&["robot", &link, blueprint::FOLLOW_RING]),
+            &rr::LineStrips3D::new([ring])
+                .with_colors([rgba([0.5, 0.5, 0.5, 0.5])])
+                .with_radii([Radius::new_ui_points(0.75)]),
+        )?;
+    }
     log_paths(stream, rec, robot)?;
 
     let ideal = rec.ideal;

@@ -132,6 +132,18 @@ pub(super) fn scene_extent(rec: &RunRecord<'_>) -> (Bounds, f64) {
     (scene, size)
 }
 
+/// Entity name of the ring around the followed link (under `robot/<link>/`).
+pub(super) const FOLLOW_RING: &str = "follow_ring";
+
+/// The link a follow view tracks and the radius of the ring that frames it:
+/// when the run is more than three times the robot's size.
+pub(super) fn follow_frame(rec: &RunRecord<'_>) -> Option<(String, f64)> {
+    let (scene, robot) = scene_extent(rec);
+    let link = rec.links.first()?;
+    (!rec.sim.link_poses.is_empty() && scene.radius() > 3.0 * robot)
+        .then(|| (link.name.clone(), 1.5 * robot))
+}
+
 /// Height of the post over a goal: above the robot (which covers a goal it
 /// reaches), and visible at the run's scale (`marker`: the path markers' size).
 pub(super) fn goal_post_height(robot: f64, marker: f64) -> f64 {
@@ -541,6 +553,10 @@ fn blueprint(rec: &RunRecord<'_>) -> (Blueprint, Vec<Property>) {
             Box::new(eye(scene.center(), radius, aspect)),
         ));
         hide_in_view(&mut props, &p, &hidden);
+        if let Some(link) = follow {
+            let ring = ep(&["robot", &link.name, FOLLOW_RING]).to_string();
+            hide_in_view(&mut props, &p, &[ring]);
+        }
     }
     let mut left = vec![overview];
     if let Some(link) = follow {
