@@ -262,11 +262,11 @@ mod tests {
     fn stretches_above_a_bound_join_close_points() {
         let s = Series {
             name: "f".into(),
-            t: vec![0.0, 0.1, 0.2, 5.0, 5.2, 9.0],
+            t: vec![0.0, 0.125, 0.25, 5.0, 5.5, 9.0],
             v: vec![Some(9.0), Some(1.0), None, Some(9.0), Some(9.0), Some(8.0)],
         };
-        assert_eq!(above(&s, 8.0, 0.5), vec![(0.0, 0.0), (5.0, 5.2)]);
-        assert_eq!(stretches(&above(&s, 8.0, 0.5)), "at t ≈ 0.00 s, 5.0–5.2 s");
+        assert_eq!(above(&s, 8.0, 0.5), vec![(0.0, 0.0), (5.0, 5.5)]);
+        assert_eq!(stretches(&above(&s, 8.0, 0.5)), "at t ≈ 0.00 s, 5.0–5.5 s");
         assert_eq!(stretches(&above(&s, 10.0, 0.5)), "never");
     }
 }
