@@ -5,7 +5,8 @@ usage: cdp_screenshot.py URL OUT.png [--wait S] [--width W] [--height H] [--full
 
 Starts Chromium (SwiftShader WebGL, no GPU, no WebGPU), opens URL, waits S
 seconds (the Rerun web viewer needs about a minute to load its wasm on these
-machines), then captures with `Page.captureScreenshot`. Needs the Debian
+machines), then captures with `Page.captureScreenshot` (`--full-page`: the whole page
+once, up to 16 000 px, by making the viewport as tall as the page). Needs the Debian
 `chromium` package and the `websocket-client` Python package.
 """
 import argparse
@@ -100,16 +101,22 @@ def main():
         time.sleep(a.wait)
         params = {"format": "png"}
         if a.full_page:
+            # Make the viewport as tall as the page and capture it as it is:
+            # `captureBeyondViewport` with a clip taller than the window
+            # repeated the page from the top after ~8 000 px. 16 000 px is
+            # below the texture limit of Chromium's compositor.
             m = call("Page.getLayoutMetrics")
             size = m.get("cssContentSize") or m["contentSize"]
-            params["captureBeyondViewport"] = True
-            params["clip"] = {
-                "x": 0,
-                "y": 0,
-                "width": a.width,
-                "height": min(size["height"], 16000),
-                "scale": 1,
-            }
+            tall = int(min(max(size["height"], a.height), 16000))
+            call(
+                "Emulation.setDeviceMetricsOverride",
+                width=a.width,
+                height=tall,
+                deviceScaleFactor=1,
+                mobile=False,
+            )
+            time.sleep(1.0)
+            params["clip"] = {"x": 0, "y": 0, "width": a.width, "height": tall, "scale": 1}
         shot = call("Page.captureScreenshot", **params)
         with open(a.out, "wb") as f:
             f.write(base64.b64decode(shot["data"]))

@@ -213,8 +213,30 @@ fn log_all(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrError>
         stream.send_property("metrics", &m)?;
     }
 
-    log_robot(stream, rec)?;
-    log_paths(stream, rec)?;
+    let (scene, robot) = blueprint::scene_extent(rec);
+    // Thinner bodies (a 1 cm rod on a 10 m run) would draw below a pixel in
+    // the overview: they are drawn at least this thick (the physics uses the
+    // URDF's sizes).
+    let thick = scene.radius() / 150.0;
+    log_robot(stream, rec, thick)?;
+    if let Some((link, r)) = blueprint::follow_frame(rec) {
+        // A faint ring around the followed link: the follow view frames what
+        // it shows, so the ring sets its scale to a few robot sizes (the
+        // overview hides it).
+        let ring: Vec<[f32; 3]> = (0..=48)
+            .map(|k| {
+                let a = k as f64 * std::f64::consts::TAU / 48.0;
+                [(r * a.cos()) as f32, (r * a.sin()) as f32, 0.0]
+            })
+            .collect();
+        stream.log_static(
+            ep(&["robot", &link, blueprint::FOLLOW_RING]),
+            &rr::LineStrips3D::new([ring])
+                .with_colors([rgba([0.5, 0.5, 0.5, 0.5])])
+                .with_radii([Radius::new_ui_points(0.75)]),
+        )?;
+    }
+    log_paths(stream, rec, robot)?;
 
     let ideal = rec.ideal;
     let sim = &rec.sim.traj;
@@ -273,7 +295,14 @@ fn log_all(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrError>
         let mut parts = vec!["analysis"];
         parts.extend(s.name.split('/').filter(|p| !p.is_empty()));
         let p = ep(&parts);
-        series_style(stream, &p, &s.name, None, false)?;
+        // The runs in their path colours, a bound in the goal's red.
+        let color = match parts.last().copied() {
+            Some("ideal") => Some(IDEAL_RGBA),
+            Some("sim") => Some(SIM_RGBA),
+            Some("bound") => Some(GOAL_RGBA),
+            _ => None,
+        };
+        series_style(stream, &p, &s.name, color, false)?;
         send_scalars(stream, p, &s.t, s.values.iter().copied())?;
     }
 
@@ -295,7 +324,8 @@ fn log_all(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrError>
     Ok(())
 }
 
-fn log_robot(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrError> {
+fn log_robot(stream: &RecordingStream, rec: &RunRecord<'_>, thick: f64) -> Result<(), RrError> {
+    let r_min = 0.5 * thick;
     let pose_times: Vec<f64> = rec.sim.link_pose_times().collect();
     for (i, link) in rec.links.iter().enumerate() {
         let link_path = ep(&["robot", &link.name]);
@@ -313,29 +343,35 @@ fn log_robot(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrErro
                 )?,
                 Shape::Box { size } => stream.log_static(
                     vp,
-                    &rr::Boxes3D::from_half_sizes([f32x3(size.map(|s| 0.5 * s))])
+                    &rr::Boxes3D::from_half_sizes([f32x3(size.map(|s| 0.5 * s.max(thick)))])
                         .with_colors(c)
                         .with_fill_mode(FillMode::Solid),
                 )?,
                 &Shape::Cylinder { radius, length } => stream.log_static(
                     vp,
-                    &rr::Cylinders3D::from_lengths_and_radii([length as f32], [radius as f32])
-                        .with_colors(c)
-                        .with_fill_mode(FillMode::Solid),
+                    &rr::Cylinders3D::from_lengths_and_radii(
+                        [length as f32],
+                        [radius.max(r_min) as f32],
+                    )
+                    .with_colors(c)
+                    .with_fill_mode(FillMode::Solid),
                 )?,
                 &Shape::Sphere { radius } => stream.log_static(
                     vp,
-                    &rr::Ellipsoids3D::from_radii([radius as f32])
+                    &rr::Ellipsoids3D::from_radii([radius.max(r_min) as f32])
                         .with_colors(c)
                         .with_fill_mode(FillMode::Solid),
                 )?,
                 // Rerun capsules run from z = 0 to z = length; URDF-style ones are centred.
                 &Shape::Capsule { radius, length } => stream.log_static(
                     vp,
-                    &rr::Capsules3D::from_lengths_and_radii([length as f32], [radius as f32])
-                        .with_translations([[0.0, 0.0, -0.5 * length as f32]])
-                        .with_colors(c)
-                        .with_fill_mode(FillMode::Solid),
+                    &rr::Capsules3D::from_lengths_and_radii(
+                        [length as f32],
+                        [radius.max(r_min) as f32],
+                    )
+                    .with_translations([[0.0, 0.0, -0.5 * length as f32]])
+                    .with_colors(c)
+                    .with_fill_mode(FillMode::Solid),
                 )?,
             }
         }
@@ -352,7 +388,9 @@ fn log_robot(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrErro
     Ok(())
 }
 
-fn log_paths(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrError> {
+/// Overlays, every robot's ideal and simulated path with its moving marker, and the goals
+/// (`robot`: the robot's size, m, for the goal posts' height).
+fn log_paths(stream: &RecordingStream, rec: &RunRecord<'_>, robot: f64) -> Result<(), RrError> {
     for o in rec.overlays {
         let strip: Vec<[f32; 3]> = o
             .points
@@ -379,22 +417,31 @@ fn log_paths(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrErro
         return Ok(());
     };
     let s = marker_scale(first) as f32;
-    let xyz = |p: &[f64; 2]| [p[0] as f32, p[1] as f32, 0.0];
+    let several = ideal_paths.len() > 1;
+    // The simulated path lies a little above the ideal one and thinner, so
+    // where the two coincide (a car 2 mm off its plan) it runs as an orange
+    // line inside a green band instead of hiding under it.
+    let lift = 0.05 * s;
     let paths = ideal_paths.iter().zip(planar_paths(rec, &rec.sim.traj));
     for (r, (ideal, sim)) in paths.enumerate() {
         let sfx = robot_suffix(r);
-        for (run, path, t, color) in [
-            ("ideal", ideal, &rec.ideal.t, IDEAL_RGBA),
-            ("sim", &sim, &rec.sim.traj.t, SIM_RGBA),
+        for (run, path, t, color, z, width) in [
+            ("ideal", ideal, &rec.ideal.t, IDEAL_RGBA, 0.0, 4.0),
+            ("sim", &sim, &rec.sim.traj.t, SIM_RGBA, lift, 1.5),
         ] {
             let name = format!("{run}{sfx}");
-            let strip: Vec<[f32; 3]> = path.iter().map(xyz).collect();
+            let strip: Vec<[f32; 3]> = path.iter().map(|p| [p[0] as f32, p[1] as f32, z]).collect();
+            let label = if several {
+                format!("robot {} {run}", r + 1)
+            } else {
+                run.to_string()
+            };
             stream.log_static(
                 ep(&["paths", &name]),
                 &rr::LineStrips3D::new([strip.clone()])
                     .with_colors([rgba(color)])
-                    .with_radii([Radius::new_ui_points(1.5)])
-                    .with_labels([name.as_str()])
+                    .with_radii([Radius::new_ui_points(width)])
+                    .with_labels([label.as_str()])
                     // In 3D the label sits on the robot; colours and hover name it.
                     .with_show_labels(false),
             )?;
@@ -410,17 +457,53 @@ fn log_paths(stream: &RecordingStream, rec: &RunRecord<'_>) -> Result<(), RrErro
                 .columns_of_unit_batches()?;
             stream.send_columns(now, [time_col(t)], cols)?;
         }
+        // Which path pair is which robot: a label at each start.
+        if several {
+            if let Some(p) = ideal.first() {
+                stream.log_static(
+                    ep(&["paths", &format!("start{sfx}")]),
+                    &rr::Points3D::new([[p[0] as f32, p[1] as f32, 0.0]])
+                        .with_colors([rgba(IDEAL_RGBA)])
+                        .with_radii([Radius::new_scene_units(0.3 * s)])
+                        .with_labels([format!("robot {}", r + 1)])
+                        .with_show_labels(true),
+                )?;
+            }
+        }
     }
+    // A post over each goal, taller than the robot, labelled on top: a robot
+    // that reaches its goal covers a marker on the ground.
+    let post = blueprint::goal_post_height(robot, s as f64) as f32;
     for (r, [gx, gy]) in goal_points(rec).into_iter().enumerate() {
         let at = [gx as f32, gy as f32, 0.0];
+        let top = [gx as f32, gy as f32, post];
         let name = format!("goal{}", robot_suffix(r));
+        let label = if several {
+            format!("goal {}", r + 1)
+        } else {
+            "goal".to_string()
+        };
         stream.log_static(
             ep(&["paths", &name]),
             &rr::Points3D::new([at])
                 .with_colors([rgba(GOAL_RGBA)])
                 .with_radii([Radius::new_scene_units(0.5 * s)])
-                .with_labels([name.as_str()])
+                .with_labels([label.as_str()])
                 .with_show_labels(false),
+        )?;
+        stream.log_static(
+            ep(&["paths", &name, "post"]),
+            &rr::LineStrips3D::new([[at, top]])
+                .with_colors([rgba(GOAL_RGBA)])
+                .with_radii([Radius::new_ui_points(2.0)]),
+        )?;
+        stream.log_static(
+            ep(&["paths", &name, "label"]),
+            &rr::Points3D::new([top])
+                .with_colors([rgba(GOAL_RGBA)])
+                .with_radii([Radius::new_scene_units(0.3 * s)])
+                .with_labels([label.as_str()])
+                .with_show_labels(true),
         )?;
         // The goal heading is the first robot's.
         if let Some(h) = rec.goal_heading.filter(|_| r == 0) {

@@ -99,6 +99,14 @@ pub struct SeriesFile {
     /// first robot's).
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub other_robots: Vec<RobotPaths>,
+    /// The system's analysis series (`V/sim`, `grasp_force/sim`,
+    /// `grasp_force/bound`, ...), as in the Rerun log's `analysis/`.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub analysis: Vec<Series>,
+    /// Label spans of the simulated run, when it has its own (a feedback
+    /// policy's modes on the simulated state; it may run longer than the ideal run).
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub sim_segments: Vec<Span>,
 }
 
 /// One more robot's planar paths ([`SeriesFile::other_robots`]).
@@ -276,6 +284,16 @@ impl SeriesFile {
                     sim: path(sim, p),
                 })
                 .collect(),
+            analysis: rec
+                .series
+                .iter()
+                .map(|s| series(&s.name, &s.t, |k| s.values[k]))
+                .collect(),
+            sim_segments: if sim.label.len() == sim.t.len() {
+                spans(sim, rec.labels)
+            } else {
+                Vec::new()
+            },
             state_names: names,
         }
     }

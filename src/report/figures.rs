@@ -32,7 +32,14 @@ const MAX_SHADES: usize = 120;
 fn shades(sf: &SeriesFile) -> (Vec<Shade>, String) {
     let mut names: Vec<&str> = Vec::new();
     let mut out = Vec::new();
-    for s in &sf.segments {
+    // The simulated run's own segments when it has them (a feedback policy
+    // switches modes on the simulated state, and may run past the ideal run's end).
+    let (segments, whose) = if sf.sim_segments.is_empty() {
+        (&sf.segments, "Plan segments")
+    } else {
+        (&sf.sim_segments, "Plan segments of the simulated run")
+    };
+    for s in segments {
         let k = match names.iter().position(|n| *n == s.label) {
             Some(k) => k,
             None => {
@@ -45,7 +52,7 @@ fn shades(sf: &SeriesFile) -> (Vec<Shade>, String) {
     if out.len() > MAX_SHADES {
         out = bin_shades(&out, MAX_SHADES);
     }
-    let mut legend = String::from("<p>Plan segments (shaded in every time plot): ");
+    let mut legend = format!("<p>{whose} (shaded in every time plot): ");
     for (k, n) in names.iter().enumerate() {
         let c = plots::label_color(k);
         let _ = write!(
@@ -380,19 +387,28 @@ pub(super) fn sweep_figures(s: &Value) -> Result<String, String> {
         Some(k) => r["params"][k].as_f64().unwrap_or(f64::NAN),
         None => f(r, key),
     };
-    for key in &keys {
-        let label = match key.strip_prefix("params/") {
-            Some("sim.friction") => "friction coefficient (sim.friction)".to_string(),
-            Some(k) => k.to_string(),
-            None => "mass scale".to_string(),
-        };
+    let label_of = |key: &str| match key.strip_prefix("params/") {
+        Some("sim.friction") => "friction coefficient (sim.friction)".to_string(),
+        Some(k) => k.to_string(),
+        None => "mass scale".to_string(),
+    };
+    // The keys whose values differ between variants (a failed variant's
+    // values count too: its `params` are recorded like a success's).
+    let varied: Vec<&String> = keys
+        .iter()
+        .filter(|key| {
+            let vals: Vec<f64> = results
+                .iter()
+                .map(|r| param(r, key))
+                .filter(|v| v.is_finite())
+                .collect();
+            vals.iter().any(|v| (v - vals[0]).abs() > 1e-12)
+        })
+        .collect();
+    for key in &varied {
+        let label = label_of(key);
         let label = label.as_str();
         let key = key.as_str();
-        let vals: Vec<f64> = results.iter().map(|r| param(r, key)).collect();
-        let varied = vals.iter().any(|v| (v - vals[0]).abs() > 1e-12);
-        if !varied {
-            continue;
-        }
         let pts: Vec<(f64, f64, bool)> = results
             .iter()
             .map(|r| {
@@ -437,14 +453,19 @@ pub(super) fn sweep_figures(s: &Value) -> Result<String, String> {
         .filter(|r| r["success"].as_bool() != Some(true))
         .collect();
     if !failed.is_empty() {
-        b.push_str("<h2>Failed variants</h2><table><tr><th>index</th><th>friction</th><th>mass scale</th><th>final error</th><th class=\"l\">error</th></tr>");
+        b.push_str("<h2>Failed variants</h2><table><tr><th>index</th>");
+        for key in &varied {
+            let _ = write!(b, "<th>{}</th>", esc(&label_of(key)));
+        }
+        b.push_str("<th>final error</th><th class=\"l\">error</th></tr>");
         for r in failed {
+            let _ = write!(b, "<tr><td>{}</td>", r["index"]);
+            for key in &varied {
+                let _ = write!(b, "<td>{}</td>", num(Some(param(r, key))));
+            }
             let _ = write!(
                 b,
-                "<tr><td>{}</td><td>{}</td><td>{}</td><td>{}</td><td class=\"l\">{}</td></tr>",
-                r["index"],
-                num(Some(f(r, "friction"))),
-                num(Some(f(r, "mass_scale"))),
+                "<td>{}</td><td class=\"l\">{}</td></tr>",
                 num(r["final_error"].as_f64()),
                 esc(r["error"].as_str().unwrap_or(""))
             );

@@ -96,6 +96,28 @@ fn primary(summary: &Value) -> Option<String> {
         .find_map(|k| k.strip_prefix("ideal_goal_").map(String::from))
 }
 
+/// The unit of a goal or tracking metric on coordinate `c` (as `primary`
+/// names it): degrees for `*_deg`, metres for the planar position and `x`,
+/// `y`, `z` coordinates, else none known.
+fn unit_of(c: &str) -> &'static str {
+    let bare = c.trim_end_matches(|ch: char| ch.is_ascii_digit() || ch == '_');
+    if c.ends_with("_deg") {
+        "°"
+    } else if c == "position" || c.starts_with("position_") || ["x", "y", "z"].contains(&bare) {
+        "m"
+    } else {
+        ""
+    }
+}
+
+/// A number with its unit (`0.0017 m`, `0.51 °`).
+fn with_unit(v: Option<f64>, unit: &str) -> String {
+    match (v.filter(|v| v.is_finite()), unit) {
+        (Some(_), u) if !u.is_empty() => format!("{} {u}", num(v)),
+        _ => num(v),
+    }
+}
+
 /// `LOGDIR/index.html`.
 pub fn index_page(runs: &[Loaded], unreadable: &[crate::error::Error]) -> String {
     let mut b = String::new();
@@ -117,7 +139,7 @@ pub fn index_page(runs: &[Loaded], unreadable: &[crate::error::Error]) -> String
         b,
         "<h1>anholonomy report</h1><p>{} scenarios: {}. XFAIL: broke a threshold as the scenario expects (it shows a limit on purpose); XPASS: met every threshold although expected to fail, which <code>check</code> counts as a failure.</p>\
          <table><tr><th class=\"l\">scenario</th><th class=\"l\">planner</th><th>result</th>\
-         <th class=\"l\">key metric</th><th>sim goal error</th><th>tracking max</th><th>wall s</th>\
+         <th class=\"l\">key metric</th><th>sim goal error</th><th>tracking max</th><th>wall (s)</th>\
          <th class=\"l\">baseline</th><th class=\"l\">broken thresholds</th></tr>",
         runs.len(),
         counts.join(", ")
@@ -138,9 +160,9 @@ pub fn index_page(runs: &[Loaded], unreadable: &[crate::error::Error]) -> String
                     esc(summary["planner"]["kind"].as_str().unwrap_or("")),
                     verdict(summary),
                     esc(&c),
-                    num(metric(summary, &format!("sim_goal_{c}"))),
+                    with_unit(metric(summary, &format!("sim_goal_{c}")), unit_of(&c)),
                     if tracking_meaningful(summary) {
-                        num(metric(summary, &format!("tracking_{c}_max")))
+                        with_unit(metric(summary, &format!("tracking_{c}_max")), unit_of(&c))
                     } else {
                         "<span class=\"muted\" title=\"feedback policy: the runs reach the goal at different times\">n/a</span>".into()
                     },
@@ -161,7 +183,15 @@ pub fn index_page(runs: &[Loaded], unreadable: &[crate::error::Error]) -> String
                     verdict(s),
                     100.0 * s["success_rate"].as_f64().unwrap_or(f64::NAN),
                     s["variants_run"].as_u64().unwrap_or(0),
-                    num(s["final_error"]["median"].as_f64()),
+                    with_unit(
+                        s["final_error"]["median"].as_f64(),
+                        unit_of(
+                            s["sweep"]["success_metric"]
+                                .as_str()
+                                .unwrap_or("")
+                                .trim_start_matches("sim_goal_")
+                        )
+                    ),
                     sweep_wall(s),
                     baseline_summary(&l.regression),
                     fails.join("; ")
@@ -176,7 +206,7 @@ pub fn index_page(runs: &[Loaded], unreadable: &[crate::error::Error]) -> String
             esc(&e.to_string())
         );
     }
-    b.push_str("</table><p class=\"muted\">Key metric: the planar position (m) when the model has one, else the first state coordinate (angles in degrees). Tracking n/a: the plan is a feedback policy, so each run reaches the goal at its own time and the runs differ sample by sample whatever the physics. Baseline: the comparison made by <code>anholonomy check --baseline</code> with this log directory.</p>");
+    b.push_str("</table><p class=\"muted\">Key metric: the planar position (m) when the model has one, else the first state coordinate (angles in degrees); every value carries its unit. Tracking n/a: the plan is a feedback policy, so each run reaches the goal at its own time and the runs differ sample by sample whatever the physics. Baseline: the comparison made by <code>anholonomy check --baseline</code> with this log directory.</p>");
     page("anholonomy report", &b)
 }
 
@@ -299,6 +329,7 @@ pub fn scenario_page(l: &Loaded) -> Result<String, String> {
                 b.push_str("</ul>");
             }
             b.push_str(&paper_table(&summary["paper"]));
+            b.push_str(&super::grasp::section(summary, series)?);
             b.push_str(&single_figures(summary, series)?);
             b.push_str("<h2>Metrics</h2>");
             b.push_str(&metrics_table(summary, &l.regression));

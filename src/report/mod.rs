@@ -13,6 +13,7 @@
 
 pub mod data;
 mod figures;
+mod grasp;
 mod html;
 mod margins;
 mod markup;

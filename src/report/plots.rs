@@ -38,7 +38,7 @@ pub fn series_color(k: usize) -> RGBColor {
 
 /// One line of a time chart; `None` values break the line.
 pub struct Line<'a> {
-    /// Legend name.
+    /// Legend name (empty: none, as for a line that shares its neighbour's).
     pub name: String,
     /// Times, s.
     pub t: &'a [f32],
@@ -161,6 +161,10 @@ pub fn time_chart(
             .flat_map(|l| l.v.iter().flatten().copied())
             .chain(hlines.iter().map(|h| h.y)),
     );
+    let entries = lines.iter().filter(|l| !l.name.is_empty()).count()
+        + hlines.iter().filter(|h| !h.name.is_empty()).count();
+    // About 176 px of plot area: the legend's rows get their own band above the data.
+    let y1 = y1 + (y1 - y0) * headroom(entries, 176.0);
     let t_end = if t_end > 0.0 { t_end } else { 1.0 };
     svg(560, 240, |root| {
         let mut chart = ChartBuilder::on(&root)
@@ -210,7 +214,7 @@ pub fn time_chart(
                 let s = chart
                     .draw_series(LineSeries::new(run, c.stroke_width(1)))
                     .map_err(err)?;
-                if first {
+                if first && !l.name.is_empty() {
                     s.label(l.name.clone()).legend(move |(x, y)| {
                         PathElement::new(vec![(x, y), (x + 14, y)], c.stroke_width(2))
                     });
@@ -221,6 +225,17 @@ pub fn time_chart(
         legend(&mut chart)?;
         Ok(())
     })
+}
+
+/// How much to extend a value axis (as a fraction of its span) so that a
+/// legend of `entries` rows in the upper right corner sits above the data, on
+/// a plot area `plot_px` high (a legend on the data hid a car's speed bump).
+fn headroom(entries: usize, plot_px: f64) -> f64 {
+    if entries == 0 {
+        return 0.0;
+    }
+    let legend_px = (10.0 + 16.0 * entries as f64).min(0.6 * plot_px);
+    legend_px / (plot_px - legend_px)
 }
 
 /// Tick label: short, without float noise.
@@ -273,6 +288,13 @@ pub fn path_chart(paths: &[Path2<'_>], markers: &[Marker<'_>]) -> Res<String> {
     };
     let (mut x0, mut x1) = range(pts().map(|p| p.0));
     let (mut y0, mut y1) = range(pts().map(|p| p.1));
+    // A band above the paths for the legend (one row per distinct name).
+    let mut names: Vec<&str> = paths.iter().map(|p| p.name).collect();
+    names.extend(markers.iter().map(|m| m.name));
+    names.retain(|n| !n.is_empty());
+    names.sort();
+    names.dedup();
+    y1 += (y1 - y0).max(x1 - x0) * headroom(names.len(), 490.0);
     // Equal scales: widen the narrower axis (plot area is square).
     let (w, h) = (x1 - x0, y1 - y0);
     if w > h {

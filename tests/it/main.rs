@@ -37,6 +37,7 @@ mod properties;
 mod published_robots;
 mod reference;
 mod report;
+mod rerun_layout;
 mod robot_examples;
 mod ros_bags;
 mod rover;

@@ -66,6 +66,11 @@ fn report_of_a_run_and_a_sweep() {
             "{name}"
         );
     }
+    // Every error in the index carries its unit.
+    assert!(
+        index.matches(" m</td>").count() >= 2,
+        "goal and tracking errors in m"
+    );
     let page = std::fs::read_to_string(logs.join("disk/report.html")).unwrap();
     assert_self_contained(&page);
     for needle in [

@@ -3,14 +3,14 @@
 //! over the whole run with fitted value ranges, and overlays hidden by default.
 
 use super::rr;
-use rr::blueprint::components::{Eye3DKind, LinkAxis, PanelState};
+use rr::blueprint::components::{Corner2D, Eye3DKind, LinkAxis, PanelState};
 use rr::blueprint::{
     Blueprint, BlueprintActivation, BlueprintPanel, ContainerLike, Grid, Horizontal,
     SelectionPanel, Spatial3DView, Tabs, TextLogView, TimePanel, TimeSeriesView, Vertical,
 };
 use rr::external::re_log_types::BlueprintActivationCommand;
 use rr::external::re_sdk_types::blueprint::archetypes::{
-    EntityBehavior, EyeControls3D, ScalarAxis, TimeAxis, VisibleTimeRanges,
+    EntityBehavior, EyeControls3D, PlotLegend, ScalarAxis, TimeAxis, VisibleTimeRanges,
 };
 use rr::external::re_sdk_types::datatypes::{
     Range1D, TimeInt, TimeRange, TimeRangeBoundary, VisibleTimeRange,
@@ -18,14 +18,14 @@ use rr::external::re_sdk_types::datatypes::{
 use rr::log::LogMsg;
 use rr::AsComponents;
 
-use crate::log::scene::{coord_name, planar_paths};
+use crate::log::scene::{coord_name, goal_points, marker_scale, planar_paths};
 use crate::record::{RunRecord, Shape};
 
 use super::{ep, RrError, TIMELINE};
 
 /// Axis-aligned box over points, empty until a finite point is added.
 #[derive(Clone, Copy)]
-struct Bounds {
+pub(super) struct Bounds {
     lo: [f64; 3],
     hi: [f64; 3],
 }
@@ -52,7 +52,7 @@ impl Bounds {
         [0, 1, 2].map(|i| 0.5 * (self.lo[i] + self.hi[i]))
     }
     /// Half the diagonal.
-    fn radius(&self) -> f64 {
+    pub(super) fn radius(&self) -> f64 {
         0.5 * (0..3)
             .map(|i| (self.hi[i] - self.lo[i]).powi(2))
             .sum::<f64>()
@@ -89,7 +89,7 @@ fn link_reach(link: &crate::record::LinkVisual) -> f64 {
 /// The run's extent (every link position over the run, both planar paths) and the robot's
 /// size (link positions at the first sample plus the reach of their visuals). Overlays are
 /// left out: a target line may run far beyond the motion.
-fn scene_extent(rec: &RunRecord<'_>) -> (Bounds, f64) {
+pub(super) fn scene_extent(rec: &RunRecord<'_>) -> (Bounds, f64) {
     let mut scene = Bounds::new();
     let poses = &rec.sim.link_poses;
     let stride = (poses.len() / 2000).max(1);
@@ -107,6 +107,7 @@ fn scene_extent(rec: &RunRecord<'_>) -> (Bounds, f64) {
     }
     let mut robot = Bounds::new();
     let mut reach: f64 = 0.0;
+    let goals = goal_points(rec);
     if let Some(first) = poses.first() {
         for (p, link) in first.iter().zip(rec.links) {
             robot.add(p.translation);
@@ -118,10 +119,35 @@ fn scene_extent(rec: &RunRecord<'_>) -> (Bounds, f64) {
     } else {
         (robot.radius() + reach).max(0.05)
     };
+    // The goal posts and their labels are in the picture.
+    if let Some(first) = planar_paths(rec, rec.ideal).first() {
+        let h = goal_post_height(size, marker_scale(first));
+        for [x, y] in goals {
+            scene.add([x, y, h]);
+        }
+    }
     if scene.is_empty() {
         scene.add([0.0; 3]);
     }
     (scene, size)
+}
+
+/// Entity name of the ring around the followed link (under `robot/<link>/`).
+pub(super) const FOLLOW_RING: &str = "follow_ring";
+
+/// The link a follow view tracks and the radius of the ring that frames it:
+/// when the run is more than three times the robot's size.
+pub(super) fn follow_frame(rec: &RunRecord<'_>) -> Option<(String, f64)> {
+    let (scene, robot) = scene_extent(rec);
+    let link = rec.links.first()?;
+    (!rec.sim.link_poses.is_empty() && scene.radius() > 3.0 * robot)
+        .then(|| (link.name.clone(), 1.5 * robot))
+}
+
+/// Height of the post over a goal: above the robot (which covers a goal it
+/// reaches), and visible at the run's scale (`marker`: the path markers' size).
+pub(super) fn goal_post_height(robot: f64, marker: f64) -> f64 {
+    (1.5 * robot).max(4.0 * marker)
 }
 
 /// Orbit camera looking at `target` from the south-west and above, far enough that a sphere of
@@ -129,11 +155,13 @@ fn scene_extent(rec: &RunRecord<'_>) -> (Bounds, f64) {
 /// A tracking-error view: title, entity paths, series.
 type ErrorGroup<'a> = (&'a str, Vec<String>, Vec<&'a [f64]>);
 
-fn eye(target: [f64; 3], radius: f64) -> EyeControls3D {
+fn eye(target: [f64; 3], radius: f64, aspect: f64) -> EyeControls3D {
     let dir: [f64; 3] = [-0.45, -0.8, 0.62];
     let n = (dir[0] * dir[0] + dir[1] * dir[1] + dir[2] * dir[2]).sqrt();
-    // Vertical field of view of Rerun's default camera is about 55°; 1.1 leaves a margin.
-    let dist = 1.1 * radius / (27.5f64).to_radians().tan();
+    // Vertical field of view of Rerun's default camera is about 55°; a view
+    // narrower than tall (width / height = `aspect`) sees less across. 1.1
+    // leaves a margin.
+    let dist = 1.1 * radius / ((27.5f64).to_radians().tan() * aspect.min(1.0));
     let pos = [0, 1, 2].map(|i| (target[i] + dist * dir[i] / n) as f32);
     EyeControls3D::new()
         .with_kind(Eye3DKind::Orbital)
@@ -215,6 +243,61 @@ fn hide_in_view(props: &mut Vec<Property>, view: &str, entities: &[String]) {
     }
 }
 
+/// Which robot a coordinate or input belongs to, from the first number in its
+/// name (`x2`, `q2_4`, `u1_3`, `omega1`); `None` when the name has no number.
+fn robot_of(name: &str) -> Option<usize> {
+    let digits: String = name
+        .chars()
+        .skip_while(|c| !c.is_ascii_digit())
+        .take_while(|c| c.is_ascii_digit())
+        .collect();
+    digits.parse().ok()
+}
+
+/// Words of a physics channel's name that say where it is measured (which
+/// robot, wheel, side or axis), not what: `slip_rear_left_lon` and
+/// `slip_lateral_2` are both `slip`, `grasp1_force` is `grasp_force`.
+const WHERE_WORDS: [&str; 13] = [
+    "left", "right", "front", "middle", "back", "rear", "lon", "lat", "lateral", "x", "y", "z", "",
+];
+
+/// The quantity a physics channel measures, its name without robot numbers
+/// and where-words: channels of one quantity share a plot, so one plot has
+/// one unit (`grasp1_force` and `grasp1_torque` do not).
+pub(super) fn channel_quantity(name: &str) -> String {
+    let words: Vec<String> = name
+        .split('_')
+        .map(|w| w.trim_end_matches(|c: char| c.is_ascii_digit()).to_string())
+        .filter(|w| !WHERE_WORDS.contains(&w.as_str()))
+        .collect();
+    if words.is_empty() {
+        name.to_string()
+    } else {
+        words.join("_")
+    }
+}
+
+/// Units of the analysis groups whose unit is known (titles name it).
+fn analysis_unit(group: &str) -> &'static str {
+    match group {
+        "grasp_force" => " (N)",
+        "grasp_torque" => " (N m)",
+        _ => "",
+    }
+}
+
+/// Most legend rows a plot shows (above the data); more are left to hover.
+const MAX_LEGEND: usize = 4;
+
+/// Grid columns for `n` plots: short titles stay readable.
+fn columns(n: usize) -> u32 {
+    if n <= 4 {
+        2
+    } else {
+        3
+    }
+}
+
 /// The layout, plus the view properties the SDK's builders cannot set.
 fn blueprint(rec: &RunRecord<'_>) -> (Blueprint, Vec<Property>) {
     let mut props: Vec<Property> = Vec::new();
@@ -225,39 +308,66 @@ fn blueprint(rec: &RunRecord<'_>) -> (Blueprint, Vec<Property>) {
     ]
     .into_iter()
     .flatten()
+    .chain(rec.series.iter().filter_map(|s| s.t.last()))
     .fold(0.0f64, |m, t| m.max(*t));
-    // A time-series view over the whole run, its value axis fitted to `values`.
-    let mut series =
-        |view: TimeSeriesView, values: &mut dyn Iterator<Item = f64>| -> ContainerLike {
-            let c: ContainerLike = view.into();
-            if let Some(p) = view_path(&c) {
-                let (ranges, axis) = whole_run(end);
-                props.push((format!("{p}/VisibleTimeRanges"), Box::new(ranges)));
-                props.push((format!("{p}/TimeAxis"), Box::new(axis)));
-                let y = ScalarAxis::new().with_range(Range1D(value_range(values)));
-                props.push((format!("{p}/ScalarAxis"), Box::new(y)));
-            }
-            c
-        };
+    // A time-series view over the whole run, its value axis fitted to `values`
+    // with room above the data for the legend of `legend` entries (none: no legend).
+    let mut series = |view: TimeSeriesView,
+                      legend: usize,
+                      values: &mut dyn Iterator<Item = f64>|
+     -> ContainerLike {
+        let c: ContainerLike = view.into();
+        if let Some(p) = view_path(&c) {
+            let (ranges, axis) = whole_run(end);
+            props.push((format!("{p}/VisibleTimeRanges"), Box::new(ranges)));
+            props.push((format!("{p}/TimeAxis"), Box::new(axis)));
+            let [lo, hi] = value_range(values);
+            // The legend sits in the top right corner, over this headroom, not on the data.
+            let head = if legend > 1 && legend <= MAX_LEGEND {
+                (0.1 + 0.15 * legend as f64).min(0.8)
+            } else {
+                0.0
+            };
+            let y = ScalarAxis::new().with_range(Range1D([lo, hi + head * (hi - lo)]));
+            props.push((format!("{p}/ScalarAxis"), Box::new(y)));
+            // More rows than fit above a plot (a car's eight slip channels) would
+            // cover the data whatever the headroom: hover names those.
+            let lg = PlotLegend::new()
+                .with_corner(Corner2D::RightTop)
+                .with_visible(legend > 1 && legend <= MAX_LEGEND);
+            props.push((format!("{p}/PlotLegend"), Box::new(lg)));
+        }
+        c
+    };
     let (ideal, sim, cmp) = (rec.ideal, &rec.sim.traj, rec.comparison);
+    let position_idx = rec.position().map(|p| p.to_vec()).unwrap_or_default();
+    let unit_of = |i: usize| {
+        if rec.angular.contains(&i) {
+            " (rad)"
+        } else if position_idx.contains(&i) {
+            " (m)"
+        } else {
+            ""
+        }
+    };
+    let several = rec.robot_positions.len() > 1;
 
-    let state_views: Vec<ContainerLike> = (0..rec.state_names.len())
-        .map(|i| {
-            let name = coord_name(rec.state_names, i);
-            series(
-                TimeSeriesView::new(format!("{name}: ideal vs sim"))
-                    .with_origin(ep(&["state", &name])),
-                &mut ideal.q.iter().chain(&sim.q).map(|q| q[i]),
-            )
-        })
-        .collect();
+    let mut state_views: Vec<(Option<usize>, ContainerLike)> = Vec::new();
+    for i in 0..rec.state_names.len() {
+        let name = coord_name(rec.state_names, i);
+        let v = series(
+            TimeSeriesView::new(format!("{name}{}", unit_of(i))).with_origin(ep(&["state", &name])),
+            2,
+            &mut ideal.q.iter().chain(&sim.q).map(|q| q[i]),
+        );
+        state_views.push((robot_of(&name).filter(|_| several), v));
+    }
 
     // Tracking errors by unit: one axis never mixes metres and radians.
-    let position_idx = rec.position().map(|p| p.to_vec()).unwrap_or_default();
     let mut groups: [ErrorGroup<'_>; 3] = [
-        ("tracking error, lengths (m)", Vec::new(), Vec::new()),
-        ("tracking error, angles (rad)", Vec::new(), Vec::new()),
-        ("tracking error, other coordinates", Vec::new(), Vec::new()),
+        ("error, lengths (m)", Vec::new(), Vec::new()),
+        ("error, angles (rad)", Vec::new(), Vec::new()),
+        ("error, other coordinates", Vec::new(), Vec::new()),
     ];
     if let Some(p) = &cmp.position_error {
         groups[0].1.push("/errors/position".into());
@@ -279,117 +389,182 @@ fn blueprint(rec: &RunRecord<'_>) -> (Blueprint, Vec<Property>) {
         groups[g].1.push(path);
         groups[g].2.push(&cmp.coord_error[i]);
     }
-    let error_views: Vec<ContainerLike> = groups
+    // A feedback policy's sim run reacts to its own state: its distance to the ideal run is
+    // not a tracking error (the report shows those metrics as n/a), so no such plots.
+    let mut analysis: Vec<ContainerLike> = groups
         .into_iter()
         .filter(|(_, c, _)| rec.tracking_meaningful && !c.is_empty())
         .map(|(name, contents, data)| {
+            let n = contents.len();
             series(
                 TimeSeriesView::new(name)
                     .with_origin("/errors")
                     .with_contents(contents),
+                n,
                 &mut data.into_iter().flatten().copied(),
             )
         })
         .collect();
+    // The analysis series: one plot per group (the first path component: `V`,
+    // `grasp_force`, ...), so a quantity shares its axis with its bound, not
+    // with quantities of other units.
+    let mut a_groups: Vec<&str> = Vec::new();
+    for s in rec.series.iter() {
+        let g = s.name.split('/').find(|p| !p.is_empty()).unwrap_or("");
+        if !a_groups.contains(&g) {
+            a_groups.push(g);
+        }
+    }
+    for g in a_groups {
+        let members: Vec<&crate::record::Series> = rec
+            .series
+            .iter()
+            .filter(|s| s.name.split('/').find(|p| !p.is_empty()).unwrap_or("") == g)
+            .collect();
+        analysis.push(series(
+            TimeSeriesView::new(format!("{g}{}", analysis_unit(g)))
+                .with_origin(ep(&["analysis", g]).to_string()),
+            members.len(),
+            &mut members.iter().flat_map(|s| s.values.iter().copied()),
+        ));
+    }
+
     // One view per command (inputs may have different units: m/s and rad/s).
-    let command_views: Vec<ContainerLike> = (0..rec.input_names.len())
-        .map(|j| {
-            let name = coord_name(rec.input_names, j);
-            series(
-                TimeSeriesView::new(format!("command {name}")).with_origin(ep(&["command", &name])),
-                &mut ideal.u.iter().map(|u| u[j]),
-            )
-        })
-        .collect();
-    // Sim channels grouped by their leading name token (slip_*, angular_momentum_*, ...).
+    let mut command_views: Vec<(Option<usize>, ContainerLike)> = Vec::new();
+    for j in 0..rec.input_names.len() {
+        let name = coord_name(rec.input_names, j);
+        let v = series(
+            TimeSeriesView::new(name.to_string()).with_origin(ep(&["command", &name])),
+            1,
+            &mut ideal.u.iter().map(|u| u[j]),
+        );
+        command_views.push((robot_of(&name).filter(|_| several), v));
+    }
+    // Sim channels grouped by the quantity they measure (every wheel's slip in
+    // one plot, each robot's grasp force with the other's, never a force with a
+    // torque); slip goes to the analysis tab.
     let mut channel_groups: Vec<(String, Vec<usize>)> = Vec::new();
     for (k, (name, _)) in rec.sim.channels.iter().enumerate() {
-        let key = name.split('_').next().unwrap_or(name).to_string();
+        let key = channel_quantity(name);
         match channel_groups.iter_mut().find(|(g, _)| *g == key) {
             Some((_, v)) => v.push(k),
             None => channel_groups.push((key, vec![k])),
         }
     }
-    let channel_views: Vec<ContainerLike> = channel_groups
-        .iter()
-        .map(|(key, idx)| {
-            let contents: Vec<String> = idx
+    let mut channel_views: Vec<ContainerLike> = Vec::new();
+    for (key, idx) in &channel_groups {
+        let contents: Vec<String> = idx
+            .iter()
+            .map(|&k| ep(&["sim", &rec.sim.channels[k].0]).to_string())
+            .collect();
+        let title = if idx.len() == 1 {
+            rec.sim.channels[idx[0]].0.clone()
+        } else if idx.len() > MAX_LEGEND {
+            format!("{key}: {} channels (hover for names)", idx.len())
+        } else {
+            key.clone()
+        };
+        let v = series(
+            TimeSeriesView::new(title)
+                .with_origin("/sim")
+                .with_contents(contents),
+            idx.len(),
+            &mut idx
                 .iter()
-                .map(|&k| ep(&["sim", &rec.sim.channels[k].0]).to_string())
-                .collect();
-            let title = if idx.len() == 1 {
-                rec.sim.channels[idx[0]].0.clone()
-            } else {
-                format!("{key}_*")
-            };
-            series(
-                TimeSeriesView::new(title)
-                    .with_origin("/sim")
-                    .with_contents(contents),
-                &mut idx
-                    .iter()
-                    .flat_map(|&k| rec.sim.channels[k].1.iter().copied()),
-            )
-        })
-        .collect();
-    // A feedback policy's sim run reacts to its own state: its distance to the ideal run is
-    // not a tracking error (the report shows those metrics as n/a), so no such plots.
-    let mut lower: Vec<ContainerLike> = Vec::new();
-    if !error_views.is_empty() {
-        lower.push(Grid::new(error_views).with_name("tracking errors").into());
+                .flat_map(|&k| rec.sim.channels[k].1.iter().copied()),
+        );
+        if key == "slip" {
+            analysis.push(v);
+        } else {
+            channel_views.push(v);
+        }
     }
-    lower.push(Grid::new(command_views).with_name("commands").into());
-    if !channel_views.is_empty() {
-        lower.push(Grid::new(channel_views).with_name("sim channels").into());
-    }
-    if !rec.series.is_empty() {
-        // One plot per group (the first path component: `V`, `grasp_force`,
-        // ...), so a quantity shares its axis with its bound, not with
-        // quantities of other units.
-        let mut groups: Vec<&str> = Vec::new();
-        for s in rec.series.iter() {
-            let g = s.name.split('/').find(|p| !p.is_empty()).unwrap_or("");
-            if !groups.contains(&g) {
-                groups.push(g);
+
+    // Tabs, the answer first: errors, V, the wrench against its bound, slip;
+    // then the states and commands (per robot when there are several), the
+    // other channels and the segment log.
+    let grid = |name: String, views: Vec<ContainerLike>| -> ContainerLike {
+        let n = views.len();
+        Grid::new(views)
+            .with_name(name)
+            .with_grid_columns(columns(n))
+            .into()
+    };
+    let per_robot = |what: &str, views: Vec<(Option<usize>, ContainerLike)>| {
+        let mut robots: Vec<Option<usize>> = Vec::new();
+        for (r, _) in &views {
+            if !robots.contains(r) {
+                robots.push(*r);
             }
         }
-        let views: Vec<ContainerLike> = groups
-            .iter()
-            .map(|g| {
-                TimeSeriesView::new(*g)
-                    .with_origin(ep(&["analysis", g]).to_string())
-                    .into()
+        robots.sort();
+        let mut views: Vec<Option<(Option<usize>, ContainerLike)>> =
+            views.into_iter().map(Some).collect();
+        robots
+            .into_iter()
+            .map(|r| {
+                let mine: Vec<ContainerLike> = views
+                    .iter_mut()
+                    .filter(|v| v.as_ref().is_some_and(|(vr, _)| *vr == r))
+                    .filter_map(|v| v.take().map(|(_, c)| c))
+                    .collect();
+                let name = match r {
+                    Some(r) => format!("{what}, robot {r}"),
+                    None => what.to_string(),
+                };
+                (name, mine)
             })
-            .collect();
-        lower.push(Grid::new(views).with_name("analysis").into());
+            .collect::<Vec<_>>()
+    };
+    let mut tabs: Vec<ContainerLike> = Vec::new();
+    if !analysis.is_empty() {
+        tabs.push(grid("analysis".into(), analysis));
     }
-    lower.push(TextLogView::new("segments").with_origin("/segment").into());
+    for (name, views) in per_robot("state", state_views) {
+        tabs.push(grid(name, views));
+    }
+    for (name, views) in per_robot("commands", command_views) {
+        tabs.push(grid(name, views));
+    }
+    if !channel_views.is_empty() {
+        tabs.push(grid("sim channels".into(), channel_views));
+    }
+    tabs.push(TextLogView::new("segments").with_origin("/segment").into());
 
     // 3D: an overview framing the whole run, and a view following the robot when the run
     // is much larger than the robot (the rover: a 0.6 m robot on a 10 m path).
     let (scene, robot) = scene_extent(rec);
     let hidden = hidden_overlays(rec);
+    let follow = rec
+        .links
+        .first()
+        .filter(|_| !rec.sim.link_poses.is_empty() && scene.radius() > 3.0 * robot);
+    let follows = follow.is_some();
     let overview: ContainerLike = Spatial3DView::new("run overview")
         .with_origin("/")
         .with_contents(["/robot/**", "/paths/**"])
         .into();
     if let Some(p) = view_path(&overview) {
         let radius = scene.radius().max(robot);
+        // The left half of a 16:10 window, whole or halved by the follow view.
+        let aspect = if follows { 1.6 } else { 0.8 };
         props.push((
             format!("{p}/EyeControls3D"),
-            Box::new(eye(scene.center(), radius)),
+            Box::new(eye(scene.center(), radius, aspect)),
         ));
         hide_in_view(&mut props, &p, &hidden);
+        if let Some(link) = follow {
+            let ring = ep(&["robot", &link.name, FOLLOW_RING]).to_string();
+            hide_in_view(&mut props, &p, &[ring]);
+        }
     }
     let mut left = vec![overview];
-    let follow = rec
-        .links
-        .first()
-        .filter(|_| !rec.sim.link_poses.is_empty() && scene.radius() > 3.0 * robot);
     if let Some(link) = follow {
+        // Only the robot and the runs' current positions: the viewer frames a view on what
+        // it shows, so the static paths (the whole run) would frame it at run scale.
         let c: ContainerLike = Spatial3DView::new(format!("following {}", link.name))
             .with_origin("/")
-            .with_contents(["/robot/**", "/paths/**"])
+            .with_contents(["/robot/**", "/paths/*/now"])
             .into();
         if let Some(p) = view_path(&c) {
             // Only the tracked entity: a fixed eye position in the blueprint would pin the
@@ -405,14 +580,13 @@ fn blueprint(rec: &RunRecord<'_>) -> (Blueprint, Vec<Property>) {
         }
         left.push(c);
     }
-    let right = Vertical::new([
-        Grid::new(state_views).with_name("state").into(),
-        Tabs::new(lower).into(),
-    ]);
-    let bp = Blueprint::new(Horizontal::new([Vertical::new(left).into(), right.into()]))
-        .with_time_panel(TimePanel::new().with_timeline(TIMELINE))
-        .with_blueprint_panel(BlueprintPanel::new().with_state(PanelState::Collapsed))
-        .with_selection_panel(SelectionPanel::new().with_state(PanelState::Collapsed));
+    let bp = Blueprint::new(
+        Horizontal::new([Vertical::new(left).into(), Tabs::new(tabs).into()])
+            .with_column_shares([1.0, 1.0]),
+    )
+    .with_time_panel(TimePanel::new().with_timeline(TIMELINE))
+    .with_blueprint_panel(BlueprintPanel::new().with_state(PanelState::Collapsed))
+    .with_selection_panel(SelectionPanel::new().with_state(PanelState::Collapsed));
     (bp, props)
 }
 

@@ -10,8 +10,9 @@
 //! * `sim_grasp_wrench_ratio` (bound = "wrench"): the same from the physics
 //!   beam's grasp wrenches, each averaged over a policy period (what a
 //!   force sensor sampled at the law's rate reports; the per-step peaks stay
-//!   in `sim_grasp_force_max` / `sim_grasp_torque_max`, and include the
-//!   platforms settling onto their casters in the first 2–4 ms);
+//!   in `sim_grasp_force_max` / `sim_grasp_torque_max`: the force's is the
+//!   solver's correction of the start poses in the first step, the moment's
+//!   single steps cross the bound mid-run too, see docs/src/research/seed-004.md);
 //! * `sim_wrist_travel_used` (compliant wrists): the largest |deflection| /
 //!   travel on any axis of either wrist (1: at the hard stop).
 
