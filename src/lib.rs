@@ -9,6 +9,28 @@
 //! [`planner`], [`model`] and [`physics`] define their own plain parameter
 //! types and never import [`scenario`].
 
+//!
+//! The public API is what the binary's commands and the Python package
+//! use: prepare scenarios (validated, planned, physics built), run them,
+//! read the outcome.
+//!
+//! ```
+//! use anholonomy::runner::{run, RunOptions};
+//! use anholonomy::validate::{prepare_all, Call};
+//! use std::path::PathBuf;
+//!
+//! let file = PathBuf::from(concat!(env!("CARGO_MANIFEST_DIR"), "/scenarios/disk_paper.toml"));
+//! // No logs: nothing is written.
+//! let call = Call { log_root: None, sharded: false, max_steps: None };
+//! let preps = prepare_all(&[file], &call).expect("a valid scenario");
+//! let outcome = run(&preps[0], &RunOptions::default())?;
+//! assert!(outcome.passed, "{:?}", outcome.failures);
+//! // The physics replay ends within its gate of the ideal run's goal.
+//! let miss = outcome.metric("sim_goal_position").unwrap();
+//! assert!(miss < 0.05, "{miss}");
+//! # Ok::<(), anholonomy::Error>(())
+//! ```
+
 pub mod baseline;
 pub mod cancel;
 pub mod compare;

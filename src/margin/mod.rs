@@ -16,7 +16,6 @@
 //! each ([`gate`]: not a search), and report it as a metric
 //! `margin_<dimension>`, so baselines hold them too.
 
-pub mod cli;
 pub mod early;
 mod gate;
 pub mod level;

@@ -1,10 +1,10 @@
 //! `anholonomy margin FILE|DIR... [--dimension NAME]...`.
 
-use super::{output, Nominal, Settings, DEFAULT_BATCH};
-use crate::error::Error;
-use crate::physics::perturb::Dimension;
-use crate::runner::{RunOptions, DEFAULT_POSE_RATE};
-use crate::validate::{not_applicable, prepare_all, Call, Prepared};
+use anholonomy::error::Error;
+use anholonomy::margin::{output, Nominal, Settings, DEFAULT_BATCH};
+use anholonomy::physics::perturb::Dimension;
+use anholonomy::runner::{RunOptions, DEFAULT_POSE_RATE};
+use anholonomy::validate::{not_applicable, prepare_all, Call, Prepared};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use std::path::PathBuf;
@@ -63,7 +63,7 @@ pub struct MarginArgs {
     #[arg(long)]
     pub quiet: bool,
     /// Step budget per run (as for `run`).
-    #[arg(long, value_name = "N", default_value_t = crate::validate::DEFAULT_MAX_STEPS)]
+    #[arg(long, value_name = "N", default_value_t = anholonomy::validate::DEFAULT_MAX_STEPS)]
     pub max_steps: u64,
 }
 
@@ -112,7 +112,7 @@ fn settings(a: &MarginArgs, prep: &Prepared) -> Settings {
 }
 
 fn check_options(a: &MarginArgs) -> Result<(), Vec<Error>> {
-    use crate::numfmt::shortest;
+    use anholonomy::numfmt::shortest;
     let bad = |opt: &str, m: String| Err(vec![Error::input(opt, m)]);
     if let Some(r) = a.resolution {
         if !(r > 0.0 && r <= 1.0) {
@@ -154,7 +154,7 @@ fn check_options(a: &MarginArgs) -> Result<(), Vec<Error>> {
 
 /// Why `d` does not apply to the scenario, in a few words (the table's
 /// note; the error for a dimension asked of no scenario says it at length).
-fn why_not(d: Dimension, sc: &crate::scenario::Scenario) -> String {
+fn why_not(d: Dimension, sc: &anholonomy::scenario::Scenario) -> String {
     match d {
         d if d.observes() => format!("open-loop plan (`{}` reads no state)", sc.planner.kind()),
         Dimension::WheelRadiusScale => "no wheels".into(),
@@ -280,9 +280,9 @@ fn one(
     };
     let t0 = Instant::now();
     // The nominal run, with its logs: level 0 of every dimension.
-    let o = crate::runner::run(prep, opts)?;
+    let o = anholonomy::runner::run(prep, opts)?;
     let s = settings(a, prep);
-    let progress = |r: &super::DimensionResult| {
+    let progress = |r: &anholonomy::margin::DimensionResult| {
         bar.inc(1);
         if !a.quiet {
             let row = output::row(name, r);
@@ -297,7 +297,7 @@ fn one(
             }
         }
     };
-    let rep = super::margins(prep, Nominal::of(prep, &o), dims, &s, &progress);
+    let rep = anholonomy::margin::margins(prep, Nominal::of(prep, &o), dims, &s, &progress);
     let wall = t0.elapsed().as_secs_f64();
     let logged = match &o.log_dir {
         Some(dir) => {
@@ -357,7 +357,7 @@ pub fn margin_cmd(a: &MarginArgs) -> Result<u8, Vec<Error>> {
         log_root,
         progress: false,
         pose_rate: DEFAULT_POSE_RATE,
-        keep: crate::log::Keep::default(),
+        keep: anholonomy::log::Keep::default(),
         cancel: Default::default(),
         batch: true,
     };
@@ -396,21 +396,21 @@ pub fn margin_cmd(a: &MarginArgs) -> Result<u8, Vec<Error>> {
         return Err(errors);
     }
     if a.json {
-        crate::say!(
+        anholonomy::say!(
             "{}",
             serde_json::to_string_pretty(&reports).unwrap_or_default()
         );
     } else if a.markdown {
-        crate::emit(&output::markdown(&rows));
+        anholonomy::emit(&output::markdown(&rows));
     } else {
-        crate::emit(&output::text(&rows));
+        anholonomy::emit(&output::text(&rows));
     }
     if a.report && !names.is_empty() {
-        let w = crate::report::write_report(&a.logs, Some(&names)).map_err(|e| vec![e])?;
+        let w = anholonomy::report::write_report(&a.logs, Some(&names)).map_err(|e| vec![e])?;
         for e in &w.skipped {
             eprintln!("warning: left out of the report: {e}");
         }
-        crate::say!(
+        anholonomy::say!(
             "report: {} ({} scenarios)",
             a.logs.join("index.html").display(),
             w.scenarios
