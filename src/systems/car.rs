@@ -10,6 +10,7 @@
 
 use super::diff_drive::{check_names, no_planner};
 use super::wheeled::{slip_metrics, SLIP_METRICS};
+use super::world::{default_goal_tolerance, SolidObstacleConfig, World};
 use super::System;
 use crate::error::SetupError;
 use crate::integrate::Trajectory;
@@ -69,6 +70,14 @@ pub struct CarConfig {
     /// Front right wheel's continuous joint (passive).
     #[serde(default = "front_right")]
     pub front_right_wheel_joint: String,
+    /// Fixed obstacles (boxes, vertical cylinders): `[[model.obstacles]]`.
+    #[serde(default)]
+    pub obstacles: Vec<SolidObstacleConfig>,
+    /// Within this distance (m) and heading difference (degrees) of the goal
+    /// the robot has reached it (`ideal_time_to_goal`, `sim_time_to_goal`:
+    /// the first such time).
+    #[serde(default = "default_goal_tolerance")]
+    pub goal_tolerance: [f64; 2],
 }
 
 fn default_wheelbase() -> f64 {
@@ -102,6 +111,7 @@ fn front_right() -> String {
 struct Car {
     model: Bicycle,
     names: CarNames,
+    world: World,
 }
 
 /// Build the car system.
@@ -143,6 +153,7 @@ pub fn build(cfg: &CarConfig) -> Result<Box<dyn System>, SetupError> {
                 cfg.front_right_wheel_joint.clone(),
             ],
         },
+        world: World::new(&cfg.obstacles, cfg.goal_tolerance)?,
     }))
 }
 
@@ -191,14 +202,8 @@ impl System for Car {
         start: &[f64],
         sim: &PhysicsSettings,
     ) -> Result<Box<dyn PhysicsSystem>, SetupError> {
-        Ok(Box::new(CarPhysics::new(
-            robot,
-            urdf_dir,
-            &self.names,
-            &self.model,
-            start,
-            sim,
-        )?))
+        let inner = CarPhysics::new(robot, urdf_dir, &self.names, &self.model, start, sim)?;
+        self.world.physics(Box::new(inner), sim)
     }
     /// Its wheels can wear or differ from the URDF (`wheel_radius_scale`).
     fn perturbable(&self, plan: &Plan) -> Vec<crate::physics::perturb::Dimension> {
@@ -209,15 +214,19 @@ impl System for Car {
     fn extra_metric_names(&self) -> Vec<String> {
         let mut out: Vec<String> = SLIP_METRICS.map(String::from).to_vec();
         out.push("steer_clipped_fraction".into());
+        out.extend(self.world.metric_names());
         out
     }
-    /// Slip maxima, and the fraction of the ideal run's samples at which
-    /// the plan asked to steer past the limit (a rate pushing past it, which
-    /// the model dropped, or an angle beyond it, which the model stopped at
-    /// the limit).
+    fn overlays(&self, _start: &State, _goal: &State) -> Vec<crate::record::Overlay> {
+        self.world.overlays()
+    }
+    /// Slip maxima, the fraction of the ideal run's samples at which the
+    /// plan asked to steer past the limit (a rate pushing past it, which the
+    /// model dropped, or an angle beyond it, which the model stopped at the
+    /// limit), time to goal, and with obstacles clearance and contacts.
     fn extra_metrics(
         &self,
-        _goal: &State,
+        goal: &State,
         ideal: &Trajectory,
         sim: &SimTrajectory,
         _cmp: &Comparison,
@@ -233,6 +242,7 @@ impl System for Car {
             clipped as f64 / n as f64
         };
         out.push(("steer_clipped_fraction".into(), frac));
+        out.extend(self.world.metrics(goal, ideal, sim));
         out
     }
 }

@@ -8,6 +8,7 @@
 //! looks up are `[model]` keys with the defaults of `models/diff_drive.urdf`.
 
 use super::wheeled::{slip_metrics, SLIP_METRICS};
+use super::world::{default_goal_tolerance, SolidObstacleConfig, World};
 use super::System;
 use crate::error::SetupError;
 use crate::integrate::Trajectory;
@@ -51,6 +52,14 @@ pub struct DiffDriveConfig {
     /// Caster links (made frictionless); may be empty.
     #[serde(default = "default_casters")]
     pub caster_links: Vec<String>,
+    /// Fixed obstacles (boxes, vertical cylinders): `[[model.obstacles]]`.
+    #[serde(default)]
+    pub obstacles: Vec<SolidObstacleConfig>,
+    /// Within this distance (m) and heading difference (degrees) of the goal
+    /// the robot has reached it (`ideal_time_to_goal`, `sim_time_to_goal`:
+    /// the first such time).
+    #[serde(default = "default_goal_tolerance")]
+    pub goal_tolerance: [f64; 2],
 }
 
 fn default_base() -> String {
@@ -84,6 +93,7 @@ pub(crate) fn check_names(names: &[(&str, &str)]) -> Result<(), SetupError> {
 
 struct DiffDrive {
     names: DiffDriveNames,
+    world: World,
 }
 
 /// One side's wheel joints: the list key, or the single-joint key.
@@ -135,6 +145,7 @@ pub fn build(cfg: &DiffDriveConfig) -> Result<Box<dyn System>, SetupError> {
             right,
             casters: cfg.caster_links.clone(),
         },
+        world: World::new(&cfg.obstacles, cfg.goal_tolerance)?,
     }))
 }
 
@@ -189,13 +200,8 @@ impl System for DiffDrive {
         start: &[f64],
         sim: &PhysicsSettings,
     ) -> Result<Box<dyn PhysicsSystem>, SetupError> {
-        Ok(Box::new(DiffDrivePhysics::new(
-            robot,
-            urdf_dir,
-            &self.names,
-            start,
-            sim,
-        )?))
+        let inner = DiffDrivePhysics::new(robot, urdf_dir, &self.names, start, sim)?;
+        self.world.physics(Box::new(inner), sim)
     }
     /// Its wheels can wear or differ from the URDF (`wheel_radius_scale`).
     fn perturbable(&self, plan: &Plan) -> Vec<crate::physics::perturb::Dimension> {
@@ -203,16 +209,24 @@ impl System for DiffDrive {
         d.push(crate::physics::perturb::Dimension::WheelRadiusScale);
         d
     }
-    fn extra_metric_names(&self) -> Vec<String> {
-        SLIP_METRICS.map(String::from).to_vec()
+    fn overlays(&self, _start: &State, _goal: &State) -> Vec<crate::record::Overlay> {
+        self.world.overlays()
     }
+    fn extra_metric_names(&self) -> Vec<String> {
+        let mut out: Vec<String> = SLIP_METRICS.map(String::from).to_vec();
+        out.extend(self.world.metric_names());
+        out
+    }
+    /// Slip maxima, time to goal, and with obstacles clearance and contacts.
     fn extra_metrics(
         &self,
-        _goal: &State,
-        _ideal: &Trajectory,
+        goal: &State,
+        ideal: &Trajectory,
         sim: &SimTrajectory,
         _cmp: &Comparison,
     ) -> Vec<(String, f64)> {
-        slip_metrics(sim)
+        let mut out = slip_metrics(sim);
+        out.extend(self.world.metrics(goal, ideal, sim));
+        out
     }
 }

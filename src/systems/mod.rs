@@ -46,6 +46,7 @@ pub mod rover;
 pub mod space_robot;
 pub mod sphere;
 pub mod wheeled;
+pub mod world;
 
 use crate::error::SetupError;
 use crate::integrate::Trajectory;

@@ -29,6 +29,7 @@ mod layering;
 mod log_roundtrip;
 mod log_unit;
 mod margin;
+mod obstacles;
 mod own_plan_examples;
 mod paper;
 mod parallel;

@@ -6,6 +6,7 @@ pub mod angles;
 pub mod batch;
 pub mod lump;
 pub mod mesh;
+pub mod obstacles;
 pub mod perturb;
 pub mod reading;
 pub mod real;
