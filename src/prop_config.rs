@@ -1,5 +1,5 @@
 //! The configuration of every property test: the unit tests' and, through
-//! `tests/common`, the integration tests'.
+//! `tests/it/common`, the integration tests'.
 //!
 //! Cases are drawn from a fixed seed, so that every run of `cargo test`
 //! (and CI) draws the same tasks and a failure reproduces; the seed is
@@ -11,7 +11,7 @@ use proptest::test_runner::{Config, RngSeed};
 
 /// The seed every property test draws from: Marsaglia's xorshift*
 /// multiplier, a number with no relation to any task. The first candidate,
-/// 2⁶⁴/φ, drew on its sixth case a task `tests/dilf.rs`
+/// 2⁶⁴/φ, drew on its sixth case a task `tests/it/dilf.rs`
 /// (`random_open_field_tasks_converge`) fails: a goal with q5 at the test's
 /// −29° clamp that does not converge within 80 s, as random cases
 /// sometimes do (2 in at most 3,200 tried;

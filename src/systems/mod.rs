@@ -4,7 +4,7 @@
 //! # Adding a system
 //!
 //! Configuration flows one way, from the scenario layer down: a system never
-//! imports `crate::scenario` (a test, `tests/layering.rs`, fails if it does).
+//! imports `crate::scenario` (a test, `tests/it/layering.rs`, fails if it does).
 //!
 //! 1. In `src/systems/<name>.rs`, define the system's own plain `[model]`
 //!    parameter struct (`#[derive(Deserialize, Serialize)]`,

@@ -38,7 +38,11 @@ fn long_number(text: &str) -> Option<&str> {
 fn run_limited(dir: &Path, args: &[String], limit: Duration) -> (Option<i32>, String, String) {
     let out = dir.join(".stdout");
     let err = dir.join(".stderr");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_anholonomy"))
+    // ANHOLONOMY_CORPUS_BIN runs another build (an older one, to compare
+    // its messages; docs/src/development.md).
+    let bin = std::env::var_os("ANHOLONOMY_CORPUS_BIN")
+        .unwrap_or_else(|| env!("CARGO_BIN_EXE_anholonomy").into());
+    let mut child = Command::new(bin)
         .args(args)
         .current_dir(dir)
         .stdin(Stdio::null())
@@ -159,6 +163,24 @@ fn check_command(cmd: &str) {
         let dir = setup(case);
         let (code, stdout, stderr) = run_limited(dir.path(), &args, LIMIT);
         invocations += 1;
+        if let Some(dump) = std::env::var_os("ANHOLONOMY_CORPUS_DUMP") {
+            // One line per invocation: case, command, stderr with the
+            // temporary directory's name taken out.
+            use std::io::Write as _;
+            let tmp = dir.path().to_string_lossy().into_owned();
+            let line = format!(
+                "{}\t{}\t{}\n",
+                case.name,
+                args.join(" ").replace(&tmp, "DIR"),
+                stderr.trim_end().replace(&tmp, "DIR").replace('\n', "\\n")
+            );
+            let mut f = std::fs::OpenOptions::new()
+                .create(true)
+                .append(true)
+                .open(dump)
+                .unwrap();
+            f.write_all(line.as_bytes()).unwrap();
+        }
         let mut bad = |what: String| {
             problems.push(format!(
                 "[{}] `{}`: {what}\n  stderr: {stderr}",

@@ -5,7 +5,7 @@
 //!
 //! Evaluated from the 0.36.1 source and tests (`dynamics/soft_body/`,
 //! `dynamics/solver/soft_constraint/`, `dynamics/solver/soft_fem/`,
-//! `tests/soft_body_joints.rs`), without enabling the `fem` feature (a
+//! `tests/it/soft_body_joints.rs`), without enabling the `fem` feature (a
 //! dependency rebuild on a shared machine, while the project moves to
 //! `rapier3d-f64`):
 //! - **Cells.** `SoftBodyBuilder::cuboid(center, half_extents, nx, ny, nz)`
@@ -36,7 +36,7 @@
 //! - **Cost.** 335–1000 cells plus the contact/recovery machinery per step
 //!   against 20 rigid bodies and 20 joints for the chain below.
 //! - **Attachments** work (clusters with proxy rigid bodies take impulse
-//!   joints, `tests/soft_body_joints.rs`), but the grasp wrench would have to
+//!   joints, `tests/it/soft_body_joints.rs`), but the grasp wrench would have to
 //!   be read from cluster impulses.
 //!
 //! Hence the fallback the issue names, which handles large rotations

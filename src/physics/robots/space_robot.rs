@@ -1,6 +1,6 @@
 //! Rigid-body free-floating space robot: `models/space_robot.urdf` in Rapier.
 //!
-//! Design (measured choices, see the scenarios and `tests/space_robot.rs`):
+//! Design (measured choices, see the scenarios and `tests/it/space_robot.rs`):
 //! * **Impulse joints** ([`crate::physics::world`]): every joint impulse acts equally
 //!   and oppositely on two bodies, so the solver conserves the system's
 //!   linear and angular momentum. Multibody joints drifted ~0.3 % in base

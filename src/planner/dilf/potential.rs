@@ -730,5 +730,44 @@ pub fn placed_generic<T: Scalar>(s: &Superellipsoid, pose: &Pose<T>) -> PlacedEl
     }
 }
 
+/// Diagnostics: ln V's factors with their gradients ([`super::terms`]).
+impl Scene {
+    /// ln V's factors at q and their gradients (forward dual numbers; for
+    /// diagnostics, [`Terms::named`] order). `None` in collision, outside
+    /// the beam's admissible set or inside a singularity enclosure (V = 0).
+    pub fn term_gradients(&self, q: &[f64]) -> Result<Option<TermGradients>, ContactError> {
+        match self.robots {
+            1 => self.term_gradients_n::<9>(q),
+            _ => self.term_gradients_n::<18>(q),
+        }
+    }
+
+    fn term_gradients_n<const N: usize>(
+        &self,
+        q: &[f64],
+    ) -> Result<Option<TermGradients>, ContactError> {
+        let qd: Vec<DualSVec64<N>> = q
+            .iter()
+            .enumerate()
+            .map(|(i, &x)| DualSVec64::<N>::from_re(x).derivative(i))
+            .collect();
+        let (e, t) = self.evaluate_terms(&qd, None, &mut self.warm())?;
+        if e.v.re <= 0.0 {
+            return Ok(None);
+        }
+        let grad = |x: &DualSVec64<N>| match &x.eps.0 {
+            Some(g) => g.iter().copied().collect(),
+            None => vec![0.0; N],
+        };
+        let terms = t
+            .named()
+            .into_iter()
+            .map(|(name, x)| (name, x.re, grad(&x)))
+            .collect();
+        let gammas = t.gammas.iter().map(|g| g.re).collect();
+        Ok(Some(TermGradients { terms, gammas }))
+    }
+}
+
 #[cfg(test)]
 pub(crate) mod tests;

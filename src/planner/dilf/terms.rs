@@ -1,12 +1,9 @@
 //! ln V split into its factors, with each factor's gradient: what drives
 //! or holds a platform, for diagnostics (`examples/dilf_trace.rs`, the
 //! seed-004 note's stall figures). The split itself is computed by
-//! [`Scene::evaluate_terms`], beside V.
+//! [`super::potential::Scene::evaluate_terms`], beside V.
 
-use super::contact::ContactError;
-use super::potential::Scene;
 use crate::model::spatial::{k, Scalar};
-use num_dual::DualSVec64;
 
 /// ln V split into its factors: ln V = dipole − d + obstacles + robots +
 /// beam_parts + beam_obstacles + singular + admissible, the numerator's
@@ -67,49 +64,11 @@ impl<T: Scalar> Terms<T> {
 }
 
 /// ln V's factors at one configuration with their gradients
-/// ([`Scene::term_gradients`]).
+/// ([`super::potential::Scene::term_gradients`]).
 #[derive(Debug, Clone)]
 pub struct TermGradients {
     /// (name, value, ∂/∂q) of each contribution to ln V ([`Terms::named`]).
     pub terms: Vec<(&'static str, f64, Vec<f64>)>,
     /// Each robot's dipole γ_r.
     pub gammas: Vec<f64>,
-}
-
-impl Scene {
-    /// ln V's factors at q and their gradients (forward dual numbers; for
-    /// diagnostics, [`Terms::named`] order). `None` in collision, outside
-    /// the beam's admissible set or inside a singularity enclosure (V = 0).
-    pub fn term_gradients(&self, q: &[f64]) -> Result<Option<TermGradients>, ContactError> {
-        match self.robots {
-            1 => self.term_gradients_n::<9>(q),
-            _ => self.term_gradients_n::<18>(q),
-        }
-    }
-
-    fn term_gradients_n<const N: usize>(
-        &self,
-        q: &[f64],
-    ) -> Result<Option<TermGradients>, ContactError> {
-        let qd: Vec<DualSVec64<N>> = q
-            .iter()
-            .enumerate()
-            .map(|(i, &x)| DualSVec64::<N>::from_re(x).derivative(i))
-            .collect();
-        let (e, t) = self.evaluate_terms(&qd, None, &mut self.warm())?;
-        if e.v.re <= 0.0 {
-            return Ok(None);
-        }
-        let grad = |x: &DualSVec64<N>| match &x.eps.0 {
-            Some(g) => g.iter().copied().collect(),
-            None => vec![0.0; N],
-        };
-        let terms = t
-            .named()
-            .into_iter()
-            .map(|(name, x)| (name, x.re, grad(&x)))
-            .collect();
-        let gammas = t.gammas.iter().map(|g| g.re).collect();
-        Ok(Some(TermGradients { terms, gammas }))
-    }
 }

@@ -1,6 +1,7 @@
 //! Helpers shared by the integration tests (`crate::common`).
 #![allow(dead_code)]
 
+pub mod dopri;
 pub mod legs;
 pub mod log_fixture;
 #[path = "../../../src/prop_config.rs"]
