@@ -313,11 +313,14 @@ pub fn run_many<'py>(
         for p in &preps {
             let sc = &p.scenario;
             if let Some(other) = seen.insert(sc.name.to_lowercase(), sc.path.clone()) {
-                let e = sc.error(format!(
-                    "key `name`: `{}` is also the name of {}: both would write the same log directory",
-                    sc.name,
-                    other.display()
-                ));
+                let e = sc.error_at(
+                    "name",
+                    format!(
+                        "`{}` is also the name of {}: both would write the same log directory",
+                        sc.name,
+                        other.display()
+                    ),
+                );
                 return Err(to_py(py, &e));
             }
         }
