@@ -98,6 +98,13 @@ impl KeyIndex {
     /// Line of `key`, or of its nearest written ancestor (a defaulted key
     /// points at its table).
     pub fn line_of(&self, key: &str) -> Option<usize> {
+        // `[[world.obstacles]]` is read as `model.obstacles`.
+        if let Some(rest) = key.strip_prefix("model.obstacles") {
+            let written = format!("world.obstacles{rest}");
+            if self.has("world.obstacles") {
+                return self.line_of(&written);
+            }
+        }
         let mut k = key;
         loop {
             if let Some(e) = self.entries.iter().find(|e| e.path == k) {

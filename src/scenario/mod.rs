@@ -319,6 +319,41 @@ fn take_urdf_source(model: &mut Spanned<DeValue<'_>>) -> Result<UrdfSourceConfig
 
 /// Remove the tagged table `name` (`[model]`, `[planner]`) from the document:
 /// its `kind` and the rest of the table.
+/// `[[world.obstacles]]`: the same list as `[[model.obstacles]]` (the
+/// models with obstacles read it there), written where the world is.
+fn world_obstacles<'i>(
+    keys: &KeyIndex,
+    path: &Path,
+    mut world: Spanned<DeValue<'i>>,
+    model: &mut Spanned<DeValue<'i>>,
+) -> Result<(), Error> {
+    let DeValue::Table(w) = world.get_mut() else {
+        return Err(keys.error_at(path, "world", "expected a table (`[[world.obstacles]]`)"));
+    };
+    if let Some(other) = w.keys().find(|k| k.get_ref() != "obstacles") {
+        return Err(keys.error_at(
+            path,
+            &format!("world.{}", other.get_ref()),
+            "unknown key (expected `obstacles`)",
+        ));
+    }
+    let Some(obstacles) = w.remove("obstacles") else {
+        return Ok(());
+    };
+    let DeValue::Table(m) = model.get_mut() else {
+        return Ok(());
+    };
+    if m.contains_key("obstacles") {
+        return Err(keys.error_at(
+            path,
+            "world.obstacles",
+            "also given as `[[model.obstacles]]`: keep one list",
+        ));
+    }
+    m.insert(Spanned::new(0..0, "obstacles".into()), obstacles);
+    Ok(())
+}
+
 fn take_tagged<'i>(
     keys: &KeyIndex,
     path: &Path,
@@ -565,6 +600,9 @@ impl Scenario {
         let mut root = root.into_inner();
         let (model_kind, mut model) =
             take_tagged(&keys, path, &mut root, "model", ModelConfig::KINDS)?;
+        if let Some((_, world)) = root.remove_entry("world") {
+            world_obstacles(&keys, path, world, &mut model)?;
+        }
         let urdf_source = take_urdf_source(&mut model).map_err(serde)?;
         let (planner_kind, planner) =
             take_tagged(&keys, path, &mut root, "planner", PlannerConfig::KINDS)?;

@@ -162,3 +162,56 @@ fn obstacles_are_in_the_mcap_scene() {
         );
     }
 }
+
+/// `[[world.obstacles]]` is the same list as `[[model.obstacles]]`: the
+/// same run to the bit; both at once is refused at the line of the world's.
+#[test]
+fn world_obstacles_are_the_model_obstacles() {
+    let dir = tempfile::tempdir().unwrap();
+    let model_file = parking(dir.path(), 0.0);
+    let text = std::fs::read_to_string(&model_file).unwrap();
+    let mut t: toml::Table = toml::from_str(&text).unwrap();
+    let obstacles = t["model"]
+        .as_table_mut()
+        .unwrap()
+        .remove("obstacles")
+        .unwrap();
+    let mut world = toml::Table::new();
+    world.insert("obstacles".into(), obstacles.clone());
+    t.insert("world".into(), world.into());
+    let world_file = dir.path().join("parking_world.toml");
+    std::fs::write(&world_file, toml::to_string(&t).unwrap()).unwrap();
+    let a = crate::common::run_file(&model_file, None);
+    let b = crate::common::run_file(&world_file, None);
+    for name in [
+        "sim_min_clearance",
+        "sim_obstacle_contacts",
+        "sim_goal_position",
+    ] {
+        assert_eq!(
+            metric(&a, name).to_bits(),
+            metric(&b, name).to_bits(),
+            "{name}"
+        );
+    }
+    // Both spellings at once.
+    t["model"]
+        .as_table_mut()
+        .unwrap()
+        .insert("obstacles".into(), obstacles);
+    let both = dir.path().join("parking_both.toml");
+    let text = toml::to_string(&t).unwrap();
+    std::fs::write(&both, &text).unwrap();
+    let line = text
+        .lines()
+        .position(|l| l.trim() == "[[world.obstacles]]")
+        .unwrap()
+        + 1;
+    let err = anholonomy::scenario::Scenario::load(&both)
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains(&format!(":{line}: key `world.obstacles`: also given as")),
+        "{err}"
+    );
+}
