@@ -468,6 +468,21 @@ pub fn add_drive_channels(sim: &mut crate::record::SimTrajectory, input_names: &
     }
 }
 
+/// `robot` with its wheels' collision radius scaled by `s`
+/// (`wheel_radius_scale`): itself when `s` is 1, else
+/// [`shrink_round_collisions`] of `links`.
+pub fn worn_wheels<'r>(
+    robot: &'r urdf_rs::Robot,
+    links: &[&str],
+    s: f64,
+) -> std::borrow::Cow<'r, urdf_rs::Robot> {
+    if s == 1.0 {
+        std::borrow::Cow::Borrowed(robot)
+    } else {
+        std::borrow::Cow::Owned(shrink_round_collisions(robot, links, s, None))
+    }
+}
+
 /// `robot` with the collision radius of every sphere and cylinder of the
 /// named links multiplied by `s` (wheel wear), or shrunk by `by` m when
 /// `absolute` (tyres worn by the same depth everywhere).

@@ -348,14 +348,7 @@ impl CarPhysics {
         let all: Vec<&Wheel> = geom.rear.iter().chain(&geom.front).collect();
         let wear = (1.0 - sim.wheel_radius_scale) * all[0].radius;
         let links: Vec<&str> = all.iter().map(|w| w.link.as_str()).collect();
-        let worn = (sim.wheel_radius_scale != 1.0).then(|| {
-            crate::physics::perturb::shrink_round_collisions(
-                robot,
-                &links,
-                sim.wheel_radius_scale,
-                None,
-            )
-        });
+        let worn = crate::physics::perturb::worn_wheels(robot, &links, sim.wheel_radius_scale);
         let root = wheeled::root_pose(
             &frames,
             &names.base,
@@ -365,7 +358,7 @@ impl CarPhysics {
             start[1],
             start[2],
         );
-        let mut sw = SimWorld::on_ground(worn.as_ref().unwrap_or(robot), urdf_dir, sim, root)?;
+        let mut sw = SimWorld::on_ground(&worn, urdf_dir, sim, root)?;
         let balls: Vec<Wheel> = all.iter().map(|w| (*w).clone()).collect();
         wheeled::roll_on_balls(&mut sw, &balls)?;
         let base = sw.require_link(&names.base)?;

@@ -208,15 +208,8 @@ impl DeclaredPhysics {
             .map(|j| j.child.link.as_str())
             .filter(|l| crate::physics::urdf::collision_radius(robot, l).is_some())
             .collect();
-        let worn = (sim.wheel_radius_scale != 1.0).then(|| {
-            crate::physics::perturb::shrink_round_collisions(
-                robot,
-                &wheels,
-                sim.wheel_radius_scale,
-                None,
-            )
-        });
-        let robot = worn.as_ref().unwrap_or(robot);
+        let worn = crate::physics::perturb::worn_wheels(robot, &wheels, sim.wheel_radius_scale);
+        let robot: &urdf_rs::Robot = &worn;
         let root = place_root(robot, rig, start)?;
         let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root)?;
         crate::physics::wheeled::roll_links_on_balls(&mut sw, &wheels)?;

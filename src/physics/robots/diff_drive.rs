@@ -289,15 +289,8 @@ impl DiffDrivePhysics {
             start[2],
         );
         let links: Vec<&str> = geom.wheels.iter().map(|w| w.link.as_str()).collect();
-        let worn = (sim.wheel_radius_scale != 1.0).then(|| {
-            crate::physics::perturb::shrink_round_collisions(
-                robot,
-                &links,
-                sim.wheel_radius_scale,
-                None,
-            )
-        });
-        let mut sw = SimWorld::on_ground(worn.as_ref().unwrap_or(robot), urdf_dir, sim, root)?;
+        let worn = crate::physics::perturb::worn_wheels(robot, &links, sim.wheel_radius_scale);
+        let mut sw = SimWorld::on_ground(&worn, urdf_dir, sim, root)?;
         let (base, base_offset) = sw.require_frame(&names.base)?;
         let wheels = geom
             .wheels

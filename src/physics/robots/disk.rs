@@ -73,9 +73,8 @@ impl DiskPhysics {
         crate::physics::urdf::require_radius(robot, WHEEL, "the wheel", radius)?;
         // A worn wheel (`wheel_radius_scale`): the model keeps `radius`.
         let s = sim.wheel_radius_scale;
-        let worn = (s != 1.0)
-            .then(|| crate::physics::perturb::shrink_round_collisions(robot, &[WHEEL], s, None));
-        let robot = worn.as_ref().unwrap_or(robot);
+        let worn = crate::physics::perturb::worn_wheels(robot, &[WHEEL], s);
+        let robot: &urdf_rs::Robot = &worn;
         let radius = radius * s;
         let yaw0 = FRAC_PI_2 - start[3];
         let root = crate::physics::rapier::math::Pose::from_parts(

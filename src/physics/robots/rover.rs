@@ -134,9 +134,8 @@ impl RoverPhysics {
         // Worn wheels (`wheel_radius_scale`): all five, the chassis lower by
         // as much; the drive still converts u1 with the model's radius.
         let s = sim.wheel_radius_scale;
-        let worn = (s != 1.0)
-            .then(|| crate::physics::perturb::shrink_round_collisions(robot, &WHEELS, s, None));
-        let robot = worn.as_ref().unwrap_or(robot);
+        let worn = crate::physics::perturb::worn_wheels(robot, &WHEELS, s);
+        let robot: &urdf_rs::Robot = &worn;
         let rim = rho * s;
         let root = crate::physics::rapier::math::Pose::from_parts(
             vector(start[0], start[1], rim),

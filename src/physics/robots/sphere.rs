@@ -63,9 +63,8 @@ impl SpherePhysics {
         crate::physics::urdf::require_radius(robot, BALL, "the ball", radius)?;
         // A ball of another radius than the model's (`wheel_radius_scale`).
         let s = sim.wheel_radius_scale;
-        let worn = (s != 1.0)
-            .then(|| crate::physics::perturb::shrink_round_collisions(robot, &[BALL], s, None));
-        let robot = worn.as_ref().unwrap_or(robot);
+        let worn = crate::physics::perturb::worn_wheels(robot, &[BALL], s);
+        let robot: &urdf_rs::Robot = &worn;
         let radius = radius * s;
         if start.len() != 6 {
             return Err(SetupError::other(format!(
