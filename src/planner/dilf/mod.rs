@@ -401,6 +401,10 @@ struct Policy {
     hold_guard: bool,
     stall: StallParams,
     grasps: Grasps,
+    /// Whether a stall in an intermediate phase moves on to the next phase
+    /// (the run's plan) instead of ending the run (the sequence's candidate
+    /// runs, which must reach every intermediate goal).
+    yield_on_stall: bool,
 }
 
 struct DilfController {
@@ -440,6 +444,15 @@ impl DilfController {
             moved = true;
         }
         if moved {
+            self.enter_phase(t, q);
+        }
+    }
+
+    /// The law's progress restarts on the current phase's goal, and a
+    /// platform already within the position tolerance of it turns in place.
+    fn enter_phase(&mut self, t: f64, q: &[f64]) {
+        let p = self.policy.clone();
+        {
             self.progress = Progress::new(p.stall);
             self.progress.restart(t);
             let goal = &self.scene().goal;
@@ -477,6 +490,13 @@ impl DilfController {
             .filter(|h| *h > p.tolerance.heading_deg.to_radians())
             .reduce(f64::max);
         match self.progress.observe(t, v, heading) {
+            // An intermediate goal is only a waypoint: a stall short of it
+            // (in physics, the hold branch's sliding surface a few cm out)
+            // moves on to the next phase; the task's own goal ends the run.
+            Verdict::Stalled if p.yield_on_stall && self.phase < p.phases.len() => {
+                self.phase += 1;
+                self.enter_phase(t, q);
+            }
             Verdict::Stalled => return Err(()),
             Verdict::HandOver => {
                 for (r, a) in self.aligning.iter_mut().enumerate() {
@@ -689,14 +709,20 @@ pub fn plan(
         hold_guard: params.hold_guard,
         stall: params.stall,
         grasps: params.grasps,
+        yield_on_stall: false,
     };
     let mut chosen = Arc::new(policy(Vec::new()));
-    if params.sequence.mode == SequenceMode::Auto {
+    if params.sequence.mode != SequenceMode::Off {
         let run = |p: &Arc<Policy>| sequence::ideal_time_to_goal(p, start, params, step);
         let (picked, found) = sequence::choose_sequence(&scene, q, params, &chosen, policy, run);
         details["sequence"] = found;
         if let Some(p) = picked {
-            chosen = p;
+            // The candidate reached every intermediate goal in the ideal
+            // run; the plan may move past one it stalls short of.
+            chosen = Arc::new(Policy {
+                yield_on_stall: true,
+                ..policy(p.phases.clone())
+            });
         }
     }
     Ok(feedback_plan(chosen, params, details))

@@ -30,7 +30,15 @@
 //! when every platform is within the task's position tolerance and
 //! `heading_deg` of its heading (the arm joints converge on the way: every
 //! phase's goal has the task goal's joints). If no candidate converges the
-//! plan is the paper's law, which then stalls and says so.
+//! plan is the paper's law, which then stalls and says so. With
+//! `mode = "always"` the sequences are tried first even where the law
+//! converges by itself (its simultaneous turn and drive strains the object
+//! and tilts the platforms more in physics), the law last.
+//!
+//! The candidates' ideal runs must reach every intermediate goal. The plan
+//! itself treats an intermediate goal as a waypoint: where the law stalls
+//! short of one (in physics, on Eq. 18's hold branch a few cm out, the
+//! sliding surface of the seed-004 note), it moves on to the next phase.
 
 use super::potential::Scene;
 use super::{check_configuration, feedback_plan, DilfParams, Policy, Tolerance};
@@ -53,6 +61,10 @@ pub enum SequenceMode {
     /// The paper's law when its ideal run converges, else the first
     /// converging turn–translate–turn sequence (ours).
     Auto,
+    /// The first converging turn–translate–turn sequence even where the
+    /// paper's law converges by itself (ours): the law's simultaneous turn
+    /// and drive strains the object more than rigid phases do.
+    Always,
 }
 
 /// `[planner.sequence]`: intermediate goals for the law (ours, see the
@@ -60,7 +72,9 @@ pub enum SequenceMode {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct SequenceParams {
-    /// `"off"` (default, the paper's law) or `"auto"`.
+    /// `"off"` (default, the paper's law), `"auto"` or `"always"`. A plan
+    /// that is a sequence moves on to the next phase when the law stalls
+    /// short of an intermediate goal (the candidates must reach each one).
     pub mode: SequenceMode,
     /// An intermediate goal is reached when every platform is within the
     /// task's position tolerance and this heading error, degrees.
@@ -245,7 +259,9 @@ pub(super) fn choose_sequence(
     policy: impl Fn(Vec<Arc<Scene>>) -> Policy,
     run: impl Fn(&Arc<Policy>) -> Option<f64>,
 ) -> (Option<Arc<Policy>>, serde_json::Value) {
-    if let Some(t) = run(direct) {
+    if params.sequence.mode == SequenceMode::Always {
+        // Tried last, below.
+    } else if let Some(t) = run(direct) {
         return (
             None,
             serde_json::json!({"chosen": "direct", "tried": 1, "ideal_time": t}),
@@ -258,7 +274,8 @@ pub(super) fn choose_sequence(
         sq.step_deg.to_radians(),
         params.tolerance.position,
     );
-    let mut tried = 1;
+    // The direct run counts as tried unless the mode skips it.
+    let mut tried = usize::from(sq.mode != SequenceMode::Always);
     for psi in headings {
         let goals = phase_goals(start, &scene.goal, psi, sq.max_turn_deg.to_radians());
         let phases: Option<Vec<Arc<Scene>>> = goals[..goals.len() - 1]
@@ -298,9 +315,16 @@ pub(super) fn choose_sequence(
             );
         }
     }
+    let converged = match sq.mode {
+        SequenceMode::Always => run(direct),
+        _ => None,
+    };
     (
         None,
-        serde_json::json!({"chosen": "direct", "tried": tried, "converged": false}),
+        match converged {
+            Some(t) => serde_json::json!({"chosen": "direct", "tried": tried + 1, "ideal_time": t}),
+            None => serde_json::json!({"chosen": "direct", "tried": tried, "converged": false}),
+        },
     )
 }
 
@@ -362,6 +386,76 @@ mod tests {
         assert_eq!(&phases[0][..2], &goal[..2]);
         assert!((phases[0][2] + 0.2).abs() < 1e-12);
         assert_eq!(phases[1], goal.to_vec());
+    }
+
+    /// `auto` keeps the paper's law when its ideal run converges; `always`
+    /// tries the sequences first and falls back to the law only when none
+    /// converges (the run closure stands in for the ideal run).
+    #[test]
+    fn always_tries_the_sequence_before_the_paper_law() {
+        use crate::planner::dilf::potential::PotentialParams;
+        let goal = vec![2.0, 1.0, 0.5, 0.0, -1.2, 2.2, 0.0, -0.6, 0.0];
+        let start = [0.0, 0.0, 0.0, 0.0, -1.2, 2.2, 0.0, -0.6, 0.0];
+        let choose = |mode: &str, converges: &dyn Fn(usize) -> bool| {
+            let params: DilfParams =
+                toml::from_str(&format!("[sequence]\nmode = \"{mode}\"")).unwrap();
+            let scene = Arc::new(
+                Scene::new(
+                    1,
+                    crate::model::mobile_manipulator::default_parts(),
+                    Vec::new(),
+                    goal.clone(),
+                    PotentialParams {
+                        lambda: params.lambda,
+                        kv: params.kv_exponent,
+                        goal_frame: params.goal_frame,
+                        dipole: params.dipole,
+                        singularity: params.singularity,
+                        field_power: params.field_power,
+                    },
+                )
+                .unwrap(),
+            );
+            let policy = |phases: Vec<Arc<Scene>>| Policy {
+                scene: scene.clone(),
+                phases,
+                sequence: params.sequence,
+                gains: params.gains(),
+                tolerance: params.tolerance,
+                period: params.period,
+                hold_guard: params.hold_guard,
+                stall: params.stall,
+                grasps: params.grasps,
+                yield_on_stall: false,
+            };
+            let direct = Arc::new(policy(Vec::new()));
+            let calls = std::cell::RefCell::new(Vec::new());
+            let run = |p: &Arc<Policy>| {
+                calls.borrow_mut().push(p.phases.len());
+                converges(p.phases.len()).then_some(10.0)
+            };
+            let (picked, details) = choose_sequence(&scene, &start, &params, &direct, policy, run);
+            (
+                picked.is_some(),
+                details["chosen"].clone(),
+                calls.into_inner(),
+            )
+        };
+        let everything = |_: usize| true;
+        assert_eq!(
+            choose("auto", &everything),
+            (false, "direct".into(), vec![0])
+        );
+        assert_eq!(
+            choose("always", &everything),
+            (true, "sequence".into(), vec![1])
+        );
+        // No sequence converges: `always` falls back to the law, run last.
+        let (picked, chosen, calls) = choose("always", &|phases| phases == 0);
+        assert!(!picked);
+        assert_eq!(chosen, "direct");
+        assert_eq!(calls.first(), Some(&1));
+        assert_eq!(calls.last(), Some(&0));
     }
 
     /// The candidates start at the direction of travel and cover the

@@ -171,6 +171,12 @@ mod tests {
     /// One robot in the open, goal at the origin facing +x, and its
     /// controller (the shipped defaults but `field_power`).
     fn controller() -> (DilfController, Vec<f64>) {
+        controller_through(&[], false)
+    }
+
+    /// The same, through intermediate goals `via`, yielding on a stall
+    /// short of one or not.
+    fn controller_through(via: &[Vec<f64>], yield_on_stall: bool) -> (DilfController, Vec<f64>) {
         let params: DilfParams = toml::from_str("field_power = 1.75").unwrap();
         let goal = vec![0.0, 0.0, 0.0, 0.0, -1.2, 2.2, 0.0, -0.6, 0.0];
         let scene = Scene::new(
@@ -197,7 +203,11 @@ mod tests {
             stall: params.stall,
             grasps: params.grasps,
             scene: scene.clone(),
-            phases: Vec::new(),
+            phases: via
+                .iter()
+                .map(|g| Arc::new(scene.with_goal(g.clone()).unwrap()))
+                .collect(),
+            yield_on_stall,
             sequence: params.sequence,
         });
         let c = DilfController {
@@ -269,6 +279,36 @@ mod tests {
         }
         let t = stop.expect("never stalled");
         assert!(t > s.time && t <= s.time + 0.021, "{t}");
+    }
+
+    /// A plan through an intermediate goal moves on to the task's goal when
+    /// it stalls short of it (the label never says `stalled`, and the next
+    /// stall, on the task's goal, ends the run `time` later); a candidate
+    /// run (no yielding) ends at the first stall.
+    #[test]
+    fn a_stall_short_of_an_intermediate_goal_moves_on() {
+        let s = StallParams::default();
+        let first_stop = |yield_on_stall: bool| {
+            let goal = vec![0.0, 0.0, 0.0, 0.0, -1.2, 2.2, 0.0, -0.6, 0.0];
+            let mut via = goal.clone();
+            via[0] = 1.0;
+            via[1] = 1.0;
+            let (mut c, _) = controller_through(&[via], yield_on_stall);
+            // Frozen 0.5 m from both goals: no progress on either.
+            let q = [0.5, 0.3, 0.3, 0.0, -1.2, 2.2, 0.0, -0.6, 0.0];
+            (0..2000)
+                .map(|k| 0.02 * k as f64)
+                .find(|t| label(&mut c, *t, &q).0 == "stalled")
+                .map(|t| (t, c.phase))
+        };
+        let (t, phase) = first_stop(false).expect("the candidate never stalled");
+        assert!(t > s.time && t <= s.time + 0.021, "{t}");
+        assert_eq!(phase, 0);
+        let (t, phase) = first_stop(true).expect("the plan never stalled");
+        // The yield at the first stall's sample; the new phase's first
+        // sample is progress (its V is a new function); `time` after it.
+        assert!(t > 2.0 * s.time && t <= 2.0 * s.time + 0.061, "{t}");
+        assert_eq!(phase, 1);
     }
 
     /// V rising by less than the gain is no progress; by more, it is. The
