@@ -26,7 +26,13 @@ pub struct KeyIndex {
     line_starts: Vec<usize>,
     /// Floats that are NaN or infinite: (path, span, as written).
     nonfinite: Vec<(String, Range<usize>, String)>,
+    /// The [`ALIASES`] this file uses: (read as, written as).
+    aliases: Vec<(&'static str, &'static str)>,
 }
+
+/// Lists a file may write under another name than the one they are read
+/// as: (read as, written as). Errors about them name the written key.
+pub const ALIASES: &[(&str, &str)] = &[("model.obstacles", "world.obstacles")];
 
 impl KeyIndex {
     /// Index a parsed document.
@@ -37,9 +43,27 @@ impl KeyIndex {
             entries: Vec::new(),
             line_starts,
             nonfinite: Vec::new(),
+            aliases: Vec::new(),
         };
         ix.walk_table(root, "");
+        ix.aliases = ALIASES
+            .iter()
+            .copied()
+            .filter(|(_, written)| ix.has(written))
+            .collect();
         ix
+    }
+
+    /// `key` as this file writes it (see [`ALIASES`]).
+    pub fn written(&self, key: &str) -> String {
+        for (read, written) in &self.aliases {
+            if let Some(rest) = key.strip_prefix(read) {
+                if rest.is_empty() || rest.starts_with(['.', '[']) {
+                    return format!("{written}{rest}");
+                }
+            }
+        }
+        key.to_string()
     }
 
     fn walk_table(&mut self, t: &DeTable<'_>, prefix: &str) {
@@ -98,14 +122,8 @@ impl KeyIndex {
     /// Line of `key`, or of its nearest written ancestor (a defaulted key
     /// points at its table).
     pub fn line_of(&self, key: &str) -> Option<usize> {
-        // `[[world.obstacles]]` is read as `model.obstacles`.
-        if let Some(rest) = key.strip_prefix("model.obstacles") {
-            let written = format!("world.obstacles{rest}");
-            if self.has("world.obstacles") {
-                return self.line_of(&written);
-            }
-        }
-        let mut k = key;
+        let key = self.written(key);
+        let mut k = key.as_str();
         loop {
             if let Some(e) = self.entries.iter().find(|e| e.path == k) {
                 return Some(self.line_at(e.key.start));
@@ -162,10 +180,11 @@ impl KeyIndex {
     /// An input error about key `key` of this file, at its line:
     /// "key `key`: message".
     pub fn error_at(&self, path: &Path, key: &str, message: impl std::fmt::Display) -> Error {
+        let key = self.written(key);
         Error::Input {
-            key: Some(key.to_string()),
+            key: Some(key.clone()),
             path: path.into(),
-            line: self.line_of(key),
+            line: self.line_of(&key),
             message: format!("key `{key}`: {message}"),
         }
     }
@@ -173,6 +192,10 @@ impl KeyIndex {
     /// A setup refusal about this file: at the line of the key it is about,
     /// if it is about one.
     pub fn setup_error(&self, path: &Path, e: &crate::error::SetupError) -> Error {
+        let mut e = e.clone();
+        if let crate::error::About::Key(k) = &mut e.about {
+            *k = self.written(k);
+        }
         Error::Input {
             key: e.key_name().map(str::to_string),
             path: path.into(),

@@ -214,4 +214,46 @@ fn world_obstacles_are_the_model_obstacles() {
         err.contains(&format!(":{line}: key `world.obstacles`: also given as")),
         "{err}"
     );
+    // An error inside the world's list names the key as written, at its line.
+    t["model"].as_table_mut().unwrap().remove("obstacles");
+    let list = t["world"]["obstacles"].as_array().unwrap().clone();
+    let mut bad = list.clone();
+    bad[1].as_table_mut().unwrap().insert(
+        "semi_axes".into(),
+        toml::Value::try_from([-0.22, 0.14, 0.06]).unwrap(),
+    );
+    t["world"]
+        .as_table_mut()
+        .unwrap()
+        .insert("obstacles".into(), bad.into());
+    let file = dir.path().join("parking_bad.toml");
+    let text = toml::to_string(&t).unwrap();
+    std::fs::write(&file, &text).unwrap();
+    let second = text
+        .lines()
+        .enumerate()
+        .filter(|(_, l)| l.trim() == "[[world.obstacles]]")
+        .nth(1)
+        .unwrap()
+        .0;
+    let line = text
+        .lines()
+        .enumerate()
+        .skip(second)
+        .find(|(_, l)| l.starts_with("semi_axes"))
+        .unwrap()
+        .0
+        + 1;
+    let err = anholonomy::scenario::Scenario::load(&file)
+        .and_then(anholonomy::validate::Prepared::new)
+        .map(|_| ())
+        .unwrap_err()
+        .to_string();
+    assert!(
+        err.contains(&format!(
+            ":{line}: key `world.obstacles[1].semi_axes[0]`: must be > 0"
+        )),
+        "{err}"
+    );
+    assert!(!err.contains("model.obstacles"), "{err}");
 }
