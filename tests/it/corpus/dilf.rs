@@ -131,9 +131,9 @@ pub fn cases(c: &mut Corpus) {
         edit(
             &po,
             "grasps = \"measured\"",
-            "grasps = \"measured\"\n\n[planner.sequence]\nmode = \"always\"",
+            "grasps = \"measured\"\n\n[planner.sequence]\nmode = \"sometimes\"",
         ),
-        Some("mode = \"always\""),
+        Some("mode = \"sometimes\""),
         Some("planner.sequence.mode"),
     );
     c.sc(
