@@ -407,6 +407,45 @@ struct Policy {
     yield_on_stall: bool,
 }
 
+impl Policy {
+    /// The law of `params` on `scene` (the task), through `phases`.
+    fn new(
+        scene: Arc<Scene>,
+        phases: Vec<Arc<Scene>>,
+        params: &DilfParams,
+        yield_on_stall: bool,
+    ) -> Policy {
+        Policy {
+            scene,
+            phases,
+            sequence: params.sequence,
+            gains: params.gains(),
+            tolerance: params.tolerance,
+            period: params.period,
+            hold_guard: params.hold_guard,
+            stall: params.stall,
+            grasps: params.grasps,
+            yield_on_stall,
+        }
+    }
+}
+
+/// One robot in the open with `params`' potential and `goal` (tests).
+#[cfg(test)]
+fn open_scene(params: &DilfParams, goal: Vec<f64>) -> Arc<Scene> {
+    use potential::PotentialParams;
+    let potential = PotentialParams {
+        lambda: params.lambda,
+        kv: params.kv_exponent,
+        goal_frame: params.goal_frame,
+        dipole: params.dipole,
+        singularity: params.singularity,
+        field_power: params.field_power,
+    };
+    let parts = crate::model::mobile_manipulator::default_parts();
+    Arc::new(Scene::new(1, parts, Vec::new(), goal, potential).unwrap())
+}
+
 struct DilfController {
     policy: Arc<Policy>,
     warm: Warm,
@@ -699,18 +738,7 @@ pub fn plan(
         "start_sum_h2": e.d,
         "start_max_deformation": e.max_deformation,
     });
-    let policy = |phases: Vec<Arc<Scene>>| Policy {
-        scene: scene.clone(),
-        phases,
-        sequence: params.sequence,
-        gains: params.gains(),
-        tolerance: params.tolerance,
-        period: params.period,
-        hold_guard: params.hold_guard,
-        stall: params.stall,
-        grasps: params.grasps,
-        yield_on_stall: false,
-    };
+    let policy = |phases: Vec<Arc<Scene>>| Policy::new(scene.clone(), phases, params, false);
     let mut chosen = Arc::new(policy(Vec::new()));
     if params.sequence.mode != SequenceMode::Off {
         let run = |p: &Arc<Policy>| sequence::ideal_time_to_goal(p, start, params, step);
@@ -719,10 +747,7 @@ pub fn plan(
         if let Some(p) = picked {
             // The candidate reached every intermediate goal in the ideal
             // run; the plan may move past one it stalls short of.
-            chosen = Arc::new(Policy {
-                yield_on_stall: true,
-                ..policy(p.phases.clone())
-            });
+            chosen = Arc::new(Policy::new(scene.clone(), p.phases.clone(), params, true));
         }
     }
     Ok(feedback_plan(chosen, params, details))

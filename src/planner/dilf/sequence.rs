@@ -393,41 +393,13 @@ mod tests {
     /// converges (the run closure stands in for the ideal run).
     #[test]
     fn always_tries_the_sequence_before_the_paper_law() {
-        use crate::planner::dilf::potential::PotentialParams;
         let goal = vec![2.0, 1.0, 0.5, 0.0, -1.2, 2.2, 0.0, -0.6, 0.0];
         let start = [0.0, 0.0, 0.0, 0.0, -1.2, 2.2, 0.0, -0.6, 0.0];
         let choose = |mode: &str, converges: &dyn Fn(usize) -> bool| {
             let params: DilfParams =
                 toml::from_str(&format!("[sequence]\nmode = \"{mode}\"")).unwrap();
-            let scene = Arc::new(
-                Scene::new(
-                    1,
-                    crate::model::mobile_manipulator::default_parts(),
-                    Vec::new(),
-                    goal.clone(),
-                    PotentialParams {
-                        lambda: params.lambda,
-                        kv: params.kv_exponent,
-                        goal_frame: params.goal_frame,
-                        dipole: params.dipole,
-                        singularity: params.singularity,
-                        field_power: params.field_power,
-                    },
-                )
-                .unwrap(),
-            );
-            let policy = |phases: Vec<Arc<Scene>>| Policy {
-                scene: scene.clone(),
-                phases,
-                sequence: params.sequence,
-                gains: params.gains(),
-                tolerance: params.tolerance,
-                period: params.period,
-                hold_guard: params.hold_guard,
-                stall: params.stall,
-                grasps: params.grasps,
-                yield_on_stall: false,
-            };
+            let scene = crate::planner::dilf::open_scene(&params, goal.clone());
+            let policy = |phases| Policy::new(scene.clone(), phases, &params, false);
             let direct = Arc::new(policy(Vec::new()));
             let calls = std::cell::RefCell::new(Vec::new());
             let run = |p: &Arc<Policy>| {

@@ -164,8 +164,7 @@ mod tests {
     use super::*;
     use crate::model::State;
     use crate::plan::{Command, Controller};
-    use crate::planner::dilf::potential::{PotentialParams, Scene};
-    use crate::planner::dilf::{DilfController, DilfParams, Policy};
+    use crate::planner::dilf::{open_scene, DilfController, DilfParams, Policy};
     use std::sync::Arc;
 
     /// One robot in the open, goal at the origin facing +x, and its
@@ -179,37 +178,12 @@ mod tests {
     fn controller_through(via: &[Vec<f64>], yield_on_stall: bool) -> (DilfController, Vec<f64>) {
         let params: DilfParams = toml::from_str("field_power = 1.75").unwrap();
         let goal = vec![0.0, 0.0, 0.0, 0.0, -1.2, 2.2, 0.0, -0.6, 0.0];
-        let scene = Scene::new(
-            1,
-            crate::model::mobile_manipulator::default_parts(),
-            Vec::new(),
-            goal.clone(),
-            PotentialParams {
-                lambda: params.lambda,
-                kv: params.kv_exponent,
-                goal_frame: params.goal_frame,
-                dipole: params.dipole,
-                singularity: params.singularity,
-                field_power: params.field_power,
-            },
-        )
-        .unwrap();
-        let scene = Arc::new(scene);
-        let policy = Arc::new(Policy {
-            gains: params.gains(),
-            tolerance: params.tolerance,
-            period: params.period,
-            hold_guard: params.hold_guard,
-            stall: params.stall,
-            grasps: params.grasps,
-            scene: scene.clone(),
-            phases: via
-                .iter()
-                .map(|g| Arc::new(scene.with_goal(g.clone()).unwrap()))
-                .collect(),
-            yield_on_stall,
-            sequence: params.sequence,
-        });
+        let scene = open_scene(&params, goal.clone());
+        let phases = via
+            .iter()
+            .map(|g| Arc::new(scene.with_goal(g.clone()).unwrap()))
+            .collect();
+        let policy = Arc::new(Policy::new(scene.clone(), phases, &params, yield_on_stall));
         let c = DilfController {
             warm: scene.warm(),
             guard_warm: scene.warm(),
