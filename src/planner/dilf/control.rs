@@ -93,6 +93,10 @@ pub struct Gains {
     /// θ_d's side of the dipole plane from the formation's mean goal-frame
     /// x rather than each platform's own (with `dipole = "formation"`).
     pub formation_side: bool,
+    /// In the final alignment the arm joints go to their goal angles at
+    /// this gain, 1/s (ours); 0: Eq. 18c's rates there too.
+    #[serde(default)]
+    pub align_joint_gain: f64,
 }
 
 /// How v_r follows the field (Eq. 18a or ours).
@@ -251,7 +255,15 @@ pub fn control_aligning(
         };
         u[j] = v;
         u[j + 1] = omega;
-        let rates: Vec<f64> = (0..6).map(|a| g.ka[a] * f[i + 3 + a]).collect();
+        // The final alignment suspends Eq. 18 for the platform; with a gain
+        // the arm goes straight to its goal angles too (ours, opt-in).
+        let rates: Vec<f64> = if branch == Branch::Align && g.align_joint_gain > 0.0 {
+            (0..6)
+                .map(|a| g.align_joint_gain * wrap_angle(goal[i + 3 + a] - q[i + 3 + a]))
+                .collect()
+        } else {
+            (0..6).map(|a| g.ka[a] * f[i + 3 + a]).collect()
+        };
         let peak = rates.iter().fold(0.0f64, |m, x| m.max(x.abs()));
         let arm = (g.max_joint_rate / peak).min(1.0);
         for a in 0..6 {
@@ -297,6 +309,7 @@ mod tests {
             approach_heading: 0.0,
             speed: SpeedLaw::Sign,
             formation_side: false,
+            align_joint_gain: 0.0,
         }
     }
 
@@ -427,5 +440,48 @@ mod tests {
         } else {
             assert!(platform >= 0.0);
         }
+    }
+
+    /// In the final alignment with `align_joint_gain` the arm joints go to
+    /// their goal angles (gain × error, scaled together within the joint
+    /// rate limit); without it, or off the alignment, they follow Eq. 18c.
+    #[test]
+    fn the_final_alignment_drives_the_arm_to_its_goal_angles() {
+        let goal = [0.0, 0.0, 0.5, 0.1, -0.2, 0.3, 0.0, 0.4, -0.1];
+        // At the goal position (within the lock radius), heading off.
+        let mut q = goal;
+        q[2] = 0.0;
+        q[3] = 0.05;
+        q[4] = -0.2 - 0.02;
+        q[8] = -0.1 + 0.04;
+        let f = [0.1, 0.2, 0.3, 0.01, -0.02, 0.03, 0.0, 0.01, 0.02];
+        let mut g = gains();
+        let (eq18c, b) = control(&q, &f, &goal, &g);
+        assert_eq!(b[0], Branch::Align);
+        for a in 0..6 {
+            assert!((eq18c[2 + a] - g.ka[a] * f[3 + a]).abs() < 1e-15);
+        }
+        g.align_joint_gain = 2.0;
+        let (u, _) = control(&q, &f, &goal, &g);
+        let want = [0.1, 0.04, 0.0, 0.0, 0.0, -0.08];
+        for a in 0..6 {
+            assert!((u[2 + a] - want[a]).abs() < 1e-12, "{a}: {}", u[2 + a]);
+        }
+        assert_eq!(
+            (u[0], u[1]),
+            (eq18c[0], eq18c[1]),
+            "the platform's turn is unchanged"
+        );
+        // The rates keep their ratios under the limit.
+        g.max_joint_rate = 0.05;
+        let (u, _) = control(&q, &f, &goal, &g);
+        assert!((u[2] - 0.05).abs() < 1e-12 && (u[7] + 0.04).abs() < 1e-12);
+        // Away from the goal (not aligning) Eq. 18c again.
+        let mut far = q;
+        far[0] = -1.0;
+        let (u, b) = control(&far, &f, &goal, &g);
+        assert_ne!(b[0], Branch::Align);
+        let (e, _) = control(&far, &f, &goal, &gains());
+        assert_eq!(&u[2..], &e[2..]);
     }
 }

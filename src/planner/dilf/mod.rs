@@ -126,6 +126,13 @@ pub struct DilfParams {
     #[serde(default = "default_deadzone")]
     #[schemars(range(min = 0), extend("exclusiveMaximum" = 1))]
     pub heading_deadzone: f64,
+    /// While a platform turns in place to its goal heading (the final
+    /// alignment, ours), its arm joints go to their goal angles at this
+    /// gain, 1/s (rate = gain × error, within `max_joint_rate`), instead of
+    /// Eq. 18c's rates, which vanish there; 0 (default): Eq. 18c throughout.
+    #[serde(default)]
+    #[schemars(range(min = 0))]
+    pub align_joint_gain: f64,
     /// The policy is evaluated every `period` seconds and held in between.
     #[serde(default = "default_period")]
     #[schemars(extend("exclusiveMinimum" = 0))]
@@ -280,6 +287,11 @@ impl DilfParams {
         check_param("max_joint_rate", pos(self.max_joint_rate), "must be > 0")?;
         check_param("period", pos(self.period), "must be > 0")?;
         check_param(
+            "align_joint_gain",
+            self.align_joint_gain.is_finite() && self.align_joint_gain >= 0.0,
+            "must be ≥ 0 (1/s; 0: Eq. 18c throughout)",
+        )?;
+        check_param(
             "heading_deadzone",
             (0.0..1.0).contains(&self.heading_deadzone),
             "must be in [0, 1)",
@@ -350,6 +362,7 @@ impl DilfParams {
             approach_heading: self.approach.heading_deg.to_radians(),
             speed: self.speed,
             formation_side: self.dipole == DipoleProduct::Formation,
+            align_joint_gain: self.align_joint_gain,
         }
     }
 }
