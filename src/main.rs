@@ -2,7 +2,7 @@
 //! the command's module in `cmd/`, print errors one per line.
 
 use clap::Parser;
-use cmd::cli::{Cli, Cmd};
+use cmd::cli::{Cli, Cmd, ModelsCmd};
 use cmd::run::Mode;
 use std::process::ExitCode;
 
@@ -56,8 +56,13 @@ fn main() -> ExitCode {
         } => cmd::inspect::keys_cmd(name.as_deref(), *markdown, out.as_deref()),
         Cmd::Merge { paths, out } => cmd::logs::merge_cmd(paths, out.as_deref()),
         Cmd::Margin(a) => cmd::margin::margin_cmd(a),
-        Cmd::Init(a) => anholonomy::init::init_cmd(a),
-        Cmd::Models(a) => anholonomy::init::models_cmd(a),
+        Cmd::Init(a) => anholonomy::init::init(&a.dir, a.git.as_deref()),
+        Cmd::Models(a) => match &a.cmd {
+            None => anholonomy::init::list_models(),
+            Some(ModelsCmd::Export { dir, names, force }) => {
+                anholonomy::init::export_models(dir, names, *force)
+            }
+        },
     };
     match res {
         Ok(code) => ExitCode::from(code),

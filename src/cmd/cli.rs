@@ -120,10 +120,10 @@ pub(crate) enum Cmd {
     ///
     /// Then `cd DIR && anholonomy check scenarios/ --baseline baselines/`
     /// passes. Exit 2 when DIR exists and is not empty (nothing written).
-    Init(anholonomy::init::InitArgs),
+    Init(InitArgs),
     /// List the shipped models (URDFs embedded in the binary); `models
     /// export DIR [NAME...]` writes them.
-    Models(anholonomy::init::ModelsArgs),
+    Models(ModelsArgs),
     /// Print every key of a model's or planner's table, or of the scenario file's own
     /// tables, with its default, type and range, and description.
     ///
@@ -239,4 +239,40 @@ pub(crate) struct RunArgs {
     /// CPU-second).
     #[arg(long)]
     pub(crate) no_batch: bool,
+}
+
+/// Arguments of `anholonomy init`.
+#[derive(clap::Args, Debug)]
+pub struct InitArgs {
+    /// The new repository's directory (created; it must not exist or be empty).
+    pub dir: PathBuf,
+    /// Install anholonomy in CI from this git repository (tag `vVERSION`)
+    /// instead of crates.io (`cargo install anholonomy --version =VERSION`).
+    #[arg(long, value_name = "URL")]
+    pub git: Option<String>,
+}
+
+/// Arguments of `anholonomy models`.
+#[derive(clap::Args, Debug)]
+pub struct ModelsArgs {
+    #[command(subcommand)]
+    pub cmd: Option<ModelsCmd>,
+}
+
+/// `anholonomy models export`.
+#[derive(clap::Subcommand, Debug)]
+pub enum ModelsCmd {
+    /// Write shipped URDFs into DIR as NAME.urdf (all of them without NAME).
+    ///
+    /// An existing file is left alone and reported (exit 2, nothing
+    /// written) unless --force.
+    Export {
+        /// Directory to write into (created if needed).
+        dir: PathBuf,
+        /// Models to write (see `anholonomy models`); default: every one.
+        names: Vec<String>,
+        /// Overwrite existing files.
+        #[arg(long)]
+        force: bool,
+    },
 }

@@ -6,7 +6,7 @@ use crate::baseline::{self, Baseline};
 use crate::error::Error;
 use crate::runner::RunOptions;
 use crate::validate::{prepare_all, Call};
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 
 /// The shipped models, by kind, as the repository's `models/` holds them.
 pub const MODELS: &[(&str, &str)] = &[
@@ -28,42 +28,6 @@ pub const MODELS: &[(&str, &str)] = &[
 /// The version written into the CI files (the install is pinned to it).
 pub const VERSION: &str = env!("CARGO_PKG_VERSION");
 
-/// Arguments of `anholonomy init`.
-#[derive(clap::Args, Debug)]
-pub struct InitArgs {
-    /// The new repository's directory (created; it must not exist or be empty).
-    pub dir: PathBuf,
-    /// Install anholonomy in CI from this git repository (tag `vVERSION`)
-    /// instead of crates.io (`cargo install anholonomy --version =VERSION`).
-    #[arg(long, value_name = "URL")]
-    pub git: Option<String>,
-}
-
-/// Arguments of `anholonomy models`.
-#[derive(clap::Args, Debug)]
-pub struct ModelsArgs {
-    #[command(subcommand)]
-    pub cmd: Option<ModelsCmd>,
-}
-
-/// `anholonomy models export`.
-#[derive(clap::Subcommand, Debug)]
-pub enum ModelsCmd {
-    /// Write shipped URDFs into DIR as NAME.urdf (all of them without NAME).
-    ///
-    /// An existing file is left alone and reported (exit 2, nothing
-    /// written) unless --force.
-    Export {
-        /// Directory to write into (created if needed).
-        dir: PathBuf,
-        /// Models to write (see `anholonomy models`); default: every one.
-        names: Vec<String>,
-        /// Overwrite existing files.
-        #[arg(long)]
-        force: bool,
-    },
-}
-
 /// The URDF text of a shipped model.
 pub fn model(name: &str) -> Option<&'static str> {
     MODELS.iter().find(|(n, _)| *n == name).map(|(_, t)| *t)
@@ -77,20 +41,19 @@ fn names() -> String {
         .join(", ")
 }
 
-/// `anholonomy models [export DIR [NAME...]]`.
-pub fn models_cmd(a: &ModelsArgs) -> Result<u8, Vec<Error>> {
-    let Some(ModelsCmd::Export {
-        dir,
-        names: want,
-        force,
-    }) = &a.cmd
-    else {
-        for (n, text) in MODELS {
-            crate::say!("{n:<20} {n}.urdf ({} bytes)", text.len());
-        }
-        crate::say!("`anholonomy models export DIR [NAME...]` writes them.");
-        return Ok(0);
-    };
+/// `anholonomy models`: the shipped models, one line each.
+pub fn list_models() -> Result<u8, Vec<Error>> {
+    for (n, text) in MODELS {
+        crate::say!("{n:<20} {n}.urdf ({} bytes)", text.len());
+    }
+    crate::say!("`anholonomy models export DIR [NAME...]` writes them.");
+    Ok(0)
+}
+
+/// `anholonomy models export DIR [NAME...]`: write the shipped models
+/// `want` (every one when empty) into `dir` as NAME.urdf; an existing file
+/// is an error (nothing written) unless `force`.
+pub fn export_models(dir: &Path, want: &[String], force: bool) -> Result<u8, Vec<Error>> {
     let mut errors = Vec::new();
     let mut files = Vec::new();
     let chosen: Vec<&str> = if want.is_empty() {
@@ -183,10 +146,10 @@ pub fn starter_files(git: Option<&str>) -> Vec<(&'static str, String)> {
     ]
 }
 
-/// `anholonomy init DIR`: write the starter repository, run its scenarios
+/// `anholonomy init DIR`: write the starter repository (CI installing
+/// anholonomy from crates.io, or from `git` when given), run its scenarios
 /// and write their baselines, so `check` passes in it at once.
-pub fn init_cmd(a: &InitArgs) -> Result<u8, Vec<Error>> {
-    let dir = &a.dir;
+pub fn init(dir: &Path, git: Option<&str>) -> Result<u8, Vec<Error>> {
     if dir.exists() {
         let empty = std::fs::read_dir(dir).map(|mut d| d.next().is_none());
         if !matches!(empty, Ok(true)) {
@@ -196,7 +159,7 @@ pub fn init_cmd(a: &InitArgs) -> Result<u8, Vec<Error>> {
             )]);
         }
     }
-    let files: Vec<(PathBuf, String)> = starter_files(a.git.as_deref())
+    let files: Vec<(PathBuf, String)> = starter_files(git)
         .into_iter()
         .map(|(p, t)| (dir.join(p), t))
         .collect();

@@ -338,3 +338,50 @@ fn every_test_file_is_a_module_of_this_binary() {
         "declare in tests/it/main.rs: {undeclared:?}"
     );
 }
+
+/// Lines of the library's files (everything under `src/` but the binary's
+/// `main.rs` and `cmd/`) that name clap: argument parsing is the binary's,
+/// as ripgrep keeps it. (The suite's and sweeps' progress bars still draw
+/// from the library.)
+fn cli_code_in_library(src: &Path) -> Vec<String> {
+    let binary = [src.join("main.rs"), src.join("cmd")];
+    rust_files(src)
+        .into_iter()
+        .filter(|f| !binary.iter().any(|b| f.starts_with(b)))
+        .flat_map(|f| {
+            let text = std::fs::read_to_string(&f).unwrap();
+            code_lines(&text)
+                .into_iter()
+                .filter(|l| l.contains("clap::"))
+                .map(|l| format!("{}: {}", f.display(), l.trim()))
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+#[test]
+fn the_library_has_no_command_line_code() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let found = cli_code_in_library(&src);
+    assert!(
+        found.is_empty(),
+        "CLI code in the library:\n{}",
+        found.join("\n")
+    );
+}
+
+#[test]
+fn command_line_code_in_the_library_is_detected() {
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::create_dir_all(dir.path().join("cmd")).unwrap();
+    std::fs::write(dir.path().join("main.rs"), "use clap::Parser;\n").unwrap();
+    std::fs::write(dir.path().join("cmd/cli.rs"), "#[derive(clap::Args)]\n").unwrap();
+    std::fs::write(
+        dir.path().join("init.rs"),
+        "#[derive(clap::Args)]\nstruct A;\n",
+    )
+    .unwrap();
+    let found = cli_code_in_library(dir.path());
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert!(found[0].contains("init.rs"));
+}
