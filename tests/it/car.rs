@@ -476,20 +476,7 @@ fn an_external_law_steers_by_angle() {
     let mut q = start;
     for (v, steer) in steps {
         let w = v * f64::tan(steer) / MODEL.wheelbase;
-        let th1 = q[2] + w * 0.25;
-        q = if w == 0.0 {
-            [
-                q[0] + v * 0.25 * q[2].cos(),
-                q[1] + v * 0.25 * q[2].sin(),
-                q[2],
-            ]
-        } else {
-            [
-                q[0] + v / w * (th1.sin() - q[2].sin()),
-                q[1] - v / w * (th1.cos() - q[2].cos()),
-                th1,
-            ]
-        };
+        q = legs::unicycle_arc(q, v, w, 0.25);
     }
     let text = format!(
         r#"name = "law_by_angle"

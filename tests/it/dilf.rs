@@ -139,24 +139,6 @@ fn unknown_joint_name_in_the_urdf_is_bad_input() {
     assert!(files_below(&dir.path().join("logs")).is_empty());
 }
 
-/// The exact motion of the unicycle + arm under a held input: an independent
-/// check of the harness's RK4 ideal run.
-fn exact_step(q: &mut [f64], u: &[f64], h: f64) {
-    let (v, w) = (u[0], u[1]);
-    let th = q[2];
-    if w.abs() < 1e-12 {
-        q[0] += v * th.cos() * h;
-        q[1] += v * th.sin() * h;
-    } else {
-        q[0] += v / w * ((th + w * h).sin() - th.sin());
-        q[1] -= v / w * ((th + w * h).cos() - th.cos());
-    }
-    q[2] += w * h;
-    for a in 0..6 {
-        q[3 + a] += u[2 + a] * h;
-    }
-}
-
 fn open_field_task(start: [f64; 9], goal: [f64; 9]) -> (f64, f64, usize) {
     let params: DilfParams = toml::from_str("field_power = 1.75\nhorizon = 80.0").unwrap();
     let scene = Scene::new(
@@ -181,7 +163,7 @@ fn open_field_task(start: [f64; 9], goal: [f64; 9]) -> (f64, f64, usize) {
     // Re-integrate the recorded (held) inputs exactly.
     let mut q = start.as_slice().to_vec();
     for k in 0..tr.t.len() - 1 {
-        exact_step(&mut q, tr.u[k].as_slice(), tr.t[k + 1] - tr.t[k]);
+        legs::mobile_manipulator_step(&mut q, tr.u[k].as_slice(), tr.t[k + 1] - tr.t[k]);
     }
     let last = tr.last();
     let gap = (0..DOF).map(|i| (q[i] - last[i]).abs()).fold(0.0, f64::max);
@@ -426,7 +408,11 @@ fn table_i_converges_with_the_geometric_mean_of_the_dipoles_only() {
         for k in 0..tr.t.len() - 1 {
             let u = tr.u[k].as_slice();
             for r in 0..2 {
-                exact_step(&mut q[r * DOF..], &u[r * 8..], tr.t[k + 1] - tr.t[k]);
+                legs::mobile_manipulator_step(
+                    &mut q[r * DOF..],
+                    &u[r * 8..],
+                    tr.t[k + 1] - tr.t[k],
+                );
             }
         }
         let last = tr.last().as_slice().to_vec();

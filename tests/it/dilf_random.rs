@@ -291,23 +291,6 @@ fn plan_choice(prep: &Prepared) -> String {
     }
 }
 
-/// The exact motion of one robot (unicycle + arm) under a held input.
-fn exact_step(q: &mut [f64], u: &[f64], h: f64) {
-    let (v, w) = (u[0], u[1]);
-    let th = q[2];
-    if w.abs() < 1e-12 {
-        q[0] += v * th.cos() * h;
-        q[1] += v * th.sin() * h;
-    } else {
-        q[0] += v / w * ((th + w * h).sin() - th.sin());
-        q[1] -= v / w * ((th + w * h).cos() - th.cos());
-    }
-    q[2] += w * h;
-    for a in 0..6 {
-        q[3 + a] += u[2 + a] * h;
-    }
-}
-
 /// The independent integrator: the run's recorded (held) inputs integrated
 /// in closed form (arcs), and how far its end lies from the harness's RK4
 /// end (largest coordinate difference).
@@ -316,7 +299,7 @@ fn exact_gap(start: &[f64], tr: &anholonomy::integrate::Trajectory) -> (Vec<f64>
     for k in 0..tr.t.len() - 1 {
         let h = tr.t[k + 1] - tr.t[k];
         for (r, qr) in q.chunks_mut(DOF).enumerate() {
-            exact_step(qr, &tr.u[k].as_slice()[INPUTS * r..], h);
+            legs::mobile_manipulator_step(qr, &tr.u[k].as_slice()[INPUTS * r..], h);
         }
     }
     let last = tr.last();

@@ -75,19 +75,7 @@ impl Run {
         for k in 0..tr.t.len() - 1 {
             let h = tr.t[k + 1] - tr.t[k];
             for (r, qr) in q.chunks_mut(DOF).enumerate() {
-                let u = &tr.u[k].as_slice()[8 * r..8 * r + 8];
-                let (v, w, th) = (u[0], u[1], qr[2]);
-                if w.abs() < 1e-12 {
-                    qr[0] += v * th.cos() * h;
-                    qr[1] += v * th.sin() * h;
-                } else {
-                    qr[0] += v / w * ((th + w * h).sin() - th.sin());
-                    qr[1] -= v / w * ((th + w * h).cos() - th.cos());
-                }
-                qr[2] += w * h;
-                for a in 0..6 {
-                    qr[3 + a] += u[2 + a] * h;
-                }
+                legs::mobile_manipulator_step(qr, &tr.u[k].as_slice()[8 * r..8 * r + 8], h);
             }
         }
         let last = tr.last();

@@ -81,24 +81,12 @@ fn car() -> String {
     )
 }
 
-/// The unicycle's pose after `(v, omega)` held for `tau`, in closed form.
-fn arc(q: [f64; 3], v: f64, w: f64, tau: f64) -> [f64; 3] {
-    let [x, y, th] = q;
-    if w == 0.0 {
-        return [x + v * tau * th.cos(), y + v * tau * th.sin(), th];
-    }
-    let th1 = th + w * tau;
-    [
-        x + v / w * (th1.sin() - th.sin()),
-        y - v / w * (th1.cos() - th.cos()),
-        th1,
-    ]
-}
-
 /// The closed-form end of `(v, omega)` commands each held `HOLD` (the plan
 /// ends one median period, `HOLD`, after the last, stopped).
 fn closed_form(start: [f64; 3], commands: &[(f64, f64)]) -> [f64; 3] {
-    commands.iter().fold(start, |q, &(v, w)| arc(q, v, w, HOLD))
+    commands
+        .iter()
+        .fold(start, |q, &(v, w)| legs::unicycle_arc(q, v, w, HOLD))
 }
 
 /// The ideal run's end state of scenario `path`, and its start.

@@ -59,6 +59,31 @@ pub fn unicycle_leg(q: [f64; 3], ds: f64, dth: f64) -> [f64; 3] {
     [x, y, q[2] + dth]
 }
 
+/// Unicycle (x, y, θ) after `(v, ω)` held for `tau`, in closed form (an arc,
+/// or a straight line for |ω| < 1e-12).
+pub fn unicycle_arc(q: [f64; 3], v: f64, w: f64, tau: f64) -> [f64; 3] {
+    let [x, y, th] = q;
+    if w.abs() < 1e-12 {
+        return [x + v * tau * th.cos(), y + v * tau * th.sin(), th];
+    }
+    let th1 = th + w * tau;
+    [
+        x + v / w * (th1.sin() - th.sin()),
+        y - v / w * (th1.cos() - th.cos()),
+        th1,
+    ]
+}
+
+/// One mobile manipulator (unicycle + six arm joints, `q` of 9) after the
+/// input `u` (v, ω, six joint rates) held for `h`, in closed form.
+pub fn mobile_manipulator_step(q: &mut [f64], u: &[f64], h: f64) {
+    let [x, y, th] = unicycle_arc([q[0], q[1], q[2]], u[0], u[1], h);
+    q[..3].copy_from_slice(&[x, y, th]);
+    for a in 0..6 {
+        q[3 + a] += u[2 + a] * h;
+    }
+}
+
 /// Bicycle (x, y, θ, φ) after a leg (Δs, Δφ): φ is linear in arc length,
 /// so θ(s) = θ0 + (ln cos φ0 − ln cos(φ0 + k s)) / (k L), k = Δφ/Δs.
 pub fn bicycle_leg(q: [f64; 4], ds: f64, dphi: f64, wheelbase: f64) -> [f64; 4] {
