@@ -116,7 +116,9 @@ pub(crate) enum Cmd {
     /// alone: a `diff_drive` scenario on a plan file and one driven by a
     /// Python feedback law (standard library only), the URDF, baselines made
     /// on the spot, a GitHub Actions workflow and a GitLab CI job pinned to
-    /// this version, and a .gitignore for logs.
+    /// this version (both install it with ci/install-anholonomy.sh: the
+    /// release binary, or a build from source where there is none), and a
+    /// .gitignore.
     ///
     /// Then `cd DIR && anholonomy check scenarios/ --baseline baselines/`
     /// passes. Exit 2 when DIR exists and is not empty (nothing written).
@@ -246,10 +248,11 @@ pub(crate) struct RunArgs {
 pub struct InitArgs {
     /// The new repository's directory (created; it must not exist or be empty).
     pub dir: PathBuf,
-    /// Install anholonomy in CI from this git repository (tag `vVERSION`)
-    /// instead of crates.io (`cargo install anholonomy --version =VERSION`).
-    #[arg(long, value_name = "URL")]
-    pub git: Option<String>,
+    /// The repository CI installs this version from instead of the
+    /// project's: its release binary (URL/releases/download/vVERSION/...,
+    /// checksum verified), else `cargo install --git URL --tag vVERSION`.
+    #[arg(long, value_name = "URL", alias = "git")]
+    pub from: Option<String>,
 }
 
 /// Arguments of `anholonomy models`.

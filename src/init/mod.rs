@@ -101,20 +101,43 @@ fn write_files(files: &[(PathBuf, String)]) -> Result<(), Vec<Error>> {
     Ok(())
 }
 
-/// The starter repository's files (without the baselines, which are run).
-pub fn starter_files(git: Option<&str>) -> Vec<(&'static str, String)> {
-    let install = match git {
-        Some(url) => format!(
-            "cargo install --locked --force --git {url} --tag \"v$ANHOLONOMY_VERSION\" anholonomy"
-        ),
-        None => {
-            "cargo install --locked --force anholonomy --version \"=$ANHOLONOMY_VERSION\"".into()
-        }
-    };
-    let fill = |t: &str| {
-        t.replace("@VERSION@", VERSION)
-            .replace("@INSTALL@", &install)
-    };
+/// Where the starter CI downloads releases from and builds from when there
+/// is no release binary: `repository` in Cargo.toml (`init --from URL`
+/// overrides it).
+pub const REPOSITORY: &str = env!("CARGO_PKG_REPOSITORY");
+
+/// `init --from URL`: a URL (`scheme://...`) without the characters that
+/// would end the double-quoted `${ANHOLONOMY_REPO:-URL}` the install script
+/// holds it in, or start a fragment; a trailing `/` is dropped.
+pub fn source_url(url: &str) -> Result<String, String> {
+    let url = url.trim_end_matches('/');
+    let scheme = url.split_once("://").map(|(s, _)| s);
+    let scheme_ok = scheme.is_some_and(|s| {
+        s.starts_with(|c: char| c.is_ascii_alphabetic())
+            && s.chars()
+                .all(|c| c.is_ascii_alphanumeric() || "+.-".contains(c))
+    });
+    if !scheme_ok || url.ends_with("://") {
+        return Err(format!(
+            "`{url}` is not a URL (scheme://host/path, e.g. {REPOSITORY})"
+        ));
+    }
+    if let Some(c) = url
+        .chars()
+        .find(|c| c.is_whitespace() || c.is_control() || "'\"`$\\#{}".contains(*c))
+    {
+        return Err(format!(
+            "`{url}` holds {c:?}, which the CI files cannot quote"
+        ));
+    }
+    Ok(url.to_string())
+}
+
+/// The starter repository's files (without the baselines, which are run);
+/// its CI installs release `VERSION` of `from` (default [`REPOSITORY`]).
+pub fn starter_files(from: Option<&str>) -> Vec<(&'static str, String)> {
+    let repo = from.unwrap_or(REPOSITORY);
+    let fill = |t: &str| t.replace("@VERSION@", VERSION).replace("@REPO@", repo);
     vec![
         ("README.md", fill(include_str!("starter/README.md"))),
         (".gitignore", include_str!("starter/gitignore").into()),
@@ -123,6 +146,10 @@ pub fn starter_files(git: Option<&str>) -> Vec<(&'static str, String)> {
             fill(include_str!("starter/github.yml")),
         ),
         (".gitlab-ci.yml", fill(include_str!("starter/gitlab.yml"))),
+        (
+            "ci/install-anholonomy.sh",
+            fill(include_str!("starter/install.sh")),
+        ),
         (
             "models/diff_drive.urdf",
             model("diff_drive").unwrap().into(),
@@ -146,10 +173,14 @@ pub fn starter_files(git: Option<&str>) -> Vec<(&'static str, String)> {
     ]
 }
 
-/// `anholonomy init DIR`: write the starter repository (CI installing
-/// anholonomy from crates.io, or from `git` when given), run its scenarios
-/// and write their baselines, so `check` passes in it at once.
-pub fn init(dir: &Path, git: Option<&str>) -> Result<u8, Vec<Error>> {
+/// `anholonomy init DIR`: write the starter repository (CI installing this
+/// version's release of [`REPOSITORY`], or of `from` when given), run its
+/// scenarios and write their baselines, so `check` passes in it at once.
+pub fn init(dir: &Path, from: Option<&str>) -> Result<u8, Vec<Error>> {
+    let from = match from.map(source_url).transpose() {
+        Ok(f) => f,
+        Err(m) => return Err(vec![Error::input("--from", m)]),
+    };
     if dir.exists() {
         let empty = std::fs::read_dir(dir).map(|mut d| d.next().is_none());
         if !matches!(empty, Ok(true)) {
@@ -159,7 +190,7 @@ pub fn init(dir: &Path, git: Option<&str>) -> Result<u8, Vec<Error>> {
             )]);
         }
     }
-    let files: Vec<(PathBuf, String)> = starter_files(git)
+    let files: Vec<(PathBuf, String)> = starter_files(from.as_deref())
         .into_iter()
         .map(|(p, t)| (dir.join(p), t))
         .collect();

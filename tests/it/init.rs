@@ -37,6 +37,7 @@ fn the_starter_repository_passes_check_at_once() {
         ".gitignore",
         ".github/workflows/anholonomy.yml",
         ".gitlab-ci.yml",
+        "ci/install-anholonomy.sh",
         "models/diff_drive.urdf",
         "baselines/s_curve.json",
         "baselines/go_to_pose.json",
@@ -66,7 +67,8 @@ fn the_starter_repository_passes_check_at_once() {
     assert!(repo.join("logs/index.html").is_file());
     assert!(repo.join("logs/junit.xml").is_file());
     // The workflow: checks: write for the JUnit action; the install and the
-    // cache key both follow the version that wrote it.
+    // cache key both follow the version that wrote it (tests/it/install.rs
+    // runs the install steps).
     let wf = std::fs::read_to_string(repo.join(".github/workflows/anholonomy.yml")).unwrap();
     let version = env!("CARGO_PKG_VERSION");
     assert!(wf.contains("checks: write"), "{wf}");
@@ -74,13 +76,21 @@ fn the_starter_repository_passes_check_at_once() {
         wf.contains(&format!("ANHOLONOMY_VERSION: \"{version}\"")),
         "{wf}"
     );
-    assert!(wf.contains("--version \"=$ANHOLONOMY_VERSION\""), "{wf}");
     assert!(
-        wf.contains("key: anholonomy-${{ runner.os }}-${{ env.ANHOLONOMY_VERSION }}"),
+        wf.contains(
+            "key: anholonomy-${{ runner.os }}-${{ runner.arch }}-${{ env.ANHOLONOMY_VERSION }}"
+        ),
         "{wf}"
     );
     let gl = std::fs::read_to_string(repo.join(".gitlab-ci.yml")).unwrap();
     assert!(gl.contains("key: anholonomy-$ANHOLONOMY_VERSION"), "{gl}");
+    let script = std::fs::read_to_string(repo.join("ci/install-anholonomy.sh")).unwrap();
+    assert!(
+        script.contains(&format!("${{ANHOLONOMY_VERSION:-{version}}}")),
+        "{script}"
+    );
+    let ignored = std::fs::read_to_string(repo.join(".gitignore")).unwrap();
+    assert!(ignored.lines().any(|l| l == ".anholonomy/"), "{ignored}");
     // Not into a directory that holds something (exit 2, nothing changed).
     let out = run(&bin, tmp.path(), &["init", "repo"]);
     assert_eq!(out.status.code(), Some(2));
@@ -89,17 +99,67 @@ fn the_starter_repository_passes_check_at_once() {
 }
 
 #[test]
-fn init_with_a_git_source_installs_from_its_tag() {
-    let files = anholonomy::init::starter_files(Some("https://example.org/a.git"));
-    let wf = &files
+fn init_from_another_repository_installs_its_release_or_its_tag() {
+    let files = anholonomy::init::starter_files(Some("https://example.org/fork"));
+    let script = &files
         .iter()
-        .find(|(p, _)| p.ends_with("anholonomy.yml"))
+        .find(|(p, _)| *p == "ci/install-anholonomy.sh")
         .unwrap()
         .1;
     assert!(
-        wf.contains("--git https://example.org/a.git --tag \"v$ANHOLONOMY_VERSION\""),
-        "{wf}"
+        script.contains("repo=\"${ANHOLONOMY_REPO:-https://example.org/fork}\""),
+        "{script}"
     );
+    assert!(
+        script.contains("--git \"$repo\" --tag \"v$version\" anholonomy"),
+        "{script}"
+    );
+    // The default is Cargo.toml's `repository`.
+    let files = anholonomy::init::starter_files(None);
+    assert!(files.iter().any(|(_, t)| t.contains(&format!(
+        "${{ANHOLONOMY_REPO:-{}}}",
+        env!("CARGO_PKG_REPOSITORY")
+    ))));
+    // A trailing slash is dropped; what the CI files cannot quote, or no
+    // URL at all, is refused.
+    use anholonomy::init::source_url;
+    assert_eq!(
+        source_url("https://example.org/fork/").as_deref(),
+        Ok("https://example.org/fork")
+    );
+    assert_eq!(
+        source_url("file:///srv/mirror").as_deref(),
+        Ok("file:///srv/mirror")
+    );
+    for bad in [
+        "example.org/fork",
+        "https://",
+        "1https://x",
+        "https://example.org/a b",
+        "https://example.org/$(id)",
+        "https://example.org/\"x",
+        "https://example.org/a#b",
+        "https://example.org/}",
+    ] {
+        assert!(source_url(bad).is_err(), "{bad}");
+    }
+}
+
+#[test]
+fn init_refuses_a_source_that_is_not_a_url_and_writes_nothing() {
+    let tmp = tempfile::tempdir().unwrap();
+    let bin = binary_outside(tmp.path());
+    for flag in ["--from", "--git"] {
+        let out = run(&bin, tmp.path(), &["init", "repo", flag, "not a url"]);
+        assert_eq!(out.status.code(), Some(2), "{flag}");
+        let err = String::from_utf8_lossy(&out.stderr);
+        assert_eq!(err.lines().count(), 1, "{err}");
+        assert!(
+            err.starts_with("error: --from: `not a url` is not a URL"),
+            "{err}"
+        );
+        assert!(!tmp.path().join("repo").exists());
+    }
 }
 
 #[test]

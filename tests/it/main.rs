@@ -24,6 +24,7 @@ mod doc_snippets;
 mod external_law;
 mod file_plan;
 mod init;
+mod install;
 mod junit;
 mod layering;
 mod log_roundtrip;
