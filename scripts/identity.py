@@ -2,10 +2,11 @@
 """Fingerprints of every shipped scenario's results: a behaviour-preserving
 change (a refactor) must leave them byte-identical.
 
-    python3 scripts/identity.py BINARY OUT.json [SCENARIO_DIR]
+    python3 scripts/identity.py BINARY OUT.json [PATH...]
     python3 scripts/identity.py --compare A.json B.json
 
-The first form runs every scenario of SCENARIO_DIR (default scenarios/)
+The first form runs every scenario of the PATHs (files or directories;
+default scenarios/)
 with BINARY (logs in a temporary directory) and writes, per scenario, the
 SHA-256 of its metrics (summary.json's `metrics`, canonical JSON) and of
 its run.mcap. The second form lists every scenario whose fingerprints
@@ -28,7 +29,7 @@ def fingerprints(binary, scenarios):
     out = {}
     with tempfile.TemporaryDirectory() as logs:
         subprocess.run(
-            [binary, "run", scenarios, "--logs", logs, "--quiet"],
+            [binary, "run", *scenarios, "--logs", logs, "--quiet"],
             check=False,
             stdout=subprocess.DEVNULL,
         )
@@ -58,7 +59,7 @@ def main():
         print(f"{len(set(a) & set(b))} scenarios compared, {differ} fingerprints differ")
         sys.exit(1 if differ else 0)
     binary, out = sys.argv[1], sys.argv[2]
-    scenarios = sys.argv[3] if len(sys.argv) > 3 else "scenarios"
+    scenarios = sys.argv[3:] or ["scenarios"]
     fp = fingerprints(binary, scenarios)
     pathlib.Path(out).write_text(json.dumps(fp, indent=1, sort_keys=True) + "\n")
     print(f"{len(fp)} scenarios fingerprinted into {out}")
