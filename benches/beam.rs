@@ -6,9 +6,9 @@
 //!
 //! `cargo bench --bench beam -- --warm-up-time 1 --measurement-time 4`.
 
-use anholonomy::model::beam::{Beam, GFRP_ROD_10MM};
-use anholonomy::physics::beam::{Attachment, BeamOptions, PhysicsBeam};
-use anholonomy::physics::rapier::prelude::*;
+use anholonomy::engine::rapier::prelude::*;
+use anholonomy::robots::mobile_manipulator::beam::physics::{Attachment, BeamOptions, PhysicsBeam};
+use anholonomy::robots::mobile_manipulator::beam::{Beam, GFRP_ROD_10MM};
 use criterion::{criterion_group, criterion_main, Criterion};
 
 fn clamped(n: usize, substeps: usize, sweeps: usize) -> (PhysicsWorld, PhysicsBeam) {

@@ -50,11 +50,11 @@ fn policy_of(c: &mut Criterion, scenario: &str, group: &str) {
 /// V and ∂V/∂q of the 18-DOF pair carrying the beam (issue 11's budget:
 /// ≤ 200 µs), at Table I's start and at nearby states, warm.
 fn pair_field(c: &mut Criterion) {
-    use anholonomy::model::beam::{Beam, GFRP_ROD_10MM};
-    use anholonomy::model::mobile_manipulator::default_parts;
-    use anholonomy::planner::dilf::object::Carried;
-    use anholonomy::planner::dilf::potential::{PotentialParams, Scene};
-    let q0 = anholonomy::planner::dilf::object::table_i_start();
+    use anholonomy::robots::mobile_manipulator::beam::{Beam, GFRP_ROD_10MM};
+    use anholonomy::robots::mobile_manipulator::dilf::object::Carried;
+    use anholonomy::robots::mobile_manipulator::dilf::potential::{PotentialParams, Scene};
+    use anholonomy::robots::mobile_manipulator::kinematics::default_parts;
+    let q0 = anholonomy::robots::mobile_manipulator::dilf::object::table_i_start();
     let mut goal = q0.clone();
     goal[1] -= 2.0;
     goal[10] -= 2.0;
@@ -110,7 +110,7 @@ fn pair_field(c: &mut Criterion) {
         panic!("dilf_paper is a mobile-manipulator scenario");
     };
     let scene =
-        anholonomy::systems::mobile_manipulator::task_scene(cfg, params, start.as_slice(), &goal)
+        anholonomy::robots::mobile_manipulator::task_scene(cfg, params, start.as_slice(), &goal)
             .expect("scene");
     let plan = prep.plan().expect("plan");
     let ideal = simulate(prep.model(), &plan, &start, prep.scenario.sim.dt);

@@ -6,7 +6,7 @@
 //! `cargo bench --bench external` (needs python3).
 
 use anholonomy::model::State;
-use anholonomy::planner::external::{self, ExternalParams};
+use anholonomy::sources::external::{self, ExternalParams};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
 use std::path::PathBuf;
 mod common;

@@ -3,7 +3,7 @@
 //!
 //! `cargo bench --bench rover`.
 
-use anholonomy::physics::urdf::{SimWorld, WorldOptions};
+use anholonomy::engine::urdf::{SimWorld, WorldOptions};
 mod common;
 use common::{bench_driven_steps, prepared, STEPS};
 use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
@@ -34,7 +34,7 @@ fn physics_steps(c: &mut Criterion) {
                 let settings = prep.scenario.sim.physics();
                 let opts = WorldOptions {
                     settings: &settings,
-                    root_pose: anholonomy::physics::rapier::math::Pose::IDENTITY,
+                    root_pose: anholonomy::engine::rapier::math::Pose::IDENTITY,
                     ground: false,
                     keep_fixed: &[],
                 };

@@ -3,10 +3,10 @@
 //!
 //! `cargo bench --bench sphere`. Medians are quoted in the README.
 
-use anholonomy::model::rolling_sphere::RollingSphere;
 use anholonomy::model::State;
-use anholonomy::planner::sphere_geometric::{self, ArcDirection, SphereGeometricParams};
-use anholonomy::planner::sphere_triangle::{self, SphereTriangleParams};
+use anholonomy::robots::rolling_sphere::geometric::{self, ArcDirection, SphereGeometricParams};
+use anholonomy::robots::rolling_sphere::kinematics::RollingSphere;
+use anholonomy::robots::rolling_sphere::triangle::{self, SphereTriangleParams};
 mod common;
 use common::{bench_driven_steps, prepared, STEPS};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
@@ -33,11 +33,11 @@ fn planners(c: &mut Criterion) {
         ..Default::default()
     };
     g.bench_function("geometric_solve_paper_ccw", |b| {
-        b.iter(|| sphere_geometric::solve(&m, black_box(&start), &goal, &ccw).expect("solve"))
+        b.iter(|| geometric::solve(&m, black_box(&start), &goal, &ccw).expect("solve"))
     });
     let auto = SphereGeometricParams::default();
     g.bench_function("geometric_solve_paper_auto", |b| {
-        b.iter(|| sphere_geometric::solve(&m, black_box(&start), &goal, &auto).expect("solve"))
+        b.iter(|| geometric::solve(&m, black_box(&start), &goal, &auto).expect("solve"))
     });
     // §5.2: one triangle, paper's fixed ψ (Newton on Eqs. 17, 18, 21) and free ψ (default).
     let (d, phi, yaw) = (1.8, 56.31f64.to_radians(), -std::f64::consts::FRAC_PI_2);
@@ -46,17 +46,15 @@ fn planners(c: &mut Criterion) {
         ..Default::default()
     };
     g.bench_function("triangle_solve_paper_fixed_psi", |b| {
-        b.iter(|| sphere_triangle::solve_triangles(black_box(d), phi, yaw, &paper).expect("solve"))
+        b.iter(|| triangle::solve_triangles(black_box(d), phi, yaw, &paper).expect("solve"))
     });
     let free = SphereTriangleParams::default();
     g.bench_function("triangle_solve_paper_free_psi", |b| {
-        b.iter(|| sphere_triangle::solve_triangles(black_box(d), phi, yaw, &free).expect("solve"))
+        b.iter(|| triangle::solve_triangles(black_box(d), phi, yaw, &free).expect("solve"))
     });
     // Two triangles: a pure translation (α = 0).
     g.bench_function("triangle_solve_two_triangles", |b| {
-        b.iter(|| {
-            sphere_triangle::solve_triangles(black_box(2.06), -0.245, 0.0, &free).expect("solve")
-        })
+        b.iter(|| triangle::solve_triangles(black_box(2.06), -0.245, 0.0, &free).expect("solve"))
     });
     g.finish();
     // The planner as the harness runs it (conversion, solve, plan assembly).

@@ -25,7 +25,7 @@
 //! it ran to the horizon, ...), when, how far from the goal, and V there.
 
 use anholonomy::integrate::simulate;
-use anholonomy::planner::dilf::potential::Scene;
+use anholonomy::robots::mobile_manipulator::dilf::potential::Scene;
 use anholonomy::scenario::{ModelConfig, PlannerConfig, Scenario, Variant};
 use anholonomy::validate::Prepared;
 use rand::{Rng, SeedableRng};
@@ -258,7 +258,7 @@ fn main() {
             std::process::exit(2);
         };
         let scene =
-            anholonomy::systems::mobile_manipulator::task_scene(m, p, start.as_slice(), &goal)
+            anholonomy::robots::mobile_manipulator::task_scene(m, p, start.as_slice(), &goal)
                 .expect("validated");
         let v_end = scene
             .evaluate::<f64>(end, &mut scene.warm())

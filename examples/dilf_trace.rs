@@ -27,11 +27,11 @@
 //!   1 − (|M|/M_max)² at the worse grasp), `wrench_ratio` = √(1 − margin),
 //!   `min_beta` (least obstacle function), `grasp_distance` (m).
 //!
-//! [`Terms::named`]: anholonomy::planner::dilf::potential::Terms::named
+//! [`Terms::named`]: anholonomy::robots::mobile_manipulator::dilf::potential::Terms::named
 
 use anholonomy::integrate::simulate;
-use anholonomy::model::mobile_manipulator::{DOF, INPUTS};
-use anholonomy::planner::dilf::object::grasp_distance;
+use anholonomy::robots::mobile_manipulator::dilf::object::grasp_distance;
+use anholonomy::robots::mobile_manipulator::kinematics::{DOF, INPUTS};
 use anholonomy::scenario::{ModelConfig, PlannerConfig, Scenario, Variant};
 use anholonomy::validate::Prepared;
 use std::collections::BTreeMap;
@@ -120,7 +120,7 @@ fn main() {
     let (start, goal) = prep.start_goal();
     let plan = prep.plan().unwrap_or_else(|e| fail(e));
     let tr = simulate(prep.model(), &plan, &start, prep.scenario.sim.dt);
-    let scene = anholonomy::systems::mobile_manipulator::task_scene(m, p, start.as_slice(), &goal)
+    let scene = anholonomy::robots::mobile_manipulator::task_scene(m, p, start.as_slice(), &goal)
         .unwrap_or_else(|e| fail(e));
     let robots = scene.robots;
     let every = (p.period / prep.scenario.sim.dt).round().max(1.0) as usize;
@@ -164,8 +164,9 @@ fn main() {
             .split('/')
             .map(|b| b == "align")
             .collect();
-        let (u0, _) =
-            anholonomy::planner::dilf::control::control_aligning(q, &f, g, &gains, &aligning);
+        let (u0, _) = anholonomy::robots::mobile_manipulator::dilf::control::control_aligning(
+            q, &f, g, &gains, &aligning,
+        );
         let norm = |x: &[f64]| x.iter().map(|a| a * a).sum::<f64>().sqrt();
         let guard_scale = if norm(&u0) > 0.0 {
             norm(u) / norm(&u0)

@@ -35,8 +35,8 @@
 use crate::error::Error;
 use crate::error::SetupError;
 pub use crate::metric::Direction;
+use crate::robots::System;
 use crate::runner::RunOutcome;
-use crate::systems::System;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;

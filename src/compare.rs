@@ -307,7 +307,7 @@ mod tests {
     /// off its goal shows in `ideal_goal_position` (robot 1 is exact).
     #[test]
     fn the_pairs_goal_position_sees_robot_2() {
-        let model = crate::model::mobile_manipulator::MobileManipulator { robots: 2 };
+        let model = crate::robots::mobile_manipulator::kinematics::MobileManipulator { robots: 2 };
         let spec = metric_spec(&model);
         assert_eq!(spec.positions, [[0, 1], [9, 10]]);
         let goal = State::from_fn(18, |i, _| 0.1 * i as f64);

@@ -29,7 +29,7 @@ fn main() -> ExitCode {
     // External laws run in process groups of their own: Ctrl-C reaches
     // them through the harness.
     #[cfg(unix)]
-    anholonomy::planner::external::process::on_signal::install();
+    anholonomy::sources::external::process::on_signal::install();
     let cli = match Cli::try_parse() {
         Ok(c) => c,
         Err(e) if !e.use_stderr() => e.exit(),

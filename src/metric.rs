@@ -1,5 +1,5 @@
 //! Metric directions: which way a metric gets worse. Systems declare
-//! exceptions ([`crate::systems::System::metric_direction`]); the baseline
+//! exceptions ([`crate::robots::System::metric_direction`]); the baseline
 //! comparison and the margin gates read them. A module of its own so that
 //! systems and baselines both depend on it and not on each other.
 

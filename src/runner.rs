@@ -4,15 +4,15 @@
 
 use crate::cancel::Cancel;
 use crate::compare::compare;
+use crate::engine::{replay, ReplayError, ReplayObserver, ReplayOptions};
 use crate::error::Error;
 use crate::integrate::{simulate_until, IdealStop, Trajectory};
 use crate::log::unit::LogUnit;
 use crate::log::Keep;
 use crate::model::{KinematicModel, State};
-use crate::physics::{replay, ReplayError, ReplayObserver, ReplayOptions};
 use crate::plan::{ControlLaw, Plan};
 use crate::record::{RunRecord, Series, SimTrajectory};
-use crate::systems::{EarlyAnalysis, SimFollower};
+use crate::robots::{EarlyAnalysis, SimFollower};
 use crate::verdict::Verdict;
 use serde::Serialize;
 use serde_json::json;
@@ -40,7 +40,7 @@ pub struct RunOptions {
     /// Which files the log directory keeps.
     pub keep: Keep,
     /// Sweeps: step groups of variants together in shared engine worlds
-    /// ([`crate::physics::batch`]; the same results); false runs each
+    /// ([`crate::engine::batch`]; the same results); false runs each
     /// variant in a world of its own.
     pub batch: bool,
 }
@@ -165,7 +165,7 @@ pub const TRACKING_NOT_MEANINGFUL: &str = "not meaningful: a feedback policy clo
 
 /// Whether the `tracking_*` metrics (simulated − ideal at equal times) mean
 /// anything: only when both runs execute the same commands, i.e. the system
-/// says its plan's commands depend on time alone ([`crate::systems::System::same_commands`]).
+/// says its plan's commands depend on time alone ([`crate::robots::System::same_commands`]).
 pub fn tracking_meaningful(prep: &Prepared) -> bool {
     prep.system.same_commands(&prep.planned)
 }
@@ -488,7 +488,7 @@ pub struct Runs {
     /// The ideal kinematic run.
     pub ideal: Trajectory,
     /// What the system's analysis computed beside the physics replay
-    /// ([`crate::systems::System::analysis_of_ideal`], a follower's result),
+    /// ([`crate::robots::System::analysis_of_ideal`], a follower's result),
     /// when the runs were side by side (else `finish` computes the ideal
     /// part and the analysis the rest).
     pub early: Option<EarlyAnalysis>,
@@ -522,7 +522,7 @@ pub fn finish(
         started: t_all,
     } = runs;
     let plan_wall_s = timings.plan;
-    crate::physics::perturb::add_drive_channels(&mut sim, model.input_names());
+    crate::engine::perturb::add_drive_channels(&mut sim, model.input_names());
     // Labels an external law named while running, for the logs.
     let plan = &*plan.with_run_labels();
 

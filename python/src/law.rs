@@ -16,7 +16,7 @@ use crate::errors::runtime_failure;
 use anholonomy::cancel::Cancel;
 use anholonomy::model::{Input, State};
 use anholonomy::plan::{Command, Controller, LabelTable, OncePerSample, PolicyFactory};
-use anholonomy::planner::external::protocol::MAX_LABELS;
+use anholonomy::sources::external::protocol::MAX_LABELS;
 use numpy::{AllowTypeChange, PyArray1, PyArrayLike1, PyArrayMethods};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyFloat, PyInt, PyList, PyString, PyTuple};

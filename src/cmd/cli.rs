@@ -111,7 +111,7 @@ pub(crate) enum Cmd {
     /// the gate that broke first beyond it, runs used) and writes the nominal
     /// run's logs plus LOGS/<scenario>/margins.json (every level, plotted
     /// by `report`). Exit 0, 2 bad input (nothing run), 3 runtime failure.
-    Margin(super::margin::MarginArgs),
+    Margin(crate::cmd::margin::MarginArgs),
     /// Write a starter repository into DIR that works with this binary
     /// alone: a `diff_drive` scenario on a plan file and one driven by a
     /// Python feedback law (standard library only), the URDF, baselines made

@@ -1,8 +1,8 @@
 //! `anholonomy margin FILE|DIR... [--dimension NAME]...`.
 
+use anholonomy::engine::perturb::Dimension;
 use anholonomy::error::Error;
 use anholonomy::margin::{output, Nominal, Settings, DEFAULT_BATCH};
-use anholonomy::physics::perturb::Dimension;
 use anholonomy::runner::{RunOptions, DEFAULT_POSE_RATE};
 use anholonomy::validate::{not_applicable, prepare_all, Call, Prepared};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};

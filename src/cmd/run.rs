@@ -1,8 +1,8 @@
 //! `run`, `check` and `baseline`: prepare every scenario, run them, then
 //! settle baselines, JUnit and the report, in that order.
 
-use super::cli::RunArgs;
-use super::table::print_table;
+use crate::cmd::cli::RunArgs;
+use crate::cmd::table::print_table;
 use anholonomy::baseline::{self, Baseline, Delta};
 use anholonomy::error::Error;
 use anholonomy::junit::{self, CaseResult};

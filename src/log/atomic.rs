@@ -4,7 +4,7 @@ use std::ffi::OsString;
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use super::LogError;
+use crate::log::LogError;
 
 /// `<dir>/<name>.tmp` for `<dir>/<name>`.
 pub(crate) fn tmp_path(path: &Path) -> PathBuf {

@@ -60,12 +60,12 @@ use foxglove::{Context, FoxgloveError, RawChannel, Schema};
 
 mod events;
 
-use super::atomic::write_atomically;
-use super::scene::{
+use crate::log::atomic::write_atomically;
+use crate::log::scene::{
     coord_name, goal_points, link_frame, marker_scale, planar_paths, robot_suffix, GOAL_RGBA,
     IDEAL_RGBA, SIM_RGBA,
 };
-use super::{validate, LogError};
+use crate::log::{validate, LogError};
 use crate::record::{Pose, RunRecord, Shape};
 
 /// Root frame of `/tf` and of the path / goal scene entities.

@@ -52,12 +52,12 @@ mod rr {
 use rr::components::{FillMode, Radius, Scalar};
 use rr::{EntityPath, EntityPathPart, RecordingStream, TimeColumn};
 
-use super::atomic::write_atomically;
-use super::scene::{
+use crate::log::atomic::write_atomically;
+use crate::log::scene::{
     coord_name, goal_points, marker_scale, planar_paths, robot_suffix, segment_name, GOAL_RGBA,
     IDEAL_RGBA, SIM_RGBA,
 };
-use super::{validate, LogError};
+use crate::log::{validate, LogError};
 use crate::record::{Pose, RunRecord, Shape};
 
 /// Name of the timeline all temporal data is logged on.

@@ -8,7 +8,7 @@
 //! directory (or, killed between the two renames, the previous set moved
 //! aside as `.<name>.old-<pid>`), which the next run of that name removes.
 
-use super::LogError;
+use crate::log::LogError;
 use std::fs;
 use std::path::{Path, PathBuf};
 

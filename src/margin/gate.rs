@@ -6,12 +6,12 @@
 //! gate, which is all the gate asks. `check` on `rover_paper` thereby costs
 //! the nominal run plus one level instead of a ten-level search.
 
-use super::level::{self, Ctx, Run};
-use super::search::Status;
-use super::{
+use crate::engine::perturb::{Dimension, Perturbation};
+use crate::margin::level::{self, Ctx, Run};
+use crate::margin::search::Status;
+use crate::margin::{
     most_frequent, nearest_gate, output, DimensionResult, Level, Nominal, Report, Settings, FORMAT,
 };
-use crate::physics::perturb::{Dimension, Perturbation};
 use crate::runner::RunOutcome;
 use crate::scenario::MarginsConfig;
 use crate::validate::Prepared;

@@ -2,14 +2,14 @@
 //! are the scenario's own (made once, never perturbed), the physics is built
 //! with the perturbed world settings and replayed under the perturbed
 //! command path and observation, and the run stops as soon as a gate is
-//! certain to break ([`super::early`]).
+//! certain to break ([`crate::margin::early`]).
 
-use super::early::{certain, family, prefix, Family, Stopped};
 use crate::compare::{compare, metric_spec};
+use crate::engine::perturb::{self, Perturbation};
+use crate::engine::{replay, ReplayOptions};
 use crate::gate::Breach;
 use crate::integrate::{simulate, step_count, Trajectory};
-use crate::physics::perturb::{self, Perturbation};
-use crate::physics::{replay, ReplayOptions};
+use crate::margin::early::{certain, family, prefix, Family, Stopped};
 use crate::record::SimTrajectory;
 use crate::validate::Prepared;
 use serde::Serialize;
@@ -110,7 +110,7 @@ pub struct Monitor<'a> {
 }
 
 /// A margin level's replay stops when its verdict is known.
-impl crate::physics::ReplayObserver for Monitor<'_> {
+impl crate::engine::ReplayObserver for Monitor<'_> {
     fn after_step(&mut self, so_far: &SimTrajectory) -> bool {
         self.check(so_far)
     }

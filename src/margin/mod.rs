@@ -24,8 +24,8 @@ pub mod search;
 
 pub use gate::{check_gate, gate};
 
+use crate::engine::perturb::{Dimension, Perturbation};
 use crate::gate::Breach;
-use crate::physics::perturb::{Dimension, Perturbation};
 use crate::runner::RunOutcome;
 use crate::scenario::MarginsConfig;
 use crate::validate::Prepared;

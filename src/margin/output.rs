@@ -1,9 +1,9 @@
 //! The margins as a table: plain text for the terminal, Markdown for the guide.
 
-use super::search::Status;
-use super::{range, DimensionResult};
+use crate::engine::perturb::{Dimension, Kind};
+use crate::margin::search::Status;
+use crate::margin::{range, DimensionResult};
 use crate::numfmt::with_digits;
-use crate::physics::perturb::{Dimension, Kind};
 
 /// One row of the table.
 #[derive(Debug, Clone)]

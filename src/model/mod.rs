@@ -3,19 +3,7 @@
 //! Every model in the harness implements [`KinematicModel`]; the ideal run
 //! integrates it with the shared fixed-step RK4 of [`crate::integrate`].
 
-pub mod beam;
-pub mod bicycle;
-pub mod declared;
-pub mod disk;
-pub mod ellipsoid;
-pub mod mobile_manipulator;
-pub mod puma560;
-pub mod rolling_sphere;
-pub mod rover;
-pub mod space_manipulator;
-pub mod space_robot;
 pub mod spatial;
-pub mod unicycle;
 
 use nalgebra::{DMatrix, DVector};
 

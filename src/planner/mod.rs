@@ -1,19 +1,6 @@
 //! Planners: one module per planner. Each turns (start, goal, model
 //! parameters, planner parameters) into a [`crate::plan::Plan`].
 
-pub mod dilf;
-pub mod endogenous;
-pub mod external;
-pub mod file;
-pub mod json_numbers;
-pub mod rover_primitives;
-pub mod sphere_geometric;
-#[cfg(test)]
-mod sphere_test_support;
-pub mod sphere_triangle;
-pub mod stokes_disk;
-pub mod stokes_space;
-
 use thiserror::Error;
 
 /// Why a planner could not produce a plan. Always a clear, user-facing reason.

@@ -2,9 +2,9 @@
 //! commands and channels against time (shaded by the policy's mode), and a
 //! sweep's distributions and table of variants.
 
-use super::data::{Series, SeriesFile};
-use super::markup::{esc, num, tracking_meaningful};
-use super::plots::{self, HLine, Line, Marker, Path2, Shade};
+use crate::report::data::{Series, SeriesFile};
+use crate::report::markup::{esc, num, tracking_meaningful};
+use crate::report::plots::{self, HLine, Line, Marker, Path2, Shade};
 use serde_json::Value;
 use std::fmt::Write as _;
 

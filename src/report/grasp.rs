@@ -3,9 +3,9 @@
 //! wrench averaged over a policy period) and the raw per-step peaks, with
 //! when the per-step values cross the bound.
 
-use super::data::{Series, SeriesFile};
-use super::markup::{esc, num};
-use super::plots::{self, HLine, Line};
+use crate::report::data::{Series, SeriesFile};
+use crate::report::markup::{esc, num};
+use crate::report::plots::{self, HLine, Line};
 use serde_json::Value;
 use std::fmt::Write as _;
 

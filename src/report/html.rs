@@ -1,8 +1,8 @@
 //! HTML of the report pages (inline CSS and SVG, no scripts).
 
-use super::figures::{single_figures, sweep_figures};
-use super::markup::{esc, num, tracking_meaningful};
-use super::{Loaded, RunData, StoredDelta};
+use crate::report::figures::{single_figures, sweep_figures};
+use crate::report::markup::{esc, num, tracking_meaningful};
+use crate::report::{Loaded, RunData, StoredDelta};
 use crate::verdict::Verdict;
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -329,13 +329,13 @@ pub fn scenario_page(l: &Loaded) -> Result<String, String> {
                 b.push_str("</ul>");
             }
             b.push_str(&paper_table(&summary["paper"]));
-            b.push_str(&super::grasp::section(summary, series)?);
+            b.push_str(&crate::report::grasp::section(summary, series)?);
             b.push_str(&single_figures(summary, series)?);
             b.push_str("<h2>Metrics</h2>");
             b.push_str(&metrics_table(summary, &l.regression));
-            b.push_str(&super::robot::section(summary));
+            b.push_str(&crate::report::robot::section(summary));
             if let Some(m) = &l.margins {
-                b.push_str(&super::margins::section(m)?);
+                b.push_str(&crate::report::margins::section(m)?);
             }
         }
         RunData::Sweep(s) => {

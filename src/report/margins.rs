@@ -2,9 +2,9 @@
 //! and per dimension the breaking metric against the perturbation, each run
 //! a point coloured by pass/fail, with the gate's bound.
 
-use super::plots;
+use crate::engine::perturb::Dimension;
 use crate::margin::output::magnitude;
-use crate::physics::perturb::Dimension;
+use crate::report::plots;
 use serde_json::Value;
 use std::fmt::Write as _;
 

@@ -2,7 +2,7 @@
 //! physics took from the description (`summary.json`'s
 //! `model.read_from_urdf`), so the user can confirm it was read right.
 
-use super::markup::esc;
+use crate::report::markup::esc;
 use serde_json::Value;
 use std::fmt::Write as _;
 

@@ -6,28 +6,28 @@
 //! define plain parameter structs and never see these enums (nor anything
 //! else of `crate::scenario`); this module picks the system for a pair.
 
-use super::schema::{by_kind, Schema};
+use crate::engine::required::Required;
 use crate::error::SetupError;
-use crate::physics::required::Required;
-use crate::planner::dilf::DilfParams;
-use crate::planner::endogenous::EndogenousParams;
-use crate::planner::external::ExternalParams;
-use crate::planner::file::FilePlanParams;
-use crate::planner::rover_primitives::RoverPrimitiveParams;
-use crate::planner::sphere_geometric::SphereGeometricParams;
-use crate::planner::sphere_triangle::SphereTriangleParams;
-use crate::planner::stokes_disk::StokesDiskParams;
-use crate::planner::stokes_space::StokesSpaceParams;
-use crate::systems::car::CarConfig;
-use crate::systems::declared::DeclaredConfig;
-use crate::systems::diff_drive::DiffDriveConfig;
-use crate::systems::disk::DiskModelConfig;
-use crate::systems::mobile_manipulator::MobileManipulatorConfig;
-use crate::systems::own_plan::{self, Source};
-use crate::systems::rover::RoverConfig;
-use crate::systems::space_robot::{SpacePlanner, SpaceRobotConfig};
-use crate::systems::sphere::{SphereConfig, SpherePlanner};
-use crate::systems::{self, System};
+use crate::robots::car::CarConfig;
+use crate::robots::declared::DeclaredConfig;
+use crate::robots::diff_drive::DiffDriveConfig;
+use crate::robots::mobile_manipulator::dilf::DilfParams;
+use crate::robots::mobile_manipulator::MobileManipulatorConfig;
+use crate::robots::rolling_disk::stokes::StokesDiskParams;
+use crate::robots::rolling_disk::DiskModelConfig;
+use crate::robots::rolling_sphere::geometric::SphereGeometricParams;
+use crate::robots::rolling_sphere::triangle::SphereTriangleParams;
+use crate::robots::rolling_sphere::{SphereConfig, SpherePlanner};
+use crate::robots::rover::primitives::RoverPrimitiveParams;
+use crate::robots::rover::RoverConfig;
+use crate::robots::space_robot::endogenous::EndogenousParams;
+use crate::robots::space_robot::stokes::StokesSpaceParams;
+use crate::robots::space_robot::{SpacePlanner, SpaceRobotConfig};
+use crate::robots::{self, System};
+use crate::scenario::schema::{by_kind, Schema};
+use crate::sources::external::ExternalParams;
+use crate::sources::file::FilePlanParams;
+use crate::sources::own_plan::{self, Source};
 use serde::de::DeserializeOwned;
 use serde::Serialize;
 use std::path::Path;
@@ -105,7 +105,7 @@ macro_rules! registry {
             pub fn schema(kind: &str) -> Option<&'static Schema> {
                 static CACHE: OnceLock<Vec<(&'static str, Schema)>> = OnceLock::new();
                 by_kind(&CACHE, Self::KINDS, kind, |k| {
-                    let source = Schema::of::<super::UrdfSourceConfig>();
+                    let source = Schema::of::<crate::scenario::UrdfSourceConfig>();
                     Some(match k {
                         $( $mkind => Schema::of::<$MCfg>(), )*
                         _ => return None,
@@ -202,57 +202,57 @@ registry! {
     models {
         /// Seed 000 §4.2 disk rolling without slipping: state (x, y, θ, α), inputs (θ', α').
         "rolling_disk" => RollingDisk(DiskModelConfig) {
-            required: crate::physics::disk::REQUIRED,
-            planners: ["stokes_disk" => |m, StokesDisk(p)| systems::disk::build(m, p)],
+            required: crate::robots::rolling_disk::physics::REQUIRED,
+            planners: ["stokes_disk" => |m, StokesDisk(p)| robots::rolling_disk::build(m, p)],
             outside: own_planners,
         }
         /// Free-floating planar space robot (seeds 000 §4.1 and 001).
         "space_robot" => SpaceRobot(SpaceRobotConfig) {
-            required: crate::physics::space_robot::REQUIRED,
+            required: crate::robots::space_robot::physics::REQUIRED,
             planners: [
-                "stokes_space" => |m, StokesSpace(p)| systems::space_robot::build(m, SpacePlanner::Stokes(p.clone())),
-                "endogenous" => |m, Endogenous(p)| systems::space_robot::build(m, SpacePlanner::Endogenous(p.clone())),
+                "stokes_space" => |m, StokesSpace(p)| robots::space_robot::build(m, SpacePlanner::Stokes(p.clone())),
+                "endogenous" => |m, Endogenous(p)| robots::space_robot::build(m, SpacePlanner::Endogenous(p.clone())),
             ],
             outside: own_planners,
         }
         /// Overconstrained rover with feedback primitives (seed 002).
         "rover" => Rover(RoverConfig) {
-            required: crate::physics::rover::REQUIRED,
-            planners: ["rover_primitives" => |m, RoverPrimitives(p)| systems::rover::build(m, p)],
+            required: crate::robots::rover::physics::REQUIRED,
+            planners: ["rover_primitives" => |m, RoverPrimitives(p)| robots::rover::build(m, p)],
             outside: own_planners,
         }
         /// Sphere rolling on a plane (seed 003).
         "rolling_sphere" => RollingSphere(SphereConfig) {
-            required: crate::physics::sphere::REQUIRED,
+            required: crate::robots::rolling_sphere::physics::REQUIRED,
             planners: [
-                "sphere_geometric" => |m, SphereGeometric(p)| systems::sphere::build(m, SpherePlanner::Geometric(p.clone())),
-                "sphere_triangle" => |m, SphereTriangle(p)| systems::sphere::build(m, SpherePlanner::Triangle(p.clone())),
+                "sphere_geometric" => |m, SphereGeometric(p)| robots::rolling_sphere::build(m, SpherePlanner::Geometric(p.clone())),
+                "sphere_triangle" => |m, SphereTriangle(p)| robots::rolling_sphere::build(m, SpherePlanner::Triangle(p.clone())),
             ],
             outside: own_planners,
         }
         /// Mobile manipulators among ellipsoid obstacles (seed 004).
         "mobile_manipulator" => MobileManipulator(MobileManipulatorConfig) {
-            required: crate::physics::mobile_manipulator::REQUIRED,
-            planners: ["dilf" => |m, Dilf(p)| systems::mobile_manipulator::build(m, p)],
+            required: crate::robots::mobile_manipulator::physics::REQUIRED,
+            planners: ["dilf" => |m, Dilf(p)| robots::mobile_manipulator::build(m, p)],
             outside: own_planners,
         }
         /// Differential drive: unicycle kinematics (x, y, θ), inputs (v, ω).
         "diff_drive" => DiffDrive(DiffDriveConfig) {
-            required: crate::physics::diff_drive::REQUIRED,
+            required: crate::robots::diff_drive::physics::REQUIRED,
             planners: [],
-            outside: |m| Some(systems::diff_drive::build(m)),
+            outside: |m| Some(robots::diff_drive::build(m)),
         }
         /// Car-like robot: kinematic bicycle (x, y, θ, φ), inputs (v, φ'); steered by angle (x, y, θ), inputs (v, φ).
         "car" => Car(CarConfig) {
-            required: crate::physics::car::REQUIRED,
+            required: crate::robots::car::physics::REQUIRED,
             planners: [],
-            outside: |m| Some(systems::car::build(m)),
+            outside: |m| Some(robots::car::build(m)),
         }
         /// A model declared in the scenario: q' = f(q, u), its drives and read-back.
         "declared" => Declared(DeclaredConfig) {
             required: [],
             planners: [],
-            outside: |m| Some(systems::declared::build(m)),
+            outside: |m| Some(robots::declared::build(m)),
         }
     }
     planners {
@@ -278,7 +278,7 @@ registry! {
 }
 
 /// Planner kinds that plan for every model: the plan comes from outside
-/// the harness (see [`crate::systems::own_plan`]).
+/// the harness (see [`crate::sources::own_plan`]).
 pub const OUTSIDE: [&str; 2] = ["file", "external"];
 
 /// Typed parameters from a table (its `kind` already removed); serde errors

@@ -9,12 +9,12 @@
 //! ```
 //!
 //! A margin is a perturbation magnitude (see
-//! [`crate::physics::perturb::Dimension::value_at`]): the amount itself for
+//! [`crate::engine::perturb::Dimension::value_at`]): the amount itself for
 //! latencies, lags and noise, the distance from 1 for factors
 //! (`friction_scale = 0.3` asks that the gates hold at 0.7× friction).
 
+use crate::engine::perturb::Dimension;
 use crate::error::SetupError;
-use crate::physics::perturb::Dimension;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -133,7 +133,7 @@ impl MarginsConfig {
         for (d, g) in self.gates() {
             let top = match d {
                 Dimension::MassScale => f64::INFINITY,
-                d if d.kind() == crate::physics::perturb::Kind::Scale => 1.0,
+                d if d.kind() == crate::engine::perturb::Kind::Scale => 1.0,
                 _ => f64::INFINITY,
             };
             if !(g >= 0.0 && g < top) {

@@ -26,9 +26,9 @@ pub use sweep_config::{
     sweep_metric_names, variant_seed, vary_key, Dist, SweepConfig, Variant, DEFAULT_TIME_METRIC,
 };
 
+pub use crate::engine::perturb::Perturbation;
 use crate::error::Error;
 use crate::input::{read_text, SCENARIO_MAX_BYTES};
-pub use crate::physics::perturb::Perturbation;
 use doc::KeyIndex;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -100,9 +100,9 @@ impl SimConfig {
     /// The physics layer's settings (everything but `settle` and the
     /// command and observation perturbations, which the replay takes), with
     /// the world perturbations of `[sim.perturb]` applied.
-    pub fn physics(&self) -> crate::physics::PhysicsSettings {
+    pub fn physics(&self) -> crate::engine::PhysicsSettings {
         let p = &self.perturb;
-        crate::physics::PhysicsSettings {
+        crate::engine::PhysicsSettings {
             dt: self.dt,
             solver_iterations: self.solver_iterations,
             pgs_iterations: self.solver_pgs_iterations,
@@ -214,7 +214,7 @@ pub struct Scenario {
     pub urdf: PathBuf,
     /// Where the URDF's meshes and xacro arguments come from (package
     /// directories resolved against the scenario's directory).
-    pub urdf_source: crate::physics::urdf::Source,
+    pub urdf_source: crate::engine::urdf::Source,
     /// Start state, SI (angles in rad).
     pub start: Vec<f64>,
     /// Goal state, SI.
@@ -486,7 +486,7 @@ impl Scenario {
         // `sweep.mass_scale` is shorthand for `sim.perturb.mass_scale`.
         sc.sim.perturb.mass_scale *= v.mass_scale;
         if let (Some(rate), ModelConfig::Rover(m)) = (v.sigma_rate, &mut sc.model) {
-            m.switching = crate::systems::rover::SwitchingConfig::Telegraph { seed: v.seed, rate };
+            m.switching = crate::robots::rover::SwitchingConfig::Telegraph { seed: v.seed, rate };
         }
         Ok(sc)
     }
@@ -779,7 +779,7 @@ impl Scenario {
             expect_fails,
             model,
             urdf,
-            urdf_source: crate::physics::urdf::Source {
+            urdf_source: crate::engine::urdf::Source {
                 packages: urdf_source
                     .packages
                     .iter()

@@ -4,7 +4,7 @@
 //! `extend("exclusiveMinimum" = ..)`).
 //!
 //! Both the validation pass ([`Schema::check`], run by
-//! [`super::Scenario::parse`] on every table) and the reference pages
+//! [`crate::scenario::Scenario::parse`] on every table) and the reference pages
 //! (`anholonomy keys`, [`Schema::rows`]) read the same schema, so a range
 //! cannot be documented without being enforced, nor enforced here without
 //! being documented.

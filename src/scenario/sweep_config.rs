@@ -3,7 +3,7 @@
 //! A variant is the scenario file with some numbers replaced: `[sweep.vary]`
 //! names any numeric key by its dotted path (`"sim.friction"`,
 //! `"planner.k1"`, `"start[2]"`) with a distribution, and the variant is
-//! parsed and range-checked like the file itself ([`super::Scenario::variant`]).
+//! parsed and range-checked like the file itself ([`crate::scenario::Scenario::variant`]).
 //! `friction`, `mass_scale` and `sigma_rate` are the older shorthands:
 //! `friction = [lo, hi]` is `"sim.friction" = { uniform = [lo, hi] }` and
 //! `mass_scale = [lo, hi]` is `"sim.perturb.mass_scale" = { uniform = [lo,
@@ -11,8 +11,8 @@
 //! their variants), `sigma_rate` gives the rover's ideal run a telegraph σ
 //! seeded per variant.
 
-use super::keypath::KeyPath;
 use crate::error::SetupError;
+use crate::scenario::keypath::KeyPath;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
 use schemars::JsonSchema;
@@ -140,7 +140,7 @@ pub fn vary_key(path: &str) -> String {
 
 impl SweepConfig {
     /// Checks ranges and counts (messages name the key). The key paths of
-    /// `vary` are checked against the file by [`super::Scenario::parse`].
+    /// `vary` are checked against the file by [`crate::scenario::Scenario::parse`].
     pub fn validate(&self) -> Result<(), SetupError> {
         if self.count == 0 || self.count > 1_000_000 {
             return Err(SetupError::key("sweep.count", "must be in 1..=1000000"));
@@ -253,7 +253,7 @@ fn key_rng(seed: u64, path: &str) -> ChaCha8Rng {
     rng
 }
 
-use crate::physics::perturb::standard_normal;
+use crate::engine::perturb::standard_normal;
 
 /// The randomised parameters of one variant.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

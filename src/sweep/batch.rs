@@ -1,14 +1,14 @@
 //! Batched sweeps: the variants of a group are built into one engine world
-//! ([`crate::physics::batch`]) and replayed in lockstep, then each is
+//! ([`crate::engine::batch`]) and replayed in lockstep, then each is
 //! compared and recorded as if it had run alone (bit-identical metrics;
 //! `--no-batch` runs every variant alone).
 
-use super::{record_line, run_variant, variant_options, SweepConfig};
 use crate::cancel::Cancel;
+use crate::engine::batch::{self, Built, Host, Lane};
+use crate::engine::PhysicsSystem;
 use crate::integrate::Trajectory;
-use crate::physics::batch::{self, Built, Host, Lane};
-use crate::physics::PhysicsSystem;
 use crate::runner::{self, Runs, Timings};
+use crate::sweep::{record_line, run_variant, variant_options, SweepConfig};
 use crate::validate::Prepared;
 use std::time::Instant;
 

@@ -5,10 +5,10 @@
 //! count); anything else is an input error naming the shard, and nothing is
 //! written.
 
-use super::records::{self, Entry, Header, Scan};
-use super::summary::{finish, Summary};
 use crate::error::Error;
 use crate::scenario::SweepConfig;
+use crate::sweep::records::{self, Entry, Header, Scan};
+use crate::sweep::summary::{finish, Summary};
 use std::path::{Path, PathBuf};
 
 /// Shard files named on the command line: a directory stands for its

@@ -8,7 +8,7 @@
 //! correctly rounded `str::parse` (serde_json's default float parser can be
 //! one ulp off), and the records go into `sweep.json` as the bytes written.
 
-use super::Shard;
+use crate::sweep::Shard;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use sha2::{Digest, Sha256};

@@ -3,10 +3,10 @@
 //! shards gives the same document. `sweep.json` is written streaming: the
 //! records are copied from the `variants.jsonl` files one at a time.
 
-use super::distribution;
-use super::records::{raw_record, Entry, Header};
 use crate::log::atomic::write_atomic;
 use crate::scenario::SweepConfig;
+use crate::sweep::distribution;
+use crate::sweep::records::{raw_record, Entry, Header};
 use serde_json::json;
 use std::io::{BufReader, Write};
 use std::path::{Path, PathBuf};

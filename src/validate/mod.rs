@@ -20,14 +20,14 @@ pub mod urdf;
 pub mod xacro;
 
 use crate::compare::metric_spec;
+use crate::engine::reading::UrdfReading;
+use crate::engine::PhysicsSystem;
 use crate::error::Error;
 use crate::model::{KinematicModel, State};
-use crate::physics::reading::UrdfReading;
-use crate::physics::PhysicsSystem;
 use crate::plan::{Limits, Plan};
 use crate::planner::PlanError;
+use crate::robots::System;
 use crate::scenario::{build_system, collect, Scenario, Variant, DEFAULT_TIME_METRIC};
-use crate::systems::System;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -262,7 +262,7 @@ impl Prepared {
     /// perturbed world: [`crate::scenario::SimConfig::physics`]).
     pub fn physics_with(
         &self,
-        settings: &crate::physics::PhysicsSettings,
+        settings: &crate::engine::PhysicsSettings,
     ) -> Result<Box<dyn PhysicsSystem>, Error> {
         let sc = &self.scenario;
         let dir = sc.urdf.parent().unwrap_or(Path::new("."));
@@ -298,8 +298,8 @@ fn check_perturbable(sc: &Scenario, system: &dyn System, plan: &Plan) -> Result<
 /// Refused before anything runs: a latency of 1e300 s overflowed the delay
 /// line, one of 1e6 s allocated gigabytes.
 fn check_perturbation_times(sc: &Scenario, plan: &Plan, budget: &Budget<'_>) -> Result<(), Error> {
+    use crate::engine::perturb::Dimension as D;
     use crate::numfmt::readable;
-    use crate::physics::perturb::Dimension as D;
     let run = plan.duration;
     let what = match plan.law {
         crate::plan::ControlLaw::Feedback { .. } => "the run (planner.horizon)",
@@ -354,11 +354,11 @@ fn check_perturbation_times(sc: &Scenario, plan: &Plan, budget: &Budget<'_>) -> 
 
 /// Why dimension `d` does not reach this scenario's system, and which do.
 pub fn not_applicable(
-    d: crate::physics::perturb::Dimension,
+    d: crate::engine::perturb::Dimension,
     sc: &Scenario,
-    applies: &[crate::physics::perturb::Dimension],
+    applies: &[crate::engine::perturb::Dimension],
 ) -> String {
-    use crate::physics::perturb::Dimension as D;
+    use crate::engine::perturb::Dimension as D;
     let (model, planner) = (sc.model.kind(), sc.planner.kind());
     let why = match d {
         d if d.observes() => format!(
@@ -516,18 +516,15 @@ fn make_plan(sc: &Scenario, system: &dyn System) -> Result<Plan, Error> {
 
 /// The rigid bodies of `robot` as the system's physics loads them: fixed
 /// joints lumped, except those the system names (it needs them as joints).
-fn bodies(
-    robot: &urdf_rs::Robot,
-    system: &dyn System,
-) -> Vec<crate::physics::reading::BodyReading> {
-    use crate::physics::required::Element;
+fn bodies(robot: &urdf_rs::Robot, system: &dyn System) -> Vec<crate::engine::reading::BodyReading> {
+    use crate::engine::required::Element;
     let names = system.urdf_names();
     let keep: Vec<&str> = names
         .iter()
         .filter(|n| n.required.element == Element::Joint)
         .map(|n| n.name.as_str())
         .collect();
-    match crate::physics::lump::lump(robot, &keep) {
+    match crate::engine::lump::lump(robot, &keep) {
         Ok(l) => UrdfReading::bodies_of(robot, &l),
         Err(_) => Vec::new(),
     }
@@ -540,7 +537,7 @@ fn build_physics(
 ) -> Result<Box<dyn PhysicsSystem>, Error> {
     // Every name the model looks up, in one message, before the physics
     // stops at the first one it misses.
-    crate::physics::required::check(robot, &system.urdf_names())
+    crate::engine::required::check(robot, &system.urdf_names())
         .map_err(|e| physics_error(sc, &e))?;
     let dir = sc.urdf.parent().unwrap_or(Path::new("."));
     system

@@ -1,5 +1,5 @@
 //! URDF checks of the validation pass: the file kind and size, the structure
-//! ([`crate::physics::urdf::read`]: links, joints, a tree, positive masses)
+//! ([`crate::engine::urdf::read`]: links, joints, a tree, positive masses)
 //! and every number the physics will use: finite positive masses,
 //! positive-definite inertias, finite origins, axes, limits and geometry.
 //! A NaN or negative inertia would otherwise be accepted (a wheel that never
@@ -33,7 +33,7 @@ impl Place {
     }
 }
 
-pub use crate::physics::urdf::Source;
+pub use crate::engine::urdf::Source;
 
 /// A URDF as the physics takes it: parsed, checked, its mesh file names
 /// resolved to files that load, with what the user should know.
@@ -72,15 +72,18 @@ pub fn load_from(path: &Path, source: &Source) -> Result<Loaded, Vec<Error>> {
     let mut notes = Vec::new();
     // Lines point into the file only when the file is what was parsed.
     let mut lines = true;
-    use super::xacro::Markup;
-    let why = match super::xacro::markup(&text) {
+    use crate::validate::xacro::Markup;
+    let why = match crate::validate::xacro::markup(&text) {
         Some(Markup::Needed(why)) => Some(why),
         // Plain URDF under the namespace: expanded only where xacro is at hand.
-        Some(Markup::Namespace) if super::xacro::available() => Some("the xacro namespace"),
+        Some(Markup::Namespace) if crate::validate::xacro::available() => {
+            Some("the xacro namespace")
+        }
         _ => None,
     };
     if let Some(why) = why {
-        text = super::xacro::expand(path, why, &source.xacro_args).map_err(|m| one(None, m))?;
+        text = crate::validate::xacro::expand(path, why, &source.xacro_args)
+            .map_err(|m| one(None, m))?;
         notes.push(format!(
             "expanded with xacro ({why}); lines in messages are those of the expansion"
         ));
@@ -88,7 +91,7 @@ pub fn load_from(path: &Path, source: &Source) -> Result<Loaded, Vec<Error>> {
     }
     let line_of = |e: &SetupError| lines.then(|| line_of_error(&text, e)).flatten();
     let mut robot =
-        crate::physics::urdf::parse_text(&text).map_err(|e| one(line_of(&e), e.to_string()))?;
+        crate::engine::urdf::parse_text(&text).map_err(|e| one(line_of(&e), e.to_string()))?;
     let mut errors: Vec<Error> = Vec::new();
     let mut push = |line: Option<usize>, m: String| {
         errors.push(Error::Input {
@@ -98,7 +101,7 @@ pub fn load_from(path: &Path, source: &Source) -> Result<Loaded, Vec<Error>> {
             message: m,
         })
     };
-    let structure = crate::physics::urdf::structure_problems(&robot);
+    let structure = crate::engine::urdf::structure_problems(&robot);
     if !structure.is_empty() {
         for e in structure {
             push(line_of(&e), e.to_string());
@@ -113,10 +116,10 @@ pub fn load_from(path: &Path, source: &Source) -> Result<Loaded, Vec<Error>> {
     }
     if !bad_numbers {
         // Masses are numbers now: which bodies lack one.
-        if let Err(e) = crate::physics::lump::lump(&robot, &[]) {
+        if let Err(e) = crate::engine::lump::lump(&robot, &[]) {
             push(line_of(&e), e.to_string());
         }
-        for e in crate::physics::urdf::loadable_problems(&robot) {
+        for e in crate::engine::urdf::loadable_problems(&robot) {
             push(line_of(&e), e.to_string());
         }
     }
@@ -148,7 +151,7 @@ fn resolve_meshes(
     urdf_dir: &Path,
     source: &Source,
 ) -> Vec<(Place, String, bool)> {
-    use crate::physics::mesh;
+    use crate::engine::mesh;
     let search = mesh::Search::from_env(source.packages.clone());
     let mut out = Vec::new();
     for l in &mut robot.links {
@@ -222,7 +225,7 @@ fn check_pose(p: &Pose, place: &Place, what: &str) -> Result<(), (Place, String)
     Ok(())
 }
 
-use crate::physics::urdf::shape_tag;
+use crate::engine::urdf::shape_tag;
 
 fn check_geometry(g: &Geometry, place: &Place, what: &str) -> Result<(), (Place, String)> {
     let positive = |v: &[f64]| v.iter().all(|x| x.is_finite() && *x > 0.0);
@@ -291,7 +294,7 @@ pub fn number_problems(robot: &Robot) -> Vec<(Place, String)> {
             let t = Matrix3::new(
                 i.ixx, i.ixy, i.ixz, i.ixy, i.iyy, i.iyz, i.ixz, i.iyz, i.izz,
             );
-            // A frame's inertia is ignored (it is lumped: crate::physics::lump).
+            // A frame's inertia is ignored (it is lumped: crate::engine::lump).
             let frame = m == 0.0;
             if !frame && (!t.iter().all(|x| x.is_finite()) || t.cholesky().is_none()) {
                 return Err((

@@ -5,12 +5,12 @@
 
 use crate::common::legs;
 
+use anholonomy::engine::{replay, PhysicsSettings, PhysicsSystem, ReplayOptions};
 use anholonomy::integrate::simulate;
-use anholonomy::model::bicycle::{ackermann, rear_speeds, Bicycle, Steering};
 use anholonomy::model::State;
-use anholonomy::physics::car::{CarNames, CarPhysics};
-use anholonomy::physics::{replay, PhysicsSettings, PhysicsSystem, ReplayOptions};
 use anholonomy::record::SimTrajectory;
+use anholonomy::robots::car::kinematics::{ackermann, rear_speeds, Bicycle, Steering};
+use anholonomy::robots::car::physics::{CarNames, CarPhysics};
 use proptest::prelude::*;
 use std::f64::consts::PI;
 use std::path::Path;
@@ -23,7 +23,7 @@ const MODEL: Bicycle = Bicycle {
 
 fn robot(text: &str) -> urdf_rs::Robot {
     let r = urdf_rs::read_from_string(text).unwrap();
-    anholonomy::physics::urdf::validate(&r).unwrap();
+    anholonomy::engine::urdf::validate(&r).unwrap();
     r
 }
 
@@ -376,7 +376,7 @@ fn starts_steered() {
 /// knuckle it accelerated.)
 #[test]
 fn steering_servo_step_response() {
-    use anholonomy::model::bicycle::bicycle_angle;
+    use anholonomy::robots::car::kinematics::bicycle_angle;
     let model = Bicycle {
         steering: Steering::Angle,
         ..MODEL

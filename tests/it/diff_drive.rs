@@ -4,19 +4,19 @@
 
 use crate::common::legs;
 
+use anholonomy::engine::{replay, PhysicsSettings, PhysicsSystem, ReplayOptions};
 use anholonomy::integrate::simulate;
-use anholonomy::model::unicycle::Unicycle;
 use anholonomy::model::State;
-use anholonomy::physics::diff_drive::{DiffDriveNames, DiffDrivePhysics};
-use anholonomy::physics::{replay, PhysicsSettings, PhysicsSystem, ReplayOptions};
 use anholonomy::record::SimTrajectory;
+use anholonomy::robots::diff_drive::kinematics::Unicycle;
+use anholonomy::robots::diff_drive::physics::{DiffDriveNames, DiffDrivePhysics};
 use proptest::prelude::*;
 use std::f64::consts::PI;
 use std::path::Path;
 
 fn robot(text: &str) -> urdf_rs::Robot {
     let r = urdf_rs::read_from_string(text).unwrap();
-    anholonomy::physics::urdf::validate(&r).unwrap();
+    anholonomy::engine::urdf::validate(&r).unwrap();
     r
 }
 

@@ -4,12 +4,12 @@
 
 use crate::common::*;
 use anholonomy::integrate::simulate;
-use anholonomy::model::mobile_manipulator::{MobileManipulator, DOF};
 use anholonomy::model::State;
-use anholonomy::planner::dilf::potential::{
+use anholonomy::robots::mobile_manipulator::dilf::potential::{
     GoalFrame, PotentialParams, Scene, SingularityEnclosure,
 };
-use anholonomy::planner::dilf::{self, DilfParams};
+use anholonomy::robots::mobile_manipulator::dilf::{self, DilfParams};
+use anholonomy::robots::mobile_manipulator::kinematics::{MobileManipulator, DOF};
 use proptest::prelude::*;
 use std::sync::Arc;
 
@@ -143,7 +143,7 @@ fn open_field_task(start: [f64; 9], goal: [f64; 9]) -> (f64, f64, usize) {
     let params: DilfParams = toml::from_str("field_power = 1.75\nhorizon = 80.0").unwrap();
     let scene = Scene::new(
         1,
-        anholonomy::model::mobile_manipulator::default_parts(),
+        anholonomy::robots::mobile_manipulator::kinematics::default_parts(),
         Vec::new(),
         goal.to_vec(),
         PotentialParams {
@@ -277,13 +277,13 @@ fn a_bound_below_the_beams_own_sag_is_bad_input() {
 /// segment.
 #[test]
 fn the_pair_holds_the_beam_at_rest_as_the_fe_model_says() {
-    use anholonomy::model::beam::{Beam, GFRP_ROD_10MM};
-    use anholonomy::physics::beam::BeamOptions;
-    use anholonomy::physics::mobile_manipulator::{
+    use anholonomy::engine::{urdf, PhysicsSettings, PhysicsSystem};
+    use anholonomy::robots::mobile_manipulator::beam::physics::BeamOptions;
+    use anholonomy::robots::mobile_manipulator::beam::{Beam, GFRP_ROD_10MM};
+    use anholonomy::robots::mobile_manipulator::dilf::object::{table_i_start, Carried};
+    use anholonomy::robots::mobile_manipulator::physics::{
         link_visuals, CarriedBeam, MobileManipulatorPhysics, Setup,
     };
-    use anholonomy::physics::{urdf, PhysicsSettings, PhysicsSystem};
-    use anholonomy::planner::dilf::object::{table_i_start, Carried};
     let q = table_i_start();
     let (material, section) = GFRP_ROD_10MM;
     let rod = Beam {
@@ -393,8 +393,8 @@ fn the_pair_holds_the_beam_at_rest_as_the_fe_model_says() {
 /// inputs checks the harness's RK4 run.
 #[test]
 fn table_i_converges_with_the_geometric_mean_of_the_dipoles_only() {
-    use anholonomy::model::beam::{Beam, GFRP_ROD_10MM};
-    use anholonomy::planner::dilf::object::Carried;
+    use anholonomy::robots::mobile_manipulator::beam::{Beam, GFRP_ROD_10MM};
+    use anholonomy::robots::mobile_manipulator::dilf::object::Carried;
     use anholonomy::scenario::Scenario;
     use anholonomy::validate::Prepared;
     let path = scenario("dilf_paper.toml");
@@ -457,8 +457,8 @@ fn table_i_converges_with_the_geometric_mean_of_the_dipoles_only() {
 /// for one robot both readings are the same function.
 #[test]
 fn v_tends_to_infinity_at_the_pairs_goal_with_the_geometric_mean() {
-    use anholonomy::planner::dilf::object::table_i_start;
-    use anholonomy::planner::dilf::potential::DipoleProduct;
+    use anholonomy::robots::mobile_manipulator::dilf::object::table_i_start;
+    use anholonomy::robots::mobile_manipulator::dilf::potential::DipoleProduct;
     let goal: Vec<f64> = {
         let mut g = table_i_start();
         g[1] -= 2.0;
@@ -468,7 +468,7 @@ fn v_tends_to_infinity_at_the_pairs_goal_with_the_geometric_mean() {
     let scene = |robots: usize, dipole: DipoleProduct| {
         Scene::new(
             robots,
-            anholonomy::model::mobile_manipulator::default_parts(),
+            anholonomy::robots::mobile_manipulator::kinematics::default_parts(),
             Vec::new(),
             goal[..DOF * robots].to_vec(),
             PotentialParams {
@@ -532,7 +532,7 @@ fn a_misspelt_metric_is_bad_input_naming_the_nearest_one() {
 /// the model's own kinematics and on random arms written here.
 #[test]
 fn table_i_cannot_carry_a_rigid_object() {
-    use anholonomy::model::mobile_manipulator::frames;
+    use anholonomy::robots::mobile_manipulator::kinematics::frames;
     use nalgebra::{Isometry3, Translation3, UnitQuaternion, Vector3};
     use rand::{Rng, SeedableRng};
     use std::f64::consts::PI;
@@ -749,8 +749,10 @@ fn the_hold_guard_keeps_long_holds_off_the_wall() {
 /// damped at these gains, stays under 1°); the stiff servos hold it too.
 #[test]
 fn impedance_servos_hold_the_arm_against_gravity() {
-    use anholonomy::physics::mobile_manipulator::{ArmServo, MobileManipulatorPhysics, Setup};
-    use anholonomy::physics::{urdf, PhysicsSettings, PhysicsSystem};
+    use anholonomy::engine::{urdf, PhysicsSettings, PhysicsSystem};
+    use anholonomy::robots::mobile_manipulator::physics::{
+        ArmServo, MobileManipulatorPhysics, Setup,
+    };
     let d = std::f64::consts::PI / 180.0;
     let q = [0.0, 0.0, 0.0, 0.0, -5.0 * d, 100.0 * d, 0.0, -45.0 * d, 0.0];
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("models");

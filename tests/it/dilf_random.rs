@@ -41,8 +41,8 @@
 use crate::common::*;
 use anholonomy::compare::wrap_angle;
 use anholonomy::integrate::simulate;
-use anholonomy::model::mobile_manipulator::{DOF, INPUTS};
-use anholonomy::planner::dilf::sequence::rigid;
+use anholonomy::robots::mobile_manipulator::dilf::sequence::rigid;
+use anholonomy::robots::mobile_manipulator::kinematics::{DOF, INPUTS};
 use anholonomy::scenario::{PlannerConfig, Scenario};
 use anholonomy::validate::Prepared;
 use rand::{Rng, SeedableRng};
@@ -158,7 +158,7 @@ fn prepare(set: Set, case: &Case, sequence: bool) -> Result<Prepared, String> {
 
 /// Table I's start formation (rad) with its centroid at the origin.
 fn table_i_formation() -> Vec<f64> {
-    let mut q = anholonomy::planner::dilf::object::table_i_start();
+    let mut q = anholonomy::robots::mobile_manipulator::dilf::object::table_i_start();
     for r in 0..2 {
         q[DOF * r] += 9.5;
         q[DOF * r + 1] -= 3.0;

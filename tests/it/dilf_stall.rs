@@ -5,10 +5,10 @@
 
 use crate::common::*;
 use anholonomy::integrate::{simulate, Trajectory};
-use anholonomy::model::mobile_manipulator::DOF;
 use anholonomy::plan::Plan;
-use anholonomy::planner::dilf::potential::Scene;
-use anholonomy::planner::dilf::DilfParams;
+use anholonomy::robots::mobile_manipulator::dilf::potential::Scene;
+use anholonomy::robots::mobile_manipulator::dilf::DilfParams;
+use anholonomy::robots::mobile_manipulator::kinematics::DOF;
 use anholonomy::scenario::{ModelConfig, PlannerConfig, Scenario};
 use anholonomy::validate::Prepared;
 use rand::{Rng, SeedableRng};
@@ -33,7 +33,7 @@ impl Run {
             panic!("not a dilf scenario")
         };
         let scene =
-            anholonomy::systems::mobile_manipulator::task_scene(m, p, start.as_slice(), &goal)
+            anholonomy::robots::mobile_manipulator::task_scene(m, p, start.as_slice(), &goal)
                 .unwrap();
         let params = p.clone();
         Run {

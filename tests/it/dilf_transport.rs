@@ -1,8 +1,8 @@
 //! Seed 004's pair carrying the beam through compliant wrists, with the
 //! wrench bound and the law on the measured grasps (`dilf_pair_open`).
 
-use anholonomy::model::mobile_manipulator::DOF;
 use anholonomy::model::spatial::Pose;
+use anholonomy::robots::mobile_manipulator::kinematics::DOF;
 use anholonomy::scenario::{ModelConfig, PlannerConfig, Scenario};
 use anholonomy::validate::Prepared;
 
@@ -28,7 +28,7 @@ fn the_measured_deformation_equals_the_planar_readout_when_the_platforms_stand_f
     };
     let (start, goal) = prep.start_goal();
     let scene =
-        anholonomy::systems::mobile_manipulator::task_scene(m, p, start.as_slice(), &goal).unwrap();
+        anholonomy::robots::mobile_manipulator::task_scene(m, p, start.as_slice(), &goal).unwrap();
     let c = scene.object.as_ref().unwrap();
     let mut sys = prep.physics().unwrap();
     let names = sys.channel_names();

@@ -190,7 +190,7 @@ fn failure_messages_show_the_breach() {
 /// not touch the physics.
 #[test]
 fn thinned_link_poses_are_the_full_rate_ones() {
-    use anholonomy::physics::{replay as physics_replay, ReplayOptions};
+    use anholonomy::engine::{replay as physics_replay, ReplayOptions};
     let prep = prepared(&root().join("scenarios/disk_paper.toml"));
     let sim = &prep.scenario.sim;
     let replay = |every: Option<usize>| {

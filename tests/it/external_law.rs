@@ -376,14 +376,14 @@ fn a_program_that_cannot_start() {
         panic!("a feedback plan")
     };
     let program = dir.path().join("no_such_program");
-    let params = anholonomy::planner::external::ExternalParams {
+    let params = anholonomy::sources::external::ExternalParams {
         command: vec!["no_such_program".into()],
         period,
         horizon: 1.0,
         timeout: 5.0,
         base: dir.path().into(),
     };
-    prep.planned = anholonomy::planner::external::plan(&params, program, &["x"], &["a", "b"]);
+    prep.planned = anholonomy::sources::external::plan(&params, program, &["x"], &["a", "b"]);
     let err = run(&prep, &opts(None)).unwrap_err();
     assert_eq!(err.exit_code(), 3);
     assert!(

@@ -2,10 +2,10 @@
 //! margins (`anholonomy margin`, `[margins]` gates in `check`).
 
 use crate::common::*;
+use anholonomy::engine::perturb::Perturbation;
+use anholonomy::engine::{replay, ReplayOptions};
 use anholonomy::integrate::step_count;
 use anholonomy::model::{Input, State};
-use anholonomy::physics::perturb::Perturbation;
-use anholonomy::physics::{replay, ReplayOptions};
 use anholonomy::plan::{ControlLaw, Plan};
 use anholonomy::runner::{run, RunOptions, RunOutcome};
 use std::collections::BTreeMap;

@@ -16,7 +16,7 @@
 //! without logs.
 
 use crate::common::*;
-use anholonomy::physics::perturb::Dimension;
+use anholonomy::engine::perturb::Dimension;
 use anholonomy::runner::{run, RunOptions, RunOutcome};
 use anholonomy::scenario::Scenario;
 use anholonomy::validate::Prepared;

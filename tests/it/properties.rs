@@ -10,12 +10,15 @@
 //! The disk and the sphere are integrated from their own equations written
 //! here, not through the crate's models.
 
-use anholonomy::model::disk::RollingDisk;
-use anholonomy::model::rolling_sphere::{euler_to_rotation, RollingSphere};
-use anholonomy::model::space_manipulator::SpaceManipulator;
 use anholonomy::model::{Input, KinematicModel, State};
 use anholonomy::plan::{ControlLaw, Limits, Plan};
-use anholonomy::planner::{endogenous, sphere_geometric, sphere_triangle, stokes_disk, PlanError};
+use anholonomy::planner::PlanError;
+use anholonomy::robots::rolling_disk::kinematics::RollingDisk;
+use anholonomy::robots::rolling_disk::stokes;
+use anholonomy::robots::rolling_sphere::kinematics::{euler_to_rotation, RollingSphere};
+use anholonomy::robots::rolling_sphere::{geometric, triangle};
+use anholonomy::robots::space_robot::endogenous;
+use anholonomy::robots::space_robot::manipulator::SpaceManipulator;
 use nalgebra::{Matrix3, Vector3};
 use proptest::prelude::*;
 
@@ -122,16 +125,16 @@ fn st(v: &[f64]) -> State {
 fn disk_error(s: [f64; 4], g: [f64; 4], free: bool) -> Result<Option<f64>, TestCaseError> {
     let r = 0.5;
     let disk = RollingDisk { r };
-    let params = stokes_disk::StokesDiskParams {
+    let params = stokes::StokesDiskParams {
         algorithm: if free {
-            stokes_disk::Algorithm::SingularityFree
+            stokes::Algorithm::SingularityFree
         } else {
-            stokes_disk::Algorithm::SingularityAvoiding
+            stokes::Algorithm::SingularityAvoiding
         },
         ..Default::default()
     };
     let lim = limits(vec![4.0, 2.0]);
-    let plan = match stokes_disk::plan(&disk, &st(&s), &st(&g), &params, &lim) {
+    let plan = match stokes::plan(&disk, &st(&s), &st(&g), &params, &lim) {
         Ok(p) => p,
         Err(e) => return justified(&e).map(|_| None),
     };
@@ -254,8 +257,8 @@ proptest! {
         s in (-4.0f64..4.0, -4.0f64..4.0, -180.0f64..180.0, 0.0f64..180.0, -180.0f64..180.0),
         g in (-2.0f64..2.0, -2.0f64..2.0, -180.0f64..180.0),
     ) {
-        let p = sphere_geometric::SphereGeometricParams::default();
-        sphere_task(&|m, s, g, l| sphere_geometric::plan(m, s, g, &p, l), [s.0, s.1, s.2, s.3, s.4], [g.0, g.1, g.2])?;
+        let p = geometric::SphereGeometricParams::default();
+        sphere_task(&|m, s, g, l| geometric::plan(m, s, g, &p, l), [s.0, s.1, s.2, s.3, s.4], [g.0, g.1, g.2])?;
     }
 
     /// The same tasks with the triangle planner.
@@ -264,8 +267,8 @@ proptest! {
         s in (-3.0f64..3.0, -3.0f64..3.0, -180.0f64..180.0, 0.0f64..180.0, -180.0f64..180.0),
         g in (-2.0f64..2.0, -2.0f64..2.0, -180.0f64..180.0),
     ) {
-        let p = sphere_triangle::SphereTriangleParams::default();
-        sphere_task(&|m, s, g, l| sphere_triangle::plan(m, s, g, &p, l), [s.0, s.1, s.2, s.3, s.4], [g.0, g.1, g.2])?;
+        let p = triangle::SphereTriangleParams::default();
+        sphere_task(&|m, s, g, l| triangle::plan(m, s, g, &p, l), [s.0, s.1, s.2, s.3, s.4], [g.0, g.1, g.2])?;
     }
 }
 

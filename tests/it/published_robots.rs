@@ -4,9 +4,9 @@
 //! said back (`summary.json`'s `model.read_from_urdf`).
 
 use crate::common::*;
-use anholonomy::physics::mesh::Search;
-use anholonomy::physics::urdf::{SimWorld, WorldOptions};
-use anholonomy::physics::PhysicsSettings;
+use anholonomy::engine::mesh::Search;
+use anholonomy::engine::urdf::{SimWorld, WorldOptions};
+use anholonomy::engine::PhysicsSettings;
 use nalgebra::{Matrix3, Vector3};
 use std::path::{Path, PathBuf};
 
@@ -87,14 +87,14 @@ fn frames_are_lumped_and_the_lumped_inertia_is_the_sum_of_the_parts() {
         .concat()
     );
     let robot = urdf_rs::read_from_string(&urdf).unwrap();
-    anholonomy::physics::urdf::validate(&robot).unwrap();
+    anholonomy::engine::urdf::validate(&robot).unwrap();
     let settings = PhysicsSettings {
         gravity: [0.0; 3],
         ..Default::default()
     };
     let opts = WorldOptions {
         settings: &settings,
-        root_pose: anholonomy::physics::rapier::math::Pose::IDENTITY,
+        root_pose: anholonomy::engine::rapier::math::Pose::IDENTITY,
         ground: false,
         keep_fixed: &[],
     };

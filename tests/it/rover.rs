@@ -3,7 +3,7 @@
 
 use crate::common::*;
 use anholonomy::integrate::simulate;
-use anholonomy::planner::rover_primitives::LABEL_P1;
+use anholonomy::robots::rover::primitives::LABEL_P1;
 use anholonomy::runner::{RunOptions, RunOutcome};
 use anholonomy::sweep::{run_sweep, Shard};
 
@@ -100,7 +100,7 @@ fn p1_turns_the_short_way_on_the_mirrored_goal() {
         let end = tr.label.iter().position(|&l| l != LABEL_P1).unwrap();
         let turn = tr.q[end][2] - start[2];
         let fin = tr.last();
-        let err = anholonomy::planner::rover_primitives::se2_distance(fin, &goal);
+        let err = anholonomy::robots::rover::primitives::se2_distance(fin, &goal);
         assert!(err <= EPS, "{name}: ideal ended {err} from the goal");
         (turn.to_degrees(), tr.t[tr.len() - 1])
     };

@@ -3,7 +3,7 @@
 //! reporting and input errors.
 
 use crate::common::*;
-use anholonomy::physics::{replay, ReplayOptions};
+use anholonomy::engine::{replay, ReplayOptions};
 use anholonomy::record::SimTrajectory;
 use anholonomy::runner::Prepared;
 use anholonomy::scenario::Scenario;
@@ -306,7 +306,7 @@ fn bad_sphere_input_is_reported() {
 #[test]
 fn tilted_goal_through_the_conversion() {
     use anholonomy::integrate::simulate;
-    use anholonomy::model::rolling_sphere::quat_state_error;
+    use anholonomy::robots::rolling_sphere::kinematics::quat_state_error;
     for planner in ["sphere_triangle", "sphere_geometric"] {
         let text = sphere_text(
             "",

@@ -486,13 +486,13 @@ fn batched_sweep_equals_unbatched() {
         let p = prepared(&dir.path().join(file));
         // Every variant joins its group's world (else the comparison below
         // would compare unbatched runs with themselves).
-        let mut host = anholonomy::physics::batch::Host::new();
+        let mut host = anholonomy::engine::batch::Host::new();
         let cfg = p.scenario.sweep.as_ref().unwrap();
         for i in 0..count {
             let v = p.variant(&cfg.variant(i)).unwrap();
             let built = host.build(|| v.physics()).unwrap();
             assert!(
-                matches!(built, anholonomy::physics::batch::Built::Hosted(_)),
+                matches!(built, anholonomy::engine::batch::Built::Hosted(_)),
                 "{file}: variant {i} not hosted"
             );
         }
@@ -531,8 +531,8 @@ fn batched_sweep_equals_unbatched() {
 /// to the end without the token.
 #[test]
 fn cancelled_batched_replay_stops() {
-    use anholonomy::physics::batch::{Built, Host, Lane};
-    use anholonomy::physics::ReplayError;
+    use anholonomy::engine::batch::{Built, Host, Lane};
+    use anholonomy::engine::ReplayError;
     let dir = tempfile::tempdir().unwrap();
     let f = dir.path().join("rover.toml");
     std::fs::write(&f, shipped_sweep("rover_sweep", 3)).unwrap();
@@ -556,7 +556,7 @@ fn cancelled_batched_replay_stops() {
             .map(|(sys, v)| Lane {
                 sys: sys.as_mut(),
                 plan: &v.planned,
-                opts: anholonomy::physics::ReplayOptions {
+                opts: anholonomy::engine::ReplayOptions {
                     dt: v.scenario.sim.dt,
                     settle: v.scenario.sim.settle,
                     link_pose_every: None,

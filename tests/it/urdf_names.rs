@@ -2,7 +2,7 @@
 //! all (an integration test: the scenario layer may not import the URDF
 //! loader, `tests/layering.rs`).
 
-use anholonomy::physics::required::{check, defaults};
+use anholonomy::engine::required::{check, defaults};
 use anholonomy::scenario::ModelConfig;
 use anholonomy::validate::urdf::load;
 use std::path::Path;

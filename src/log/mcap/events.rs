@@ -13,7 +13,7 @@ use foxglove::messages::{FrameTransform, FrameTransforms};
 use foxglove::{Encode, PartialMetadata, RawChannel};
 use rayon::prelude::*;
 
-use super::{quat, timestamp, vec3, JsonMsg, Keys, WORLD_FRAME};
+use crate::log::mcap::{quat, timestamp, vec3, JsonMsg, Keys, WORLD_FRAME};
 use crate::log::scene::{label_at, nanos, segment_name};
 use crate::log::LogError;
 use crate::record::RunRecord;

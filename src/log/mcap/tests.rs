@@ -1,6 +1,6 @@
 //! Tests of the MCAP writer.
 
-use super::*;
+use crate::log::mcap::*;
 use serde::ser::{SerializeMap, SerializeStruct};
 use serde::{Serialize, Serializer};
 

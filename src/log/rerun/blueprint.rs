@@ -2,7 +2,7 @@
 //! run, a follow view for runs much larger than the robot, time-series views
 //! over the whole run with fitted value ranges, and overlays hidden by default.
 
-use super::rr;
+use crate::log::rerun::rr;
 use rr::blueprint::components::{Corner2D, Eye3DKind, LinkAxis, PanelState};
 use rr::blueprint::{
     Blueprint, BlueprintActivation, BlueprintPanel, ContainerLike, Grid, Horizontal,
@@ -21,7 +21,7 @@ use rr::AsComponents;
 use crate::log::scene::{coord_name, goal_points, marker_scale, planar_paths};
 use crate::record::{RunRecord, Shape};
 
-use super::{ep, RrError, TIMELINE};
+use crate::log::rerun::{ep, RrError, TIMELINE};
 
 /// Axis-aligned box over points, empty until a finite point is added.
 #[derive(Clone, Copy)]

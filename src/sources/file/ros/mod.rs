@@ -1,0 +1,588 @@
+//! ROS 2 bags (rosbag2, MCAP storage) as plan files: one command topic's
+//! messages, decoded through the definition the bag stores with the topic
+//! ([`msg`]), become samples: `t` from the log time (or the header stamp),
+//! starting at 0 at the first message; the inputs from message fields,
+//! by default for the common command types ([`DEFAULT_MAPS`]) or as the
+//! scenario's `[planner.map]` says. The plan ends one median message period
+//! after the last message (or at `duration`), where the robot is stopped.
+//!
+//! Every problem names the file, the topic and the message's index on that
+//! topic (0 for the first).
+
+pub mod metadata;
+pub mod msg;
+
+use crate::planner::PlanError;
+use crate::sources::file::{At, Reader, Samples, MCAP_MAX_BYTES};
+use msg::{Definition, FieldPath};
+use std::collections::{BTreeMap, HashMap};
+use std::io::Read;
+use std::path::{Path, PathBuf};
+use std::rc::Rc;
+
+/// Where `t` comes from.
+#[derive(
+    Debug,
+    Clone,
+    Copy,
+    Default,
+    PartialEq,
+    Eq,
+    serde::Deserialize,
+    serde::Serialize,
+    schemars::JsonSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum BagTime {
+    /// The time the recorder logged each message (`ros2 bag record`'s receive time).
+    #[default]
+    Log,
+    /// The message's own `header.stamp` (stamped types only).
+    Header,
+}
+
+impl BagTime {
+    /// The name as written in scenario files.
+    pub fn name(self) -> &'static str {
+        match self {
+            BagTime::Log => "log",
+            BagTime::Header => "header",
+        }
+    }
+}
+
+/// The model inputs the common command types give without a `[planner.map]`:
+/// (type, [(input, field path)]).
+pub const DEFAULT_MAPS: &[(&str, &[(&str, &str)])] = &[
+    (
+        "geometry_msgs/msg/Twist",
+        &[("v", "linear.x"), ("omega", "angular.z")],
+    ),
+    (
+        "geometry_msgs/msg/TwistStamped",
+        &[("v", "twist.linear.x"), ("omega", "twist.angular.z")],
+    ),
+    (
+        "ackermann_msgs/msg/AckermannDrive",
+        &[("v", "speed"), ("steer", "steering_angle")],
+    ),
+    (
+        "ackermann_msgs/msg/AckermannDriveStamped",
+        &[("v", "drive.speed"), ("steer", "drive.steering_angle")],
+    ),
+];
+
+/// The scenario's bag keys.
+#[derive(Debug, Clone, Copy)]
+pub struct BagKeys<'a> {
+    /// `topic`, if set.
+    pub topic: Option<&'a str>,
+    /// `time`.
+    pub time: BagTime,
+    /// `[planner.map]`.
+    pub map: &'a BTreeMap<String, String>,
+    /// `duration`, if set.
+    pub duration: Option<f64>,
+}
+
+/// A channel of one of the bag's files.
+#[derive(Debug, Clone)]
+pub struct ChannelInfo {
+    /// Index of its file.
+    pub file: usize,
+    /// Its id in that file.
+    pub id: u16,
+    /// Topic.
+    pub topic: String,
+    /// `cdr`, `json`, ...
+    pub encoding: String,
+    /// Its schema's name (the message type), if it has one.
+    pub type_name: Option<String>,
+    /// Messages on it.
+    pub count: usize,
+}
+
+/// The channels of a bag's files.
+#[derive(Debug, Clone, Default)]
+pub struct Inventory {
+    /// The files, in order.
+    pub files: Vec<PathBuf>,
+    /// Every channel of every file.
+    pub channels: Vec<ChannelInfo>,
+}
+
+/// A file's bytes (a regular file within the MCAP cap).
+pub fn read_bytes(file: &Path) -> Result<Vec<u8>, PlanError> {
+    let err = |m: String| PlanError::file(file.to_path_buf(), None, m);
+    crate::input::check_regular(file, "plan file", MCAP_MAX_BYTES).map_err(err)?;
+    let mut bytes = Vec::new();
+    std::fs::File::open(file)
+        .and_then(|f| f.take(MCAP_MAX_BYTES + 1).read_to_end(&mut bytes))
+        .map_err(|e| err(format!("cannot read plan file: {e}")))?;
+    if bytes.is_empty() {
+        return Err(err("empty file: expected an MCAP file".into()));
+    }
+    Ok(bytes)
+}
+
+impl Inventory {
+    /// Scan `files` for their channels and message counts.
+    pub fn scan(files: &[PathBuf]) -> Result<Inventory, PlanError> {
+        use mcap::records::Record;
+        let mut out = Inventory {
+            files: files.to_vec(),
+            channels: Vec::new(),
+        };
+        for (fi, file) in files.iter().enumerate() {
+            let bytes = read_bytes(file)?;
+            let bad = |e: mcap::McapError| {
+                PlanError::file(file.clone(), None, format!("not a readable MCAP file: {e}"))
+            };
+            let mut schemas: HashMap<u16, String> = HashMap::new();
+            let mut index: HashMap<u16, usize> = HashMap::new();
+            for rec in mcap::read::ChunkFlattener::new(&bytes).map_err(bad)? {
+                match rec.map_err(bad)? {
+                    Record::Schema { header, .. } => {
+                        schemas.insert(header.id, header.name);
+                    }
+                    Record::Channel(c) => {
+                        if index.contains_key(&c.id) {
+                            continue;
+                        }
+                        index.insert(c.id, out.channels.len());
+                        out.channels.push(ChannelInfo {
+                            file: fi,
+                            id: c.id,
+                            topic: c.topic,
+                            encoding: c.message_encoding,
+                            type_name: schemas.get(&c.schema_id).cloned(),
+                            count: 0,
+                        });
+                    }
+                    Record::Message { header, .. } => {
+                        if let Some(&i) = index.get(&header.channel_id) {
+                            out.channels[i].count += 1;
+                        }
+                    }
+                    _ => {}
+                }
+            }
+        }
+        Ok(out)
+    }
+
+    /// Whether some channel has `topic`.
+    pub fn has(&self, topic: &str) -> bool {
+        self.channels.iter().any(|c| c.topic == topic)
+    }
+
+    /// Whether every channel of `topic` (at least one) holds JSON (a run log).
+    pub fn is_json(&self, topic: &str) -> bool {
+        let mut chans = self.channels.iter().filter(|c| c.topic == topic).peekable();
+        chans.peek().is_some() && chans.all(|c| c.encoding == "json")
+    }
+
+    /// `topic (type), ...` of every topic, for messages.
+    pub fn topics(&self) -> String {
+        let mut seen: Vec<String> = Vec::new();
+        for c in &self.channels {
+            let t = match &c.type_name {
+                Some(ty) if !ty.is_empty() => format!("{} ({ty})", c.topic),
+                _ => c.topic.clone(),
+            };
+            if !seen.contains(&t) {
+                seen.push(t);
+            }
+        }
+        if seen.is_empty() {
+            "none".into()
+        } else {
+            seen.join(", ")
+        }
+    }
+}
+
+/// The field path of each input for messages of type `ty` (the scenario's
+/// map first, then the type's defaults); `Err` names an input neither gives.
+fn paths_for<'a>(
+    ty: &str,
+    inputs: &[&'a str],
+    map: &BTreeMap<String, String>,
+) -> Result<Vec<String>, &'a str> {
+    let defaults = DEFAULT_MAPS
+        .iter()
+        .find(|(t, _)| msg::normalize(t) == msg::normalize(ty))
+        .map(|(_, m)| *m)
+        .unwrap_or(&[]);
+    inputs
+        .iter()
+        .map(|&i| {
+            map.get(i)
+                .cloned()
+                .or_else(|| {
+                    defaults
+                        .iter()
+                        .find(|(n, _)| *n == i)
+                        .map(|(_, p)| p.to_string())
+                })
+                .ok_or(i)
+        })
+        .collect()
+}
+
+/// Why an input has no field, for a message.
+fn unmapped(ty: &str, input: &str, inputs: &[&str]) -> String {
+    let defaults = DEFAULT_MAPS
+        .iter()
+        .find(|(t, _)| msg::normalize(t) == msg::normalize(ty));
+    let mut m = format!(
+        "no field gives the input `{input}` (the model's inputs: {}): map it in the scenario, `[planner.map] {input} = \"field.path\"`",
+        inputs.join(", ")
+    );
+    if let Some((_, d)) = defaults {
+        let names: Vec<&str> = d.iter().map(|(n, _)| *n).collect();
+        m.push_str(&format!("; {ty} gives {} by default", names.join(" and ")));
+        if names.contains(&"steer") && input == "steer_rate" {
+            m.push_str(
+                " (a steering angle: steer the car by angle with `[model] steering = \"angle\"`)",
+            );
+        }
+    }
+    m
+}
+
+/// The topic to read: the scenario's, or the one topic whose type maps to
+/// every input of the model.
+fn choose_topic(
+    inv: &Inventory,
+    keys: &BagKeys<'_>,
+    inputs: &[&str],
+    bag: &Path,
+) -> Result<String, PlanError> {
+    let err = |m: String| PlanError::file(bag.to_path_buf(), None, m);
+    if let Some(t) = keys.topic {
+        if !inv.has(t) {
+            return Err(err(format!(
+                "no topic `{t}` in the bag (topics: {})",
+                inv.topics()
+            )));
+        }
+        return Ok(t.to_string());
+    }
+    let mut fits: Vec<&ChannelInfo> = Vec::new();
+    for c in &inv.channels {
+        let Some(ty) = &c.type_name else { continue };
+        if c.encoding == "cdr"
+            && paths_for(ty, inputs, keys.map).is_ok()
+            && !fits.iter().any(|f| f.topic == c.topic)
+        {
+            fits.push(c);
+        }
+    }
+    match fits.as_slice() {
+        [one] => Ok(one.topic.clone()),
+        [] => Err(err(format!(
+            "no topic whose messages give this model's inputs ({}) by default (topics: {}): choose one with `topic = \"...\"` and map its fields with `[planner.map]`",
+            inputs.join(", "),
+            inv.topics()
+        ))),
+        many => Err(err(format!(
+            "several topics could be the commands ({}): choose one with `topic = \"...\"`",
+            many.iter()
+                .map(|c| c.topic.as_str())
+                .collect::<Vec<_>>()
+                .join(", ")
+        ))),
+    }
+}
+
+/// What a topic's messages are read with: the definition and the inputs' paths.
+struct Prepared {
+    def: Definition,
+    paths: Vec<FieldPath>,
+    stamp: Option<[FieldPath; 2]>,
+}
+
+/// What was read, for the plan's details.
+#[derive(Debug, Clone)]
+pub struct BagInfo {
+    /// The topic read.
+    pub topic: String,
+    /// Its message type.
+    pub type_name: String,
+    /// Messages read.
+    pub messages: usize,
+    /// Each input's field path.
+    pub paths: Vec<(String, String)>,
+}
+
+/// Read the command topic of the bag made of `files` (`bag`: the path the
+/// scenario gave, for bag-wide messages) for a model with `inputs`.
+pub fn read(
+    bag: &Path,
+    files: &[PathBuf],
+    inputs: &[&str],
+    keys: &BagKeys<'_>,
+) -> Result<(Samples, BagInfo), PlanError> {
+    let inv = Inventory::scan(files)?;
+    read_with(bag, &inv, inputs, keys)
+}
+
+/// [`read`] with the bag's channels already scanned.
+pub fn read_with(
+    bag: &Path,
+    inv: &Inventory,
+    inputs: &[&str],
+    keys: &BagKeys<'_>,
+) -> Result<(Samples, BagInfo), PlanError> {
+    let topic = choose_topic(inv, keys, inputs, bag)?;
+    let chans: Vec<&ChannelInfo> = inv.channels.iter().filter(|c| c.topic == topic).collect();
+    let total: usize = chans.iter().map(|c| c.count).sum();
+    let type_of = |c: &ChannelInfo| c.type_name.clone().unwrap_or_default();
+    if total == 0 {
+        let ty = chans.first().map(|c| type_of(c)).unwrap_or_default();
+        return Err(PlanError::file(
+            bag.to_path_buf(),
+            None,
+            format!(
+                "topic `{topic}`{}: no messages (an empty topic: nothing was published on it while recording)",
+                if ty.is_empty() { String::new() } else { format!(" ({ty})") }
+            ),
+        ));
+    }
+    for c in &chans {
+        if c.encoding != "cdr" {
+            return Err(PlanError::file(
+                inv.files[c.file].clone(),
+                None,
+                format!(
+                    "topic `{topic}`: messages encoded as `{}`, not CDR (ROS 2) nor a run log's JSON",
+                    c.encoding
+                ),
+            ));
+        }
+    }
+    // Samples on the topic's first file, whose errors name that file.
+    let first_file = inv.files[chans[0].file].clone();
+    let mut prepared: HashMap<(usize, u16), Rc<Prepared>> = HashMap::new();
+    // (ns, values, message index)
+    let mut raw: Vec<(i64, Vec<f64>, usize)> = Vec::new();
+    let mut k = 0usize;
+    let mut type_name = String::new();
+    let mut paths_used: Vec<(String, String)> = Vec::new();
+    for (fi, file) in inv.files.iter().enumerate() {
+        if !chans.iter().any(|c| c.file == fi) {
+            continue;
+        }
+        let bytes = read_bytes(file)?;
+        let at_msg = |k: usize, m: String| {
+            PlanError::file(
+                file.clone(),
+                None,
+                format!("topic `{topic}` message {k}: {m}"),
+            )
+        };
+        let stream = mcap::MessageStream::new(&bytes).map_err(|e| {
+            PlanError::file(file.clone(), None, format!("not a readable MCAP file: {e}"))
+        })?;
+        for m in stream {
+            let m = m.map_err(|e| {
+                PlanError::file(file.clone(), None, format!("not a readable MCAP file: {e}"))
+            })?;
+            if m.channel.topic != topic {
+                continue;
+            }
+            let key = (fi, m.channel.id);
+            let p = match prepared.get(&key) {
+                Some(p) => p.clone(),
+                None => {
+                    let p = Rc::new(prepare(&m.channel, inputs, keys).map_err(|e| at_msg(k, e))?);
+                    if type_name.is_empty() {
+                        type_name = p.def.name().to_string();
+                        paths_used = inputs
+                            .iter()
+                            .zip(&p.paths)
+                            .map(|(i, p)| (i.to_string(), p.text.clone()))
+                            .collect();
+                    }
+                    prepared.insert(key, p.clone());
+                    p
+                }
+            };
+            let v = p.def.decode(&m.data).map_err(|e| at_msg(k, e))?;
+            let mut u = Vec::with_capacity(inputs.len());
+            for (i, path) in p.paths.iter().enumerate() {
+                let x = msg::number_at(&v, path).map_err(|e| {
+                    at_msg(k, format!("input `{}` = `{}`: {e}", inputs[i], path.text))
+                })?;
+                if !x.is_finite() {
+                    return Err(at_msg(
+                        k,
+                        format!(
+                            "field `{}` (input `{}`): {x} is not a finite number",
+                            path.text, inputs[i]
+                        ),
+                    ));
+                }
+                u.push(x);
+            }
+            let ns = match &p.stamp {
+                None => i64::try_from(m.log_time).map_err(|_| {
+                    at_msg(k, format!("log time {} ns is out of range", m.log_time))
+                })?,
+                Some([sec, nsec]) => {
+                    let s = msg::integer_at(&v, sec);
+                    let n = msg::integer_at(&v, nsec);
+                    match (s, n) {
+                        (Some(s), Some(n)) => s * 1_000_000_000 + n,
+                        _ => {
+                            return Err(at_msg(
+                                k,
+                                "no integer `header.stamp.sec` and `header.stamp.nanosec`".into(),
+                            ))
+                        }
+                    }
+                }
+            };
+            if let Some(&(prev, ..)) = raw.last() {
+                if ns < prev {
+                    let t0 = raw[0].0;
+                    let secs = |x: i64| crate::numfmt::readable((x - t0) as f64 * 1e-9);
+                    return Err(at_msg(
+                        k,
+                        format!(
+                            "time goes backwards: its {} time is {} s after the first message, before the previous message's {} s",
+                            keys.time.name(),
+                            secs(ns),
+                            secs(prev)
+                        ),
+                    ));
+                }
+                if ns == prev {
+                    // Two commands at one instant: the later one is in force.
+                    let last = raw.last_mut().expect("a previous message");
+                    *last = (ns, u, k);
+                    k += 1;
+                    continue;
+                }
+            }
+            raw.push((ns, u, k));
+            k += 1;
+        }
+    }
+    let t0 = raw[0].0;
+    let secs = |ns: i64| (ns - t0) as f64 / 1e9;
+    let end = match keys.duration {
+        Some(d) => {
+            raw.retain(|s| secs(s.0) < d);
+            d
+        }
+        None if raw.len() < 2 => {
+            return Err(PlanError::file(
+                first_file.clone(),
+                None,
+                format!(
+                    "topic `{topic}`: {} distinct message time{}: no period to end the plan on; set the plan's length with `duration`",
+                    raw.len(),
+                    if raw.len() == 1 { "" } else { "s" }
+                ),
+            ))
+        }
+        None => {
+            let mut gaps: Vec<i64> = raw.windows(2).map(|w| w[1].0 - w[0].0).collect();
+            gaps.sort_unstable();
+            let n = gaps.len();
+            let median = if n % 2 == 1 {
+                gaps[n / 2]
+            } else {
+                gaps[n / 2 - 1] + (gaps[n / 2] - gaps[n / 2 - 1]) / 2
+            };
+            secs(raw[raw.len() - 1].0 + median)
+        }
+    };
+    let mut r = Reader::new(&first_file, inputs);
+    for (ns, u, k) in &raw {
+        let at = At {
+            line: None,
+            what: format!("topic `{topic}` message {k}"),
+        };
+        r.push(secs(*ns), &at, u, &|_| at.clone(), Some(&topic))?;
+    }
+    let at = At {
+        line: None,
+        what: format!("topic `{topic}`, the plan's end"),
+    };
+    r.push(
+        end,
+        &at,
+        &vec![0.0; inputs.len()],
+        &|_| at.clone(),
+        Some(&topic),
+    )?;
+    Ok((
+        r.finish()?,
+        BagInfo {
+            topic,
+            type_name,
+            messages: k,
+            paths: paths_used,
+        },
+    ))
+}
+
+/// The definition and paths for messages on `channel`.
+fn prepare(
+    channel: &mcap::Channel<'_>,
+    inputs: &[&str],
+    keys: &BagKeys<'_>,
+) -> Result<Prepared, String> {
+    let Some(schema) = channel.schema.as_ref() else {
+        return Err(
+            "the bag stores no message definition for this topic (its channel has no schema): it cannot be decoded; record it again where the message package is installed"
+                .into(),
+        );
+    };
+    let ty = schema.name.clone();
+    if schema.data.is_empty() {
+        return Err(format!(
+            "the bag stores no definition of {ty} (an empty schema: the recorder did not have the message package); record it again where the package is installed"
+        ));
+    }
+    if schema.encoding != "ros2msg" {
+        return Err(format!(
+            "the definition of {ty} is stored as `{}`; only `ros2msg` (.msg) definitions are read",
+            schema.encoding
+        ));
+    }
+    let text = std::str::from_utf8(&schema.data)
+        .map_err(|_| format!("the definition of {ty} is not UTF-8 text"))?;
+    let def = Definition::parse(&ty, text)
+        .map_err(|e| format!("the bag's definition of {ty} is not usable: {e}"))?;
+    let texts = paths_for(&ty, inputs, keys.map).map_err(|i| unmapped(&ty, i, inputs))?;
+    let mut paths = Vec::new();
+    for (input, text) in inputs.iter().zip(texts) {
+        let p = FieldPath::parse(&text).map_err(|e| format!("input `{input}`: {e}"))?;
+        let from = if keys.map.contains_key(*input) {
+            format!("planner.map.{input}")
+        } else {
+            format!("the default for {ty}")
+        };
+        def.resolve_number(&p)
+            .map_err(|e| format!("input `{input}` = `{text}` ({from}): {e}"))?;
+        paths.push(p);
+    }
+    let stamp = match keys.time {
+        BagTime::Log => None,
+        BagTime::Header => {
+            let sec = FieldPath::parse("header.stamp.sec").expect("a path");
+            let nsec = FieldPath::parse("header.stamp.nanosec").expect("a path");
+            if def.resolve_number(&sec).is_err() || def.resolve_number(&nsec).is_err() {
+                return Err(format!(
+                    "time = \"header\", but {ty} has no `header.stamp` (not a stamped type): drop `time` to use the log time"
+                ));
+            }
+            Some([sec, nsec])
+        }
+    };
+    Ok(Prepared { def, paths, stamp })
+}
