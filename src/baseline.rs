@@ -24,7 +24,7 @@
 //! A metric regresses when it is worse than its baseline by more than
 //! `max(abs, rel · |baseline|)`; better by more than that is reported as an
 //! improvement and never fails; informational metrics are reported when they
-//! change. Defaults [`DEFAULT_REL`], [`DEFAULT_ABS`]; a scenario's
+//! change. Defaults [`crate::scenario::regression::DEFAULT_REL`], [`crate::scenario::regression::DEFAULT_ABS`]; a scenario's
 //! `[regression]` table overrides them, for all its metrics or per metric.
 //!
 //! NaN: NaN now with a finite baseline is a regression (e.g. a time to goal
@@ -33,11 +33,11 @@
 //! the run no longer produces is a regression; a new metric is reported only.
 
 use crate::error::Error;
-use crate::error::SetupError;
 pub use crate::metric::Direction;
+use crate::numfmt::fmt_value;
 use crate::robots::System;
 use crate::runner::RunOutcome;
-use schemars::JsonSchema;
+use crate::scenario::regression::RegressionConfig;
 use serde::{Deserialize, Serialize};
 use serde_json::Value;
 use std::collections::BTreeMap;
@@ -46,87 +46,11 @@ use std::path::{Path, PathBuf};
 /// Version of the baseline file format.
 pub const FORMAT: u64 = 1;
 
-/// Default relative tolerance (why 2 %: docs/src/operations/ci-gates.md).
-pub const DEFAULT_REL: f64 = 0.02;
-
-/// Default absolute tolerance, in the metric's own unit; below any meaningful
-/// value of every metric (m, deg, fractions, counts, kg m²/s).
-pub const DEFAULT_ABS: f64 = 1e-9;
-
 /// The direction of `name` for `system`: its declaration, else the convention.
 pub fn direction(system: &dyn System, name: &str) -> Direction {
     system
         .metric_direction(name)
         .unwrap_or_else(|| Direction::conventional(name))
-}
-
-/// A relative and an absolute tolerance; unset fields fall back to the level above.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize, Serialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct Tolerance {
-    /// Relative to |baseline|.
-    #[schemars(range(min = 0))]
-    pub rel: Option<f64>,
-    /// In the metric's unit.
-    #[schemars(range(min = 0))]
-    pub abs: Option<f64>,
-}
-
-/// `[regression]` in a scenario file: tolerance overrides for the baseline check.
-///
-/// ```toml
-/// [regression]
-/// rel = 0.05                                    # every metric of this scenario
-/// metrics.sim_time_to_goal = { rel = 0.2 }      # one metric
-/// ```
-#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct RegressionConfig {
-    /// Relative tolerance for every metric.
-    #[schemars(range(min = 0))]
-    pub rel: Option<f64>,
-    /// Absolute tolerance for every metric.
-    #[schemars(range(min = 0))]
-    pub abs: Option<f64>,
-    /// Per-metric overrides.
-    #[serde(default)]
-    pub metrics: BTreeMap<String, Tolerance>,
-}
-
-impl RegressionConfig {
-    /// Values must be finite and ≥ 0 (messages name the key).
-    pub fn validate(&self) -> Result<(), SetupError> {
-        let ok = |key: String, v: Option<f64>| match v {
-            Some(x) if !(x.is_finite() && x >= 0.0) => {
-                Err(SetupError::key(key, "must be finite and ≥ 0"))
-            }
-            _ => Ok(()),
-        };
-        ok("regression.rel".into(), self.rel)?;
-        ok("regression.abs".into(), self.abs)?;
-        for (m, t) in &self.metrics {
-            ok(format!("regression.metrics.{m}.rel"), t.rel)?;
-            ok(format!("regression.metrics.{m}.abs"), t.abs)?;
-        }
-        Ok(())
-    }
-
-    /// The unknown metric names among the overrides.
-    pub fn unknown_metrics<'a>(&'a self, known: &'a [String]) -> impl Iterator<Item = &'a str> {
-        self.metrics
-            .keys()
-            .filter(move |k| !known.contains(k))
-            .map(String::as_str)
-    }
-
-    /// `(rel, abs)` for a metric.
-    pub fn tolerance(&self, metric: &str) -> (f64, f64) {
-        let t = self.metrics.get(metric).copied().unwrap_or_default();
-        (
-            t.rel.or(self.rel).unwrap_or(DEFAULT_REL),
-            t.abs.or(self.abs).unwrap_or(DEFAULT_ABS),
-        )
-    }
 }
 
 /// The committed metrics of one scenario.
@@ -415,17 +339,6 @@ pub fn change_text(base: Option<f64>, now: Option<f64>) -> String {
     }
 }
 
-/// A metric value for tables.
-pub fn fmt_value(v: f64) -> String {
-    if v.is_nan() {
-        "NaN".into()
-    } else if v == 0.0 || (v.abs() >= 1e-3 && v.abs() < 1e6) {
-        format!("{v:.6}")
-    } else {
-        format!("{v:.4e}")
-    }
-}
-
 /// Compare a run with its baseline; `dir` gives each metric's direction.
 pub fn compare(
     base: &Baseline,
@@ -501,6 +414,7 @@ pub fn format_table(rows: &[(String, Vec<Delta>)]) -> String {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scenario::regression::{DEFAULT_ABS, DEFAULT_REL};
     use proptest::prelude::*;
     use Direction::*;
 

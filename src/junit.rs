@@ -11,8 +11,9 @@
 //! of type `xpass`. A sweep is one test
 //! case with its statistics (`sweep_*` metrics) as `<property>` elements.
 
-use crate::baseline::{fmt_value, Delta, Status};
+use crate::baseline::{Delta, Status};
 use crate::error::Error;
+use crate::numfmt::fmt_value;
 use crate::runner::RunOutcome;
 use crate::verdict::Verdict;
 use quick_junit::{NonSuccessKind, Property, Report, TestCase, TestCaseStatus, TestSuite};

@@ -113,6 +113,17 @@ pub fn shorten_long_numbers(text: &str) -> String {
     out
 }
 
+/// A metric value for tables.
+pub fn fmt_value(v: f64) -> String {
+    if v.is_nan() {
+        "NaN".into()
+    } else if v == 0.0 || (v.abs() >= 1e-3 && v.abs() < 1e6) {
+        format!("{v:.6}")
+    } else {
+        format!("{v:.4e}")
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

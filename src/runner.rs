@@ -656,12 +656,12 @@ fn write_logs(
     // The writers are independent (each file from the same record): on two
     // cores a single run's logs take the longer writer's time, not the sum.
     if keep == Keep::Report {
-        return crate::report::data::write(&dir.join("series.json"), &rec);
+        return crate::log::series::write(&dir.join("series.json"), &rec);
     }
     let (mcap, rest) = rayon::join(
         || crate::log::mcap::write_mcap(&dir.join("run.mcap"), &rec).map_err(|e| e.to_string()),
         || {
-            crate::report::data::write(&dir.join("series.json"), &rec)?;
+            crate::log::series::write(&dir.join("series.json"), &rec)?;
             crate::log::rerun::write_rrd(&dir.join("run.rrd"), &rec).map_err(|e| e.to_string())
         },
     );

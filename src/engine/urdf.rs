@@ -213,6 +213,16 @@ pub fn loadable_problems(robot: &Robot) -> Vec<SetupError> {
     out
 }
 
+/// The `<limit effort>` of a joint, when the URDF gives one (> 0).
+pub fn effort(robot: &Robot, joint: &str) -> Option<f64> {
+    robot
+        .joints
+        .iter()
+        .find(|j| j.name == joint)
+        .map(|j| j.limit.effort)
+        .filter(|e| e.is_finite() && *e > 0.0)
+}
+
 /// Radius of the first sphere or cylinder collision of `link`, if any.
 pub fn collision_radius(robot: &Robot, link: &str) -> Option<f64> {
     robot

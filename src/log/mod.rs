@@ -15,6 +15,7 @@ pub mod atomic;
 pub mod mcap;
 pub mod rerun;
 mod scene;
+pub mod series;
 pub mod unit;
 
 use std::path::{Path, PathBuf};

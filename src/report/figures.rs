@@ -2,7 +2,7 @@
 //! commands and channels against time (shaded by the policy's mode), and a
 //! sweep's distributions and table of variants.
 
-use crate::report::data::{Series, SeriesFile};
+use crate::log::series::{Series, SeriesFile};
 use crate::report::markup::{esc, num, tracking_meaningful};
 use crate::report::plots::{self, HLine, Line, Marker, Path2, Shade};
 use serde_json::Value;

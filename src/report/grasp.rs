@@ -3,7 +3,7 @@
 //! wrench averaged over a policy period) and the raw per-step peaks, with
 //! when the per-step values cross the bound.
 
-use crate::report::data::{Series, SeriesFile};
+use crate::log::series::{Series, SeriesFile};
 use crate::report::markup::{esc, num};
 use crate::report::plots::{self, HLine, Line};
 use serde_json::Value;

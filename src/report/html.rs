@@ -246,7 +246,7 @@ fn metrics_table(summary: &Value, reg: &Option<Vec<StoredDelta>>) -> String {
                     format!(
                         "<span class=\"{}\">≤ {}</span>",
                         if ok { "pass" } else { "fail" },
-                        crate::baseline::fmt_value(t)
+                        crate::numfmt::fmt_value(t)
                     )
                 }
                 None => String::new(),

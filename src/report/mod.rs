@@ -11,7 +11,6 @@
 //! touched. Pages are self-contained (inline SVG from `plotters`, inline CSS,
 //! no scripts, no network), so they work as CI artifacts and offline.
 
-pub mod data;
 mod figures;
 mod grasp;
 mod html;
@@ -21,6 +20,7 @@ mod plots;
 mod robot;
 
 use crate::error::Error;
+use crate::log::series;
 use rayon::prelude::*;
 use serde::Deserialize;
 use serde_json::Value;
@@ -48,7 +48,7 @@ pub enum RunData {
         /// `summary.json`.
         summary: Box<Value>,
         /// `series.json`.
-        series: Box<data::SeriesFile>,
+        series: Box<series::SeriesFile>,
     },
     /// A Monte Carlo sweep: `sweep.json`.
     Sweep(Box<Value>),
@@ -126,14 +126,14 @@ pub fn load_dir(dir: &Path) -> Result<Loaded, Error> {
             };
             return Err(Error::input(&series_path, why));
         }
-        let series: data::SeriesFile = read_json(&series_path)?;
-        if series.format != data::FORMAT {
+        let series: series::SeriesFile = read_json(&series_path)?;
+        if series.format != series::FORMAT {
             return Err(Error::input(
                 &series_path,
                 format!(
                     "key `format`: {} is not supported (expected {})",
                     series.format,
-                    data::FORMAT
+                    series::FORMAT
                 ),
             ));
         }

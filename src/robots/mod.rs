@@ -248,3 +248,30 @@ pub trait System: Send + Sync {
         Vec::new()
     }
 }
+
+/// Names given in `[model]`: none empty, none given twice.
+pub(crate) fn check_names(names: &[(&str, &str)]) -> Result<(), SetupError> {
+    for (i, (key, name)) in names.iter().enumerate() {
+        if name.trim().is_empty() {
+            return Err(SetupError::key(format!("model.{key}"), "must not be empty"));
+        }
+        if let Some((other, _)) = names[..i].iter().find(|(_, n)| n == name) {
+            return Err(SetupError::key(
+                format!("model.{key}"),
+                format!("`{name}` is also `model.{other}` (each part needs its own name)"),
+            ));
+        }
+    }
+    Ok(())
+}
+
+/// The refusal of a model without a planner of its own (the plan-file and
+/// external-law wrappers replace [`System::plan`]).
+pub(crate) fn no_planner(model: &str) -> PlanError {
+    PlanError::InvalidParameter {
+        name: "kind".into(),
+        reason: format!(
+            "model `{model}` has no built-in planner: use kind = \"file\" or kind = \"external\""
+        ),
+    }
+}

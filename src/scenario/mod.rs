@@ -15,6 +15,7 @@ mod config;
 pub mod doc;
 pub mod keypath;
 pub mod margins_config;
+pub mod regression;
 pub mod schema;
 mod sweep_config;
 
@@ -175,7 +176,7 @@ struct ScenarioFile {
     sweep: Option<SweepConfig>,
     /// Tolerances of the baseline comparison (`check --baseline`).
     #[serde(default)]
-    regression: crate::baseline::RegressionConfig,
+    regression: crate::scenario::regression::RegressionConfig,
     /// Least robustness margins `check` gates (searched after the nominal run).
     #[serde(default)]
     margins: MarginsConfig,
@@ -234,7 +235,7 @@ pub struct Scenario {
     /// Monte Carlo variants (`[sweep]`): `run`/`check` run the sweep instead of one run.
     pub sweep: Option<SweepConfig>,
     /// Baseline tolerance overrides (`[regression]`).
-    pub regression: crate::baseline::RegressionConfig,
+    pub regression: crate::scenario::regression::RegressionConfig,
     /// Margins `check` gates (`[margins]`) and how they are searched.
     pub margins: MarginsConfig,
     /// Where each key is written, for errors found after parsing.
@@ -767,7 +768,7 @@ impl Scenario {
             regression
                 .metrics
                 .entry(MarginsConfig::metric(d))
-                .or_insert(crate::baseline::Tolerance {
+                .or_insert(crate::scenario::regression::Tolerance {
                     rel: Some(file.margins.tolerance()),
                     abs: None,
                 });

@@ -119,7 +119,7 @@ fn worsened_run_fails_unchanged_passes_update_resets() {
         let (base, now): (f64, f64) = (f[3].parse().unwrap(), f[4].parse().unwrap());
         assert_eq!(f[2], "lower", "{l}");
         assert!(
-            now > base + base.abs() * anholonomy::baseline::DEFAULT_REL,
+            now > base + base.abs() * anholonomy::scenario::regression::DEFAULT_REL,
             "{l}"
         );
     }

@@ -37,7 +37,7 @@ fn uses(file: &Path, modules: &[&str]) -> Vec<String> {
 #[test]
 fn nothing_below_the_scenario_layer_imports_it() {
     let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let below = ["model", "planner", "physics", "systems", "log"]
+    let below = ["model", "planner", "engine", "robots", "sources", "log"]
         .iter()
         .flat_map(|d| rust_files(&src.join(d)))
         .chain(
@@ -308,6 +308,240 @@ fn an_import_circle_is_detected() {
     assert_eq!(import_circles(dir.path()).len(), 1);
     std::fs::write(m.join("b.rs"), "// crate::m::a in a comment\n").unwrap();
     assert!(import_circles(dir.path()).is_empty());
+}
+
+/// The text of `file` that is code: comments and `#[cfg(test)]` modules
+/// left out, lines joined (a `use` group may span lines).
+fn code_text(text: &str) -> String {
+    code_lines(text)
+        .into_iter()
+        .map(|l| match l.find("//") {
+            Some(i) => &l[..i],
+            None => l,
+        })
+        .collect::<Vec<_>>()
+        .join("\n")
+}
+
+/// The top-level modules (`src/X.rs`, `src/X/`) of a source tree, the
+/// binary's `main.rs` and `cmd/` left out.
+fn top_level_modules(src: &Path) -> Vec<String> {
+    let mut out: Vec<String> = std::fs::read_dir(src)
+        .unwrap()
+        .flatten()
+        .map(|e| e.path())
+        .filter(|p| p.is_dir() || p.extension().is_some_and(|x| x == "rs"))
+        .filter_map(|p| p.file_stem().map(|s| s.to_string_lossy().into_owned()))
+        .filter(|m| !["lib", "main", "cmd"].contains(&m.as_str()))
+        .collect();
+    out.sort();
+    out.dedup();
+    out
+}
+
+/// The first name of every crate path in `code`: `crate::a::...`,
+/// `super::...` resolved from `module`, and each item of a group
+/// `crate::{a::x, b::{y, z}}`, however the group is nested or wrapped.
+fn top_names(code: &str, module: &[String]) -> Vec<String> {
+    let ident = |c: char| c.is_ascii_alphanumeric() || c == '_';
+    let mut out = Vec::new();
+    let b = code.as_bytes();
+    let mut i = 0;
+    while i < code.len() {
+        let before_ok = i == 0 || !(ident(b[i - 1] as char) || b[i - 1] == b':');
+        let tail = &code[i..];
+        let (mut base, mut t) = if before_ok && tail.starts_with("crate::") {
+            (Vec::new(), &tail["crate::".len()..])
+        } else if before_ok && tail.starts_with("super::") {
+            let mut base = module.to_vec();
+            let mut t = tail;
+            while let Some(r) = t.strip_prefix("super::") {
+                base.pop();
+                t = r;
+            }
+            (base, t)
+        } else {
+            i += tail.chars().next().map_or(1, char::len_utf8);
+            continue;
+        };
+        if base.is_empty() && t.starts_with('{') {
+            // A group straight under the crate: the first name of each item.
+            let mut depth = 0;
+            let mut start = true;
+            for (k, c) in t.char_indices() {
+                match c {
+                    '{' => {
+                        depth += 1;
+                        start = depth == 1;
+                    }
+                    '}' => {
+                        depth -= 1;
+                        if depth == 0 {
+                            t = &t[k..];
+                            break;
+                        }
+                    }
+                    ',' if depth == 1 => start = true,
+                    c if start && depth == 1 && ident(c) => {
+                        let name: String = t[k..].chars().take_while(|&c| ident(c)).collect();
+                        out.push(name);
+                        start = false;
+                    }
+                    c if !c.is_whitespace() => start = false,
+                    _ => {}
+                }
+            }
+        } else if base.is_empty() {
+            let name: String = t.chars().take_while(|&c| ident(c)).collect();
+            out.push(name);
+        } else {
+            out.push(base.swap_remove(0));
+        }
+        i = code.len() - t.len();
+        i += 1;
+    }
+    out
+}
+
+/// Which top-level module names which: every crate path in every file of
+/// the library counts (`use` lines and fully qualified paths alike).
+fn top_level_edges(
+    src: &Path,
+) -> std::collections::BTreeMap<String, std::collections::BTreeSet<String>> {
+    let mods = top_level_modules(src);
+    let mut edges: std::collections::BTreeMap<_, std::collections::BTreeSet<String>> = mods
+        .iter()
+        .map(|m| (m.clone(), Default::default()))
+        .collect();
+    for f in rust_files(src) {
+        let module = module_of(src, &f);
+        let Some(top) = module.first().filter(|m| mods.contains(m)) else {
+            continue;
+        };
+        let text = std::fs::read_to_string(&f).unwrap();
+        for name in top_names(&code_text(&text), &module) {
+            if mods.contains(&name) && &name != top {
+                edges.get_mut(top).unwrap().insert(name);
+            }
+        }
+    }
+    edges
+}
+
+/// The circles of `edges`: its strongly connected components of more than
+/// one module (Tarjan), each sorted.
+fn circles(
+    edges: &std::collections::BTreeMap<String, std::collections::BTreeSet<String>>,
+) -> Vec<Vec<String>> {
+    struct T<'a> {
+        edges: &'a std::collections::BTreeMap<String, std::collections::BTreeSet<String>>,
+        index: std::collections::BTreeMap<&'a str, usize>,
+        low: std::collections::BTreeMap<&'a str, usize>,
+        stack: Vec<&'a str>,
+        out: Vec<Vec<String>>,
+    }
+    fn visit<'a>(t: &mut T<'a>, v: &'a str) {
+        let n = t.index.len();
+        t.index.insert(v, n);
+        t.low.insert(v, n);
+        t.stack.push(v);
+        for w in &t.edges[v] {
+            if !t.index.contains_key(w.as_str()) {
+                visit(t, w);
+                let lw = t.low[w.as_str()];
+                let lv = t.low.get_mut(v).unwrap();
+                *lv = (*lv).min(lw);
+            } else if t.stack.contains(&w.as_str()) {
+                let iw = t.index[w.as_str()];
+                let lv = t.low.get_mut(v).unwrap();
+                *lv = (*lv).min(iw);
+            }
+        }
+        if t.low[v] == t.index[v] {
+            let mut comp = Vec::new();
+            while let Some(w) = t.stack.pop() {
+                comp.push(w.to_string());
+                if w == v {
+                    break;
+                }
+            }
+            if comp.len() > 1 {
+                comp.sort();
+                t.out.push(comp);
+            }
+        }
+    }
+    let mut t = T {
+        edges,
+        index: Default::default(),
+        low: Default::default(),
+        stack: Vec::new(),
+        out: Vec::new(),
+    };
+    for v in edges.keys() {
+        if !t.index.contains_key(v.as_str()) {
+            visit(&mut t, v);
+        }
+    }
+    t.out
+}
+
+/// No circle among the top-level modules, counting every crate path: the
+/// pipeline reads one way (scenario → plan → ideal run → replay → compare →
+/// logs/report), with the engine, robots and plan sources beneath it.
+#[test]
+fn no_circles_among_top_level_modules() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let edges = top_level_edges(&src);
+    assert!(edges.len() > 25, "{:?}", edges.keys());
+    let found = circles(&edges);
+    let show: Vec<String> = found.iter().map(|c| c.join(" <-> ")).collect();
+    assert!(
+        found.is_empty(),
+        "circles among top-level modules:\n{}",
+        show.join("\n")
+    );
+}
+
+/// The rule can fail: a circle made by a fully qualified path, a wrapped
+/// nested group and `super::` is caught; comments and test modules are not
+/// code.
+#[test]
+fn a_circle_among_top_level_modules_is_detected() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = dir.path();
+    std::fs::write(src.join("lib.rs"), "pub mod a;\npub mod b;\npub mod c;\n").unwrap();
+    std::fs::write(src.join("a.rs"), "fn f() { crate::b::g() }\n").unwrap();
+    std::fs::create_dir(src.join("b")).unwrap();
+    std::fs::write(src.join("b/mod.rs"), "pub mod d;\n").unwrap();
+    std::fs::write(
+        src.join("b/d.rs"),
+        "use crate::{\n    c::{x, y},\n    a::Z,\n};\n",
+    )
+    .unwrap();
+    std::fs::write(src.join("c.rs"), "// crate::a in a comment\n").unwrap();
+    let edges = top_level_edges(src);
+    assert_eq!(
+        circles(&edges),
+        vec![vec!["a".to_string(), "b".to_string()]]
+    );
+    // Through `super::super::` from a nested file: c -> b -> c.
+    std::fs::write(src.join("b/d.rs"), "use crate::c::x;\n").unwrap();
+    std::fs::create_dir(src.join("c")).unwrap();
+    std::fs::remove_file(src.join("c.rs")).unwrap();
+    std::fs::write(src.join("c/mod.rs"), "pub mod e;\n").unwrap();
+    std::fs::write(src.join("c/e.rs"), "fn h() { super::super::b::d::k() }\n").unwrap();
+    assert_eq!(
+        circles(&top_level_edges(src)),
+        vec![vec!["b".to_string(), "c".to_string()]]
+    );
+    // A test module may borrow from anywhere: no circle.
+    std::fs::write(
+        src.join("c/e.rs"),
+        "#[cfg(test)]\nmod tests {\n    use crate::b::d::k;\n}\n",
+    )
+    .unwrap();
+    assert!(circles(&top_level_edges(src)).is_empty());
 }
 
 /// The integration tests are one binary (`autotests = false`): a file

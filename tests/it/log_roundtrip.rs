@@ -437,7 +437,7 @@ fn every_robots_paths_and_goal_are_logged() {
     assert!(!entities.contains("/paths/goal_2/heading"));
 
     // The report's data: the first robot's paths as before, the others beside.
-    let sf = anholonomy::report::data::SeriesFile::from_record(&rec);
+    let sf = anholonomy::log::series::SeriesFile::from_record(&rec);
     assert_eq!(sf.path_ideal.len(), fx.ideal.len());
     assert_eq!(sf.other_robots.len(), 1);
     assert_eq!(sf.other_robots[0].position, [2, 3]);

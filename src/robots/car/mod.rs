@@ -21,12 +21,12 @@ use crate::planner::PlanError;
 use crate::record::{Comparison, SimTrajectory};
 use crate::robots::car::kinematics::{Bicycle, Steering};
 use crate::robots::car::physics::{self as phys, CarNames, CarPhysics, REQUIRED};
-use crate::robots::diff_drive::{check_names, no_planner};
 use crate::robots::wheeled::obstacles::config::{
     default_goal_tolerance, SolidObstacleConfig, World,
 };
 use crate::robots::wheeled::slip::{slip_metrics, SLIP_METRICS};
 use crate::robots::System;
+use crate::robots::{check_names, no_planner};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};

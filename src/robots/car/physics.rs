@@ -47,6 +47,7 @@ use crate::engine::rapier::prelude::*;
 use crate::engine::reading::UrdfReading;
 use crate::engine::real::{f, vector};
 use crate::engine::required::Required;
+use crate::engine::urdf::effort;
 use crate::engine::urdf::{Drive, SimWorld};
 use crate::engine::{angles, PhysicsSettings, PhysicsSystem};
 use crate::error::SetupError;
@@ -55,7 +56,6 @@ use crate::record::Pose;
 use crate::robots::car::kinematics::{
     ackermann, ackermann_slope, bicycle_angle, rear_speeds, Bicycle, Steering as SteeringInput,
 };
-use crate::robots::diff_drive::physics::effort;
 use crate::robots::wheeled::{self, Wheel};
 use std::path::Path;
 

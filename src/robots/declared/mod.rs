@@ -17,7 +17,7 @@ use crate::plan::{Limits, Plan};
 use crate::planner::PlanError;
 use crate::robots::declared::kinematics::{Declared, Expr};
 use crate::robots::declared::physics::{DeclaredPhysics, Read, Rig};
-use crate::robots::diff_drive::no_planner;
+use crate::robots::no_planner;
 use crate::robots::System;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};

@@ -258,7 +258,7 @@ impl DeclaredPhysics {
             let uj = joint(robot, j).expect("checked");
             let h = sw.require_joint(j)?;
             let mut d = sw.drive_for(h, axis_of(uj), sw.joint_position(h).unwrap_or(0.0));
-            d.max_torque = crate::robots::diff_drive::physics::effort(robot, j);
+            d.max_torque = crate::engine::urdf::effort(robot, j);
             reading.drive(j, d.max_torque, sim.motor_max_torque);
             drives.push((d, e.clone()));
         }
@@ -267,7 +267,7 @@ impl DeclaredPhysics {
             let uj = joint(robot, j).expect("checked");
             let h = sw.require_joint(j)?;
             let mut d = sw.drive_for(h, axis_of(uj), sw.joint_position(h).unwrap_or(0.0));
-            d.max_torque = crate::robots::diff_drive::physics::effort(robot, j);
+            d.max_torque = crate::engine::urdf::effort(robot, j);
             reading.drive(j, d.max_torque, sim.motor_max_torque);
             positions.push((d, e.clone()));
         }

@@ -26,7 +26,7 @@ use crate::robots::wheeled::obstacles::config::{
     default_goal_tolerance, SolidObstacleConfig, World,
 };
 use crate::robots::wheeled::slip::{slip_metrics, SLIP_METRICS};
-use crate::robots::System;
+use crate::robots::{check_names, no_planner, System};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
@@ -80,22 +80,6 @@ fn default_right() -> String {
 }
 fn default_casters() -> Vec<String> {
     vec![phys::CASTER.into()]
-}
-
-/// Names given in `[model]`: none empty, none given twice.
-pub(crate) fn check_names(names: &[(&str, &str)]) -> Result<(), SetupError> {
-    for (i, (key, name)) in names.iter().enumerate() {
-        if name.trim().is_empty() {
-            return Err(SetupError::key(format!("model.{key}"), "must not be empty"));
-        }
-        if let Some((other, _)) = names[..i].iter().find(|(_, n)| n == name) {
-            return Err(SetupError::key(
-                format!("model.{key}"),
-                format!("`{name}` is also `model.{other}` (each part needs its own name)"),
-            ));
-        }
-    }
-    Ok(())
 }
 
 struct DiffDrive {
@@ -154,17 +138,6 @@ pub fn build(cfg: &DiffDriveConfig) -> Result<Box<dyn System>, SetupError> {
         },
         world: World::new(&cfg.obstacles, cfg.goal_tolerance)?,
     }))
-}
-
-/// The refusal of a model without a planner of its own (the plan-file and
-/// external-law wrappers replace [`System::plan`]).
-pub(crate) fn no_planner(model: &str) -> PlanError {
-    PlanError::InvalidParameter {
-        name: "kind".into(),
-        reason: format!(
-            "model `{model}` has no built-in planner: use kind = \"file\" or kind = \"external\""
-        ),
-    }
 }
 
 impl System for DiffDrive {

@@ -98,16 +98,6 @@ pub struct DiffDriveGeometry {
     pub effort: Vec<Option<f64>>,
 }
 
-/// The `<limit effort>` of a joint, when the URDF gives one (> 0).
-pub fn effort(robot: &urdf_rs::Robot, joint: &str) -> Option<f64> {
-    robot
-        .joints
-        .iter()
-        .find(|j| j.name == joint)
-        .map(|j| j.limit.effort)
-        .filter(|e| e.is_finite() && *e > 0.0)
-}
-
 /// The mean of `f` over `wheels`.
 fn mean(wheels: &[Wheel], f: impl Fn(&Wheel) -> f64) -> f64 {
     wheels.iter().map(f).sum::<f64>() / wheels.len() as f64
@@ -166,7 +156,10 @@ impl DiffDriveGeometry {
             half_track: 0.5 * (yl - yr),
             point: [0.5 * (xl + xr), 0.5 * (yl + yr)],
             ground,
-            effort: wheels.iter().map(|w| effort(robot, &w.joint)).collect(),
+            effort: wheels
+                .iter()
+                .map(|w| crate::engine::urdf::effort(robot, &w.joint))
+                .collect(),
             n_left: left.len(),
             wheels,
         })
