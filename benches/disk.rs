@@ -39,7 +39,7 @@ fn full_run(c: &mut Criterion) {
     let logs = tempfile::tempdir().expect("tempdir");
     let opts = RunOptions {
         log_root: Some(logs.path().to_path_buf()),
-        progress: false,
+        progress: Default::default(),
         pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
         cancel: Default::default(),
         keep: anholonomy::log::Keep::All,

@@ -3,7 +3,16 @@
 use std::path::PathBuf;
 use thiserror::Error;
 
-/// Top-level error. [`Error::exit_code`] maps it to the CLI's exit status.
+/// What the user must do about an [`Error`].
+#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
+pub enum ErrorKind {
+    /// Fix the input (a scenario, a file it names, a flag).
+    BadInput,
+    /// Something failed while running (physics, a feedback law, logs).
+    Runtime,
+}
+
+/// Top-level error. [`Error::kind`] says whether the user must fix the input.
 #[derive(Debug, Error)]
 pub enum Error {
     /// The scenario (or a file it names) is unusable: the user must fix the input.
@@ -212,12 +221,17 @@ impl Error {
         }
     }
 
-    /// Exit status: 2 for bad input (including planner refusals), 3 for runtime failures.
-    pub fn exit_code(&self) -> i32 {
+    /// Bad input (planner refusals included) or a failure at run time; of
+    /// several errors, a runtime one if any.
+    pub fn kind(&self) -> ErrorKind {
         match self {
-            Error::Input { .. } | Error::Plan { .. } => 2,
-            Error::Several(v) => v.iter().map(Error::exit_code).max().unwrap_or(2),
-            Error::Physics { .. } | Error::Law { .. } | Error::Log { .. } => 3,
+            Error::Input { .. } | Error::Plan { .. } => ErrorKind::BadInput,
+            Error::Several(v) => v
+                .iter()
+                .map(Error::kind)
+                .max()
+                .unwrap_or(ErrorKind::BadInput),
+            Error::Physics { .. } | Error::Law { .. } | Error::Log { .. } => ErrorKind::Runtime,
         }
     }
 }

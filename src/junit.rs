@@ -145,9 +145,9 @@ pub fn test_case(r: &CaseResult<'_>) -> TestCase {
         } => {
             let mut s = TestCaseStatus::non_success(NonSuccessKind::Error);
             s.set_message(error.to_string())
-                .set_type(match error.exit_code() {
-                    2 => "input",
-                    _ => "runtime",
+                .set_type(match error.kind() {
+                    crate::error::ErrorKind::BadInput => "input",
+                    crate::error::ErrorKind::Runtime => "runtime",
                 });
             let mut tc = TestCase::new(*name, s);
             tc.set_classname(format!("anholonomy.{planner}"))

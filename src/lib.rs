@@ -1,3 +1,4 @@
+#![warn(missing_docs)]
 //! anholonomy: validation harness for nonholonomic motion planners.
 //!
 //! Pipeline: [`scenario`] (TOML → typed configuration) → [`validate`] (every
@@ -65,19 +66,3 @@ pub mod validate;
 pub mod verdict;
 
 pub use error::Error;
-
-/// `println!` for command output that ignores a closed stdout (`| head`)
-/// instead of panicking.
-#[macro_export]
-macro_rules! say {
-    ($($t:tt)*) => {{
-        use std::io::Write as _;
-        let _ = writeln!(std::io::stdout().lock(), $($t)*);
-    }};
-}
-
-/// Print text to stdout, ignoring a closed stdout (`| head`) like `say!`.
-pub fn emit(text: &str) {
-    use std::io::Write as _;
-    let _ = write!(std::io::stdout().lock(), "{text}");
-}

@@ -1,10 +1,26 @@
 //! `anholonomy` command-line interface: parse (`cmd::cli`), dispatch to
 //! the command's module in `cmd/`, print errors one per line.
 
+use anholonomy::error::ErrorKind;
 use clap::Parser;
 use cmd::cli::{Cli, Cmd, ModelsCmd};
 use cmd::run::Mode;
 use std::process::ExitCode;
+
+/// `println!` for command output that ignores a closed stdout (`| head`)
+/// instead of panicking.
+macro_rules! say {
+    ($($t:tt)*) => {{
+        use std::io::Write as _;
+        let _ = writeln!(std::io::stdout().lock(), $($t)*);
+    }};
+}
+
+/// Print text to stdout, ignoring a closed stdout (`| head`) like `say!`.
+fn emit(text: &str) {
+    use std::io::Write as _;
+    let _ = write!(std::io::stdout().lock(), "{text}");
+}
 
 mod cmd;
 
@@ -56,11 +72,11 @@ fn main() -> ExitCode {
         } => cmd::inspect::keys_cmd(name.as_deref(), *markdown, out.as_deref()),
         Cmd::Merge { paths, out } => cmd::logs::merge_cmd(paths, out.as_deref()),
         Cmd::Margin(a) => cmd::margin::margin_cmd(a),
-        Cmd::Init(a) => anholonomy::init::init(&a.dir, a.from.as_deref()),
+        Cmd::Init(a) => cmd::inspect::init_cmd(&a.dir, a.from.as_deref()),
         Cmd::Models(a) => match &a.cmd {
-            None => anholonomy::init::list_models(),
+            None => cmd::inspect::models_cmd(),
             Some(ModelsCmd::Export { dir, names, force }) => {
-                anholonomy::init::export_models(dir, names, *force)
+                cmd::inspect::export_cmd(dir, names, *force)
             }
         },
     };
@@ -75,7 +91,9 @@ fn main() -> ExitCode {
                     anholonomy::numfmt::shorten_long_numbers(&e.to_string())
                 );
             }
-            ExitCode::from(errors.iter().map(|e| e.exit_code()).max().unwrap_or(2) as u8)
+            // 2: bad input; 3: a failure at run time.
+            let runtime = errors.iter().any(|e| e.kind() == ErrorKind::Runtime);
+            ExitCode::from(if runtime { 3 } else { 2 })
         }
     }
 }

@@ -1,49 +1,95 @@
-//! A progress bar that only appears once a run has taken more than a second.
+//! Progress of long work, reported to an [`Observer`]: the library
+//! computes, the binary draws (its progress bars are `src/cmd/progress.rs`),
+//! as the replay reports to a [`crate::engine::ReplayObserver`].
 
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
-use std::cell::Cell;
-use std::time::{Duration, Instant};
+use std::sync::Arc;
 
-/// Progress bar shown on stderr after a delay (never when disabled or not a terminal).
-pub struct Delayed {
-    bar: ProgressBar,
-    start: Instant,
-    shown: Cell<bool>,
-    enabled: bool,
+/// The kinds of long work that report progress.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
+pub enum Work {
+    /// One scenario's physics replay, in thousandths of its steps.
+    Run,
+    /// A sweep's variants.
+    Sweep,
+    /// The scenarios of one call.
+    Scenarios,
 }
 
-const RESOLUTION: u64 = 1000;
+/// Units a [`Work::Run`] counts to.
+pub const RUN_UNITS: u64 = 1000;
 
-impl Delayed {
-    /// A hidden bar for the scenario `name`.
-    pub fn new(name: &str, enabled: bool) -> Self {
-        let bar = ProgressBar::with_draw_target(Some(RESOLUTION), ProgressDrawTarget::hidden());
-        if let Ok(style) =
-            ProgressStyle::with_template("{prefix:>24} [{bar:40}] {percent:>3}% {elapsed}/{eta}")
-        {
-            bar.set_style(style.progress_chars("=> "));
-        }
-        bar.set_prefix(name.to_string());
-        Self {
-            bar,
-            start: Instant::now(),
-            shown: Cell::new(false),
-            enabled,
-        }
+/// Receives progress from any thread. Every method does nothing by default.
+pub trait Observer: Send + Sync {
+    /// `work` named `name` starts; it will count to `total`.
+    fn started(&self, _work: Work, _name: &str, _total: u64) {}
+    /// `work` named `name` did `by` more units.
+    fn advanced(&self, _work: Work, _name: &str, _by: u64) {}
+    /// `work` named `name` ended (done, failed or cancelled).
+    fn finished(&self, _work: Work, _name: &str) {}
+}
+
+/// Observes nothing.
+#[derive(Debug, Clone, Copy, Default)]
+pub struct Silent;
+
+impl Observer for Silent {}
+
+/// A shared observer, for options that are cloned into every run.
+#[derive(Clone)]
+pub struct Progress(pub Arc<dyn Observer>);
+
+impl Progress {
+    /// An observer that sees nothing.
+    pub fn silent() -> Progress {
+        Progress(Arc::new(Silent))
+    }
+}
+
+impl Default for Progress {
+    fn default() -> Self {
+        Progress::silent()
+    }
+}
+
+impl std::fmt::Debug for Progress {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str("Progress")
+    }
+}
+
+impl std::ops::Deref for Progress {
+    type Target = dyn Observer;
+    fn deref(&self) -> &Self::Target {
+        &*self.0
+    }
+}
+
+/// A run's progress as [`Work::Run`] units: sends only the increments.
+pub struct RunMeter<'a> {
+    to: &'a dyn Observer,
+    name: &'a str,
+    sent: u64,
+}
+
+impl<'a> RunMeter<'a> {
+    /// A run named `name` starts.
+    pub fn start(to: &'a dyn Observer, name: &'a str) -> Self {
+        to.started(Work::Run, name, RUN_UNITS);
+        RunMeter { to, name, sent: 0 }
     }
 
-    /// Report progress as a fraction in [0, 1].
-    pub fn set(&self, fraction: f64) {
-        if self.enabled && !self.shown.get() && self.start.elapsed() > Duration::from_secs(1) {
-            self.bar.set_draw_target(ProgressDrawTarget::stderr());
-            self.shown.set(true);
+    /// The run is `fraction` done.
+    pub fn set(&mut self, fraction: f64) {
+        let now = (fraction.clamp(0.0, 1.0) * RUN_UNITS as f64) as u64;
+        if now > self.sent {
+            self.to.advanced(Work::Run, self.name, now - self.sent);
+            self.sent = now;
         }
-        self.bar
-            .set_position((fraction.clamp(0.0, 1.0) * RESOLUTION as f64) as u64);
     }
+}
 
-    /// Remove the bar.
-    pub fn finish(&self) {
-        self.bar.finish_and_clear();
+impl Drop for RunMeter<'_> {
+    fn drop(&mut self) {
+        self.to.finished(Work::Run, self.name);
     }
 }

@@ -24,14 +24,30 @@ impl Pose {
 /// Visual geometry of a URDF link, in the link frame.
 #[derive(Debug, Clone, PartialEq, Serialize)]
 pub enum Shape {
-    /// Full edge lengths, m.
-    Box { size: [f64; 3] },
-    /// Axis along local z (URDF convention).
-    Cylinder { radius: f64, length: f64 },
-    /// Sphere.
-    Sphere { radius: f64 },
-    /// Capsule along local z.
-    Capsule { radius: f64, length: f64 },
+    /// A box.
+    Box {
+        /// Full edge lengths, m.
+        size: [f64; 3],
+    },
+    /// A cylinder, its axis along local z (URDF convention).
+    Cylinder {
+        /// Radius, m.
+        radius: f64,
+        /// Length along z, m.
+        length: f64,
+    },
+    /// A sphere.
+    Sphere {
+        /// Radius, m.
+        radius: f64,
+    },
+    /// A capsule along local z.
+    Capsule {
+        /// Radius, m.
+        radius: f64,
+        /// Length of the cylindrical part along z, m.
+        length: f64,
+    },
     /// A triangle mesh from a file (its vertices in the visual's frame, scaled).
     Mesh {
         /// The mesh file.

@@ -28,8 +28,8 @@ pub use crate::validate::Prepared;
 pub struct RunOptions {
     /// Root directory for `<scenario>/run.*`; `None` writes no logs.
     pub log_root: Option<PathBuf>,
-    /// Show a progress bar when a run takes longer than a second.
-    pub progress: bool,
+    /// Where progress goes (nothing by default).
+    pub progress: crate::progress::Progress,
     /// Link poses in the logs per second of simulated time (at least this
     /// many, see [`pose_stride`]); 0 logs them at every sample.
     pub pose_rate: f64,
@@ -50,7 +50,7 @@ impl Default for RunOptions {
     fn default() -> Self {
         RunOptions {
             log_root: None,
-            progress: false,
+            progress: Default::default(),
             pose_rate: DEFAULT_POSE_RATE,
             cancel: Cancel::default(),
             keep: Keep::All,
@@ -318,7 +318,7 @@ fn run_plan(
         let t0 = Instant::now();
         let cpu0 = thread_cpu_s();
         let mut sys = prep.physics()?;
-        let bar = crate::progress::Delayed::new(&sc.name, opts.progress);
+        let mut bar = crate::progress::RunMeter::start(&*opts.progress, &sc.name);
         let mut fed = 0;
         let mut send = |traj: &Trajectory| {
             if let Some(tx) = &feed {
@@ -331,7 +331,7 @@ fn run_plan(
         };
         let mut observer = Observer {
             after_step: |out: &SimTrajectory| send(&out.traj),
-            bar: &bar,
+            bar: &mut bar,
             cancel: &opts.cancel,
         };
         let sim = replay(
@@ -340,7 +340,8 @@ fn run_plan(
             &replay_options(prep, opts),
             &mut observer,
         );
-        bar.finish();
+        drop(observer);
+        drop(bar);
         let sim = sim.map_err(|e| replay_error(prep, e))?;
         send(&sim.traj);
         let cpu = thread_cpu_s().zip(cpu0).map(|(b, a)| b - a);
@@ -425,15 +426,15 @@ pub fn ideal_run(prep: &Prepared, plan: &Plan, cancel: &Cancel) -> Result<Trajec
     })
 }
 
-/// The runner's view of a replay: its progress bar, the follower fed each
+/// The runner's view of a replay: its progress, the follower fed each
 /// new sample, and the run's cancel token.
-struct Observer<'a, F: FnMut(&SimTrajectory)> {
+struct Observer<'a, 'b, F: FnMut(&SimTrajectory)> {
     after_step: F,
-    bar: &'a crate::progress::Delayed,
+    bar: &'a mut crate::progress::RunMeter<'b>,
     cancel: &'a Cancel,
 }
 
-impl<F: FnMut(&SimTrajectory)> ReplayObserver for Observer<'_, F> {
+impl<F: FnMut(&SimTrajectory)> ReplayObserver for Observer<'_, '_, F> {
     fn progress(&mut self, fraction: f64) {
         self.bar.set(fraction);
     }
@@ -522,7 +523,7 @@ pub fn finish(
         started: t_all,
     } = runs;
     let plan_wall_s = timings.plan;
-    crate::engine::perturb::add_drive_channels(&mut sim, model.input_names());
+    crate::engine::perturb::reality::add_drive_channels(&mut sim, model.input_names());
     // Labels an external law named while running, for the logs.
     let plan = &*plan.with_run_labels();
 

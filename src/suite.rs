@@ -2,23 +2,29 @@
 //!
 //! Scenarios are independent (each builds its own world, single-threaded and
 //! deterministic), so they run on rayon's pool; results come back in input
-//! order and sweep tables are printed in input order once everything is done.
-//! No two scenarios of one call share a name, hence a log directory (the
-//! validation pass refuses it). A single scenario runs on the calling thread
-//! with its own progress bar; several share one bar counting finished
-//! scenarios.
+//! order, each sweep's table with it. No two scenarios of one call share a
+//! name, hence a log directory (the validation pass refuses it). A single
+//! scenario runs on the calling thread and reports its own progress;
+//! several report only how many have finished ([`Work::Scenarios`]).
 
 use crate::error::Error;
+use crate::progress::{Progress, Work};
 use crate::runner::{run, RunOptions, RunOutcome};
 use crate::sweep::records::Scan;
 use crate::sweep::{run_sweep_report, Shard};
 use crate::validate::Prepared;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use std::time::Instant;
 
-/// The result of one scenario and its wall time, s (JUnit reports it for failures too).
-pub type Ran = (Result<RunOutcome, Error>, f64);
+/// What one scenario of a call gave.
+pub struct Ran {
+    /// Its outcome.
+    pub result: Result<RunOutcome, Error>,
+    /// Its wall time, s (JUnit reports it for failures too).
+    pub wall: f64,
+    /// A sweep's table (empty for a single run), to show the user.
+    pub table: String,
+}
 
 /// Run every prepared scenario (sweeps as sweeps, restricted to `shard`,
 /// continuing `resumed[i]` when given); one result per scenario, in input order.
@@ -30,35 +36,29 @@ pub fn run_all(
 ) -> Vec<Ran> {
     let resume = |i: usize| resumed.get(i).and_then(Option::as_ref);
     if preps.len() == 1 {
-        let (res, table, wall) = run_one_report(&preps[0], opts, shard, resume(0));
-        crate::emit(&table);
-        return vec![(res, wall)];
+        return vec![run_one_report(&preps[0], opts, shard, resume(0))];
     }
     // Longest work first keeps both cores busy to the end.
     let mut order: Vec<usize> = (0..preps.len()).collect();
     order.sort_by_key(|&i| std::cmp::Reverse(cost(&preps[i])));
-    let bar = overall_bar(preps.len(), opts.progress);
+    let progress = &opts.progress;
+    progress.started(Work::Scenarios, "scenarios", preps.len() as u64);
     let quiet = RunOptions {
-        progress: false,
+        progress: Progress::silent(),
         ..opts.clone()
     };
-    let mut done: Vec<(usize, Ran, String)> = order
+    let mut done: Vec<(usize, Ran)> = order
         .par_iter()
         .with_max_len(1)
         .map(|&i| {
-            let (res, table, wall) = run_one_report(&preps[i], &quiet, shard, resume(i));
-            bar.inc(1);
-            (i, (res, wall), table)
+            let ran = run_one_report(&preps[i], &quiet, shard, resume(i));
+            progress.advanced(Work::Scenarios, "scenarios", 1);
+            (i, ran)
         })
         .collect();
-    bar.finish_and_clear();
-    done.sort_by_key(|(i, _, _)| *i);
-    done.into_iter()
-        .map(|(_, ran, table)| {
-            crate::emit(&table);
-            ran
-        })
-        .collect()
+    progress.finished(Work::Scenarios, "scenarios");
+    done.sort_by_key(|(i, _)| *i);
+    done.into_iter().map(|(_, ran)| ran).collect()
 }
 
 /// One scenario: its outcome, for a sweep its table, and its wall time.
@@ -67,7 +67,7 @@ fn run_one_report(
     opts: &RunOptions,
     shard: Option<Shard>,
     resume: Option<&Scan>,
-) -> (Result<RunOutcome, Error>, String, f64) {
+) -> Ran {
     let t0 = Instant::now();
     let (res, table) = if prep.scenario.sweep.is_some() {
         match run_sweep_report(prep, opts, shard, resume) {
@@ -82,7 +82,11 @@ fn run_one_report(
         });
         (res, String::new())
     };
-    (res, table, t0.elapsed().as_secs_f64())
+    Ran {
+        result: res,
+        wall: t0.elapsed().as_secs_f64(),
+        table,
+    }
 }
 
 /// A rough cost for scheduling: simulated steps (× variants for sweeps).
@@ -91,20 +95,4 @@ pub fn cost(prep: &Prepared) -> u64 {
     let variants = sc.sweep.as_ref().map_or(1, |s| s.count) as u64;
     let steps = (1.0 / sc.sim.dt.max(1e-6)) as u64;
     variants * steps
-}
-
-fn overall_bar(n: usize, enabled: bool) -> ProgressBar {
-    let target = if enabled {
-        ProgressDrawTarget::stderr()
-    } else {
-        ProgressDrawTarget::hidden()
-    };
-    let bar = ProgressBar::with_draw_target(Some(n as u64), target);
-    if let Ok(style) =
-        ProgressStyle::with_template("{prefix:>24} [{bar:40}] {pos}/{len} {elapsed}/{eta}")
-    {
-        bar.set_style(style.progress_chars("=> "));
-    }
-    bar.set_prefix("scenarios");
-    bar
 }

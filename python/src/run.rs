@@ -128,7 +128,7 @@ fn check_pose_rate(py: Python<'_>, rate: f64) -> PyResult<()> {
 fn options(logs: Option<PathBuf>, pose_rate: f64, cancel: &Cancel) -> RunOptions {
     RunOptions {
         log_root: logs,
-        progress: false,
+        progress: Default::default(),
         pose_rate,
         cancel: cancel.clone(),
         keep: anholonomy::log::Keep::All,

@@ -3,7 +3,6 @@
 
 use anholonomy::error::Error;
 use anholonomy::integrate::simulate;
-use anholonomy::say;
 use anholonomy::validate::{prepare_all, prepare_each, Call};
 use std::path::{Path, PathBuf};
 
@@ -197,6 +196,37 @@ pub fn keys_cmd(name: Option<&str>, markdown: bool, out: Option<&Path>) -> Resul
         page.text()
     }
     .map_err(|m| vec![Error::input("keys", m)])?;
-    anholonomy::emit(&text);
+    crate::emit(&text);
+    Ok(0)
+}
+
+/// `anholonomy models`: the shipped models, one line each.
+pub fn models_cmd() -> Result<u8, Vec<Error>> {
+    for (n, text) in anholonomy::init::models() {
+        say!("{n:<20} {n}.urdf ({} bytes)", text.len());
+    }
+    say!("`anholonomy models export DIR [NAME...]` writes them.");
+    Ok(0)
+}
+
+/// `anholonomy models export DIR [NAME...]`.
+pub fn export_cmd(dir: &Path, names: &[String], force: bool) -> Result<u8, Vec<Error>> {
+    for p in anholonomy::init::export_models(dir, names, force)? {
+        say!("wrote {}", p.display());
+    }
+    Ok(0)
+}
+
+/// `anholonomy init DIR`.
+pub fn init_cmd(dir: &Path, from: Option<&str>) -> Result<u8, Vec<Error>> {
+    for (name, verdict) in anholonomy::init::init(dir, from)? {
+        say!("{name}: {verdict} (baseline written)");
+    }
+    say!(
+        "wrote a starter repository in {} (anholonomy {}); try:\n  cd {} && anholonomy check scenarios/ --baseline baselines/ --report",
+        dir.display(),
+        anholonomy::init::VERSION,
+        dir.display()
+    );
     Ok(0)
 }

@@ -1,7 +1,6 @@
 //! Commands on written logs: `report` and `merge`.
 
 use anholonomy::error::Error;
-use anholonomy::say;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
@@ -19,7 +18,7 @@ pub fn report_cmd(logdir: &Path) -> Result<u8, Vec<Error>> {
 
 pub fn merge_cmd(paths: &[PathBuf], out: Option<&Path>) -> Result<u8, Vec<Error>> {
     let (sum, path) = anholonomy::sweep::merge::merge(paths, out)?;
-    anholonomy::emit(&sum.table);
+    crate::emit(&sum.table);
     say!("merged: {}", path.display());
     Ok(0)
 }

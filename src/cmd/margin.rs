@@ -76,7 +76,7 @@ fn parse_dimensions(names: &[String]) -> Result<Vec<Dimension>, Vec<Error>> {
             Some(d) if !out.contains(&d) => out.push(d),
             Some(_) => {}
             None => {
-                let known: Vec<&str> = Dimension::ALL.iter().map(|d| d.name()).collect();
+                let known: Vec<&str> = Dimension::all().map(|d| d.name()).collect();
                 let hint = known
                     .iter()
                     .map(|k| (strsim::jaro_winkler(n, k), k))
@@ -184,11 +184,8 @@ impl Todo {
 /// none is named) that apply are searched, the others shown as n/a. A
 /// dimension asked for that applies to no scenario of the call is bad input.
 fn plan_dimensions(preps: &[Prepared], asked: &[Dimension]) -> Result<Vec<Todo>, Vec<Error>> {
-    let wanted: &[Dimension] = if asked.is_empty() {
-        &Dimension::ALL
-    } else {
-        asked
-    };
+    let all: Vec<Dimension> = Dimension::all().collect();
+    let wanted: &[Dimension] = if asked.is_empty() { &all } else { asked };
     let mut out = Vec::new();
     for p in preps {
         let sc = &p.scenario;
@@ -316,7 +313,7 @@ fn one(
         .map(|r| (r.dimension, output::row(name, r)))
         .chain(na.iter().map(|(d, why)| (*d, output::na(name, *d, why))))
         .collect();
-    rows.sort_by_key(|(d, _)| Dimension::ALL.iter().position(|x| x == d));
+    rows.sort_by_key(|(d, _)| Dimension::all().position(|x| x == *d));
     Ok(Scenario {
         rows: rows.into_iter().map(|(_, r)| r).collect(),
         json: Some(rep.to_json(wall)),
@@ -355,7 +352,7 @@ pub fn margin_cmd(a: &MarginArgs) -> Result<u8, Vec<Error>> {
     let plan = plan_dimensions(&preps, &asked)?;
     let opts = RunOptions {
         log_root,
-        progress: false,
+        progress: Default::default(),
         pose_rate: DEFAULT_POSE_RATE,
         keep: anholonomy::log::Keep::default(),
         cancel: Default::default(),
@@ -396,21 +393,21 @@ pub fn margin_cmd(a: &MarginArgs) -> Result<u8, Vec<Error>> {
         return Err(errors);
     }
     if a.json {
-        anholonomy::say!(
+        say!(
             "{}",
             serde_json::to_string_pretty(&reports).unwrap_or_default()
         );
     } else if a.markdown {
-        anholonomy::emit(&output::markdown(&rows));
+        crate::emit(&output::markdown(&rows));
     } else {
-        anholonomy::emit(&output::text(&rows));
+        crate::emit(&output::text(&rows));
     }
     if a.report && !names.is_empty() {
         let w = anholonomy::report::write_report(&a.logs, Some(&names)).map_err(|e| vec![e])?;
         for e in &w.skipped {
             eprintln!("warning: left out of the report: {e}");
         }
-        anholonomy::say!(
+        say!(
             "report: {} ({} scenarios)",
             a.logs.join("index.html").display(),
             w.scenarios

@@ -6,5 +6,6 @@ pub mod cli;
 pub mod inspect;
 pub mod logs;
 pub mod margin;
+pub mod progress;
 pub mod run;
 pub mod table;

@@ -2,12 +2,13 @@
 //! settle baselines, JUnit and the report, in that order.
 
 use crate::cmd::cli::RunArgs;
+use crate::cmd::progress::Bars;
 use crate::cmd::table::print_table;
 use anholonomy::baseline::{self, Baseline, Delta};
 use anholonomy::error::Error;
 use anholonomy::junit::{self, CaseResult};
+use anholonomy::progress::Progress;
 use anholonomy::runner::{Prepared, RunOptions, RunOutcome};
-use anholonomy::say;
 use anholonomy::validate::{prepare_all, Call};
 use anholonomy::verdict::Verdict;
 use std::path::PathBuf;
@@ -168,7 +169,11 @@ pub fn run_cmd(args: &RunArgs, mode: Mode) -> Result<u8, Vec<Error>> {
     };
     let opts = RunOptions {
         log_root,
-        progress: !args.quiet,
+        progress: if args.quiet {
+            Progress::silent()
+        } else {
+            Progress(std::sync::Arc::new(Bars::default()))
+        },
         pose_rate: args.pose_rate,
         cancel: Default::default(),
         keep: args.keep,
@@ -178,7 +183,11 @@ pub fn run_cmd(args: &RunArgs, mode: Mode) -> Result<u8, Vec<Error>> {
     let results: Vec<(usize, Outcome)> = anholonomy::suite::run_all(&preps, &opts, shard, &resumed)
         .into_iter()
         .enumerate()
-        .map(|(i, (res, wall))| (i, res.map_err(|e| (e, wall))))
+        .map(|(i, ran)| {
+            // A sweep's table, in input order.
+            crate::emit(&ran.table);
+            (i, ran.result.map_err(|e| (e, ran.wall)))
+        })
         .collect();
     let rows: Vec<RunOutcome> = results
         .iter()

@@ -1,7 +1,6 @@
 //! The results table `run`, `check` and `baseline` print.
 
 use anholonomy::runner::RunOutcome;
-use anholonomy::say;
 
 /// A metric for the table: 4 significant digits at any magnitude (a goal
 /// error of 1e300 from a runaway plan is `1e300`, not 300 digits).

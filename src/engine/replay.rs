@@ -25,7 +25,7 @@ pub struct ReplayOptions {
     /// runs without logs skip the read-back, and the logs need no more than
     /// a display rate.
     pub link_pose_every: Option<usize>,
-    /// The command and observation perturbations ([`perturb::Reality`]);
+    /// The command and observation perturbations ([`perturb::reality::Reality`]);
     /// the world ones are in the system already.
     pub perturbation: perturb::Perturbation,
 }
@@ -137,7 +137,7 @@ pub struct Replay {
     clock: Option<crate::integrate::SampleClock>,
     held: crate::plan::Command,
     zero: Input,
-    reality: perturb::Reality,
+    reality: perturb::reality::Reality,
     finished: bool,
     pose_every: Option<usize>,
     out: SimTrajectory,
@@ -156,7 +156,7 @@ impl Replay {
         let mut ctl = plan.controller();
         let n_plan = step_count(plan.duration, dt);
         // Delayed commands keep arriving after the last one is sent.
-        let n_settle = step_count(opts.settle, dt) + perturb::extra_steps(p, dt);
+        let n_settle = step_count(opts.settle, dt) + perturb::reality::extra_steps(p, dt);
         let n = n_plan + n_settle;
         let names = sys.channel_names();
         let mut out = SimTrajectory {
@@ -184,7 +184,7 @@ impl Replay {
             return Err(ReplayError::Law(fault));
         }
         let zero = Input::zeros(held.u.len());
-        let reality = perturb::Reality::new(p, dt, held.u.len());
+        let reality = perturb::reality::Reality::new(p, dt, held.u.len());
         let mut run = Replay {
             ctl,
             dt,

@@ -53,6 +53,7 @@ pub struct Slot {
 }
 
 thread_local! {
+    /// This thread's slot: the world the next robot built here joins.
     pub static SLOT: RefCell<Option<Slot>> = const { RefCell::new(None) };
 }
 

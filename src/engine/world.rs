@@ -385,7 +385,7 @@ impl SimWorld {
         };
         // Heavier links than the model believes (`mass_scale`): the URDF's own
         // numbers scaled, so a sweep variant and a margin level agree exactly.
-        let scaled = crate::engine::perturb::scaled_masses(robot, s.mass_scale);
+        let scaled = crate::engine::perturb::world::scaled_masses(robot, s.mass_scale);
         let robot = insert_robot(
             &mut world,
             scaled.as_ref().unwrap_or(robot),
@@ -477,7 +477,7 @@ impl SimWorld {
         _urdf_dir: &Path,
         root_pose: RPose,
     ) -> Result<RobotHandles, SetupError> {
-        let scaled = crate::engine::perturb::scaled_masses(robot, self.settings.mass_scale);
+        let scaled = crate::engine::perturb::world::scaled_masses(robot, self.settings.mass_scale);
         let robot = scaled.as_ref().unwrap_or(robot);
         let keep: Vec<&str> = self.keep_fixed.iter().map(String::as_str).collect();
         insert_robot(

@@ -41,19 +41,15 @@ fn names() -> String {
         .join(", ")
 }
 
-/// `anholonomy models`: the shipped models, one line each.
-pub fn list_models() -> Result<u8, Vec<Error>> {
-    for (n, text) in MODELS {
-        crate::say!("{n:<20} {n}.urdf ({} bytes)", text.len());
-    }
-    crate::say!("`anholonomy models export DIR [NAME...]` writes them.");
-    Ok(0)
+/// The shipped models: name and URDF text.
+pub fn models() -> impl Iterator<Item = (&'static str, &'static str)> {
+    MODELS.iter().copied()
 }
 
 /// `anholonomy models export DIR [NAME...]`: write the shipped models
 /// `want` (every one when empty) into `dir` as NAME.urdf; an existing file
-/// is an error (nothing written) unless `force`.
-pub fn export_models(dir: &Path, want: &[String], force: bool) -> Result<u8, Vec<Error>> {
+/// is an error (nothing written) unless `force`. The files written.
+pub fn export_models(dir: &Path, want: &[String], force: bool) -> Result<Vec<PathBuf>, Vec<Error>> {
     let mut errors = Vec::new();
     let mut files = Vec::new();
     let chosen: Vec<&str> = if want.is_empty() {
@@ -79,10 +75,7 @@ pub fn export_models(dir: &Path, want: &[String], force: bool) -> Result<u8, Vec
         return Err(errors);
     }
     write_files(&files)?;
-    for (p, _) in &files {
-        crate::say!("wrote {}", p.display());
-    }
-    Ok(0)
+    Ok(files.into_iter().map(|(p, _)| p).collect())
 }
 
 fn write_files(files: &[(PathBuf, String)]) -> Result<(), Vec<Error>> {
@@ -176,7 +169,8 @@ pub fn starter_files(from: Option<&str>) -> Vec<(&'static str, String)> {
 /// `anholonomy init DIR`: write the starter repository (CI installing this
 /// version's release of [`REPOSITORY`], or of `from` when given), run its
 /// scenarios and write their baselines, so `check` passes in it at once.
-pub fn init(dir: &Path, from: Option<&str>) -> Result<u8, Vec<Error>> {
+/// Each starter scenario's name and verdict.
+pub fn init(dir: &Path, from: Option<&str>) -> Result<Vec<(String, String)>, Vec<Error>> {
     let from = match from.map(source_url).transpose() {
         Ok(f) => f,
         Err(m) => return Err(vec![Error::input("--from", m)]),
@@ -203,7 +197,7 @@ pub fn init(dir: &Path, from: Option<&str>) -> Result<u8, Vec<Error>> {
     let preps = prepare_all(&[dir.join("scenarios")], &call)?;
     let opts = RunOptions {
         log_root: None,
-        progress: false,
+        progress: Default::default(),
         pose_rate: crate::runner::DEFAULT_POSE_RATE,
         cancel: Default::default(),
         keep: crate::log::Keep::All,
@@ -211,18 +205,15 @@ pub fn init(dir: &Path, from: Option<&str>) -> Result<u8, Vec<Error>> {
     };
     let base = dir.join("baselines");
     let mut errors = Vec::new();
-    for (res, _) in crate::suite::run_all(&preps, &opts, None, &[]) {
-        match res {
+    let mut ran = Vec::new();
+    for r in crate::suite::run_all(&preps, &opts, None, &[]) {
+        match r.result {
             Ok(o) if o.verdict.ok() => {
                 let path = baseline::path_for(&base, &o.name);
                 if let Err(m) = Baseline::from_outcome(&o).write(&path) {
                     errors.push(Error::Log { path, message: m });
                 }
-                crate::say!(
-                    "{}: {} (baseline written)",
-                    o.name,
-                    o.verdict.describe(&o.failures, None)
-                );
+                ran.push((o.name.clone(), o.verdict.describe(&o.failures, None)));
             }
             // The starter's gates hold on every platform the tests run on:
             // a failure here is worth a report, not a silent baseline.
@@ -239,10 +230,5 @@ pub fn init(dir: &Path, from: Option<&str>) -> Result<u8, Vec<Error>> {
     if !errors.is_empty() {
         return Err(errors);
     }
-    crate::say!(
-        "wrote a starter repository in {} (anholonomy {VERSION}); try:\n  cd {} && anholonomy check scenarios/ --baseline baselines/ --report",
-        dir.display(),
-        dir.display()
-    );
-    Ok(0)
+    Ok(ran)
 }

@@ -262,7 +262,8 @@ fn run_inner(ctx: &Ctx<'_>, p: &Perturbation, seed: Option<u64>) -> Run {
         link_pose_every: None,
         perturbation: *p,
     };
-    let n_max = step_count(prep.planned.duration + sc.sim.settle, dt) + perturb::extra_steps(p, dt);
+    let n_max = step_count(prep.planned.duration + sc.sim.settle, dt)
+        + perturb::reality::extra_steps(p, dt);
     let mut monitor = Monitor::new(ctx, n_max, dt);
     let sim = replay(sys.as_mut(), &prep.planned, &opts, &mut monitor);
     let sim = match sim {

@@ -70,26 +70,11 @@ impl Settings {
     }
 }
 
-/// Where a dimension is searched: the first level, the smallest level told
-/// apart from 0, the largest level searched (as magnitudes, see
-/// [`Dimension::value_at`]).
-pub fn range(d: Dimension) -> (f64, f64, f64) {
-    match d {
-        Dimension::CommandLatency | Dimension::ActuatorTau | Dimension::StateLatency => {
-            (0.01, 1e-6, 2.0)
-        }
-        Dimension::StateNoise => (1e-3, 1e-7, 1.0),
-        Dimension::TorqueScale | Dimension::FrictionScale => (0.05, 1e-4, 0.99),
-        Dimension::WheelRadiusScale => (0.01, 1e-5, 0.5),
-        Dimension::MassScale => (0.1, 1e-4, 9.0),
-    }
-}
-
 /// The largest level of `d` a run of `prep` can take: what `[sim.perturb]`
 /// accepts (a time no longer than the run; a latency whose extra steps fit
-/// the step budget), within [`range`]'s ceiling.
+/// the step budget), within its row's search ceiling.
 pub fn ceiling(d: Dimension, prep: &Prepared) -> f64 {
-    let (_, floor, ceiling) = range(d);
+    let crate::engine::perturb::Search { floor, ceiling, .. } = d.row().search;
     if d.unit() != "s" {
         return ceiling;
     }
@@ -106,7 +91,7 @@ pub fn ceiling(d: Dimension, prep: &Prepared) -> f64 {
 /// The search spec of `d`; a gated dimension's ladder starts at its gate
 /// (a level the verdict needs anyway).
 pub fn spec(d: Dimension, s: &Settings, gate: Option<f64>, ceiling: f64) -> Spec {
-    let (start, floor, _) = range(d);
+    let crate::engine::perturb::Search { start, floor, .. } = d.row().search;
     let start = match gate {
         Some(g) if g > 0.0 => g.clamp(floor, ceiling),
         _ => start,
@@ -219,7 +204,7 @@ impl DimensionResult {
             Status::Ceiling => notes.push("never broke up to the ceiling".to_string()),
             Status::BelowFloor => notes.push(format!(
                 "broke at every level down to {}",
-                crate::numfmt::readable(range(self.dimension).1)
+                crate::numfmt::readable(self.dimension.row().search.floor)
             )),
             Status::NominalFails => notes.push("the nominal run already fails".into()),
             Status::Budget => notes.push(format!("run budget ({} runs) spent", self.runs)),

@@ -1,8 +1,8 @@
 //! The margins as a table: plain text for the terminal, Markdown for the guide.
 
-use crate::engine::perturb::{Dimension, Kind};
+use crate::engine::perturb::Dimension;
 use crate::margin::search::Status;
-use crate::margin::{range, DimensionResult};
+use crate::margin::DimensionResult;
 use crate::numfmt::with_digits;
 
 /// One row of the table.
@@ -28,34 +28,26 @@ pub struct Row {
     pub note: String,
 }
 
-fn unit(d: Dimension) -> String {
-    match d.unit() {
-        "" => String::new(),
-        u => format!(" {u}"),
-    }
-}
-
 /// A magnitude of `d` as text: `0.12 s`; factors with the factor, `0.35
 /// (×0.65)`, with the digits that tell a small magnitude's factor from 1.
 pub fn magnitude(d: Dimension, m: f64) -> String {
     let x = with_digits(m, 3);
-    match d.kind() {
-        Kind::Scale => {
-            let extra = if m > 0.0 {
-                ((-m.log10()).ceil() - 1.0).clamp(0.0, 12.0) as usize
-            } else {
-                0
-            };
-            format!("{x} (×{})", with_digits(d.value_at(m), 3 + extra))
-        }
-        Kind::Amount => format!("{x}{}", unit(d)),
+    if d.is_factor() {
+        let extra = if m > 0.0 {
+            ((-m.log10()).ceil() - 1.0).clamp(0.0, 12.0) as usize
+        } else {
+            0
+        };
+        format!("{x} (×{})", with_digits(d.value_at(m), 3 + extra))
+    } else {
+        format!("{x}{}", d.unit_suffix())
     }
 }
 
 /// The row of one dimension's result.
 pub fn row(scenario: &str, r: &DimensionResult) -> Row {
     let d = r.dimension;
-    let (_, floor, _) = range(d);
+    let floor = d.row().search.floor;
     let margin = match r.status {
         Status::Found => magnitude(d, r.margin),
         // The ceiling the search reached (a time dimension's is at most the run).
@@ -78,7 +70,7 @@ pub fn row(scenario: &str, r: &DimensionResult) -> Row {
             "[{}, {}){}",
             with_digits(r.margin, 3),
             with_digits(hi, 3),
-            unit(d)
+            d.unit_suffix()
         ),
         _ => "–".into(),
     };
@@ -253,7 +245,7 @@ mod tests {
         for r in &rows {
             assert_eq!(r.len(), width, "{r:?}");
         }
-        let all: Vec<&str> = Dimension::ALL.iter().map(|d| d.name()).collect();
+        let all: Vec<&str> = Dimension::all().map(|d| d.name()).collect();
         let mut names: Vec<String> = std::fs::read_dir(root.join("scenarios"))
             .unwrap()
             .filter_map(|e| {

@@ -46,7 +46,7 @@ pub mod rover;
 pub mod space_robot;
 pub mod wheeled;
 
-use crate::engine::perturb::Dimension;
+use crate::engine::perturb::{Dimension, Exposure};
 use crate::engine::required::Named;
 use crate::engine::PhysicsSettings;
 use crate::engine::PhysicsSystem;
@@ -234,13 +234,18 @@ pub trait System: Send + Sync {
     fn metric_direction(&self, _name: &str) -> Option<Direction> {
         None
     }
-    /// Which `[sim.perturb]` dimensions reach this system under `plan`: a
-    /// value set away from nominal for any other dimension is bad input, and
-    /// `anholonomy margin` searches these. Default: [`Dimension::common`]
-    /// (the command path, masses, friction and, for a feedback law, what it
-    /// sees); wheeled systems add [`Dimension::WheelRadiusScale`].
+    /// What of this system a perturbation can reach under `plan` (friction,
+    /// wheels, a feedback law): each `[sim.perturb]` row says what it needs
+    /// ([`crate::engine::perturb::Reaches`]). Default: [`Exposure::of`]
+    /// (friction, no wheels, a feedback law when the plan is one).
+    fn exposure(&self, plan: &Plan) -> Exposure {
+        Exposure::of(plan)
+    }
+    /// The `[sim.perturb]` dimensions that reach this system under `plan`
+    /// (those of its [`System::exposure`]): a value set away from nominal for
+    /// any other dimension is bad input, and `anholonomy margin` searches these.
     fn perturbable(&self, plan: &Plan) -> Vec<Dimension> {
-        Dimension::common(plan)
+        Dimension::reaching(&self.exposure(plan))
     }
     /// The paper's printed numbers next to the values `plan` computes, when the scenario
     /// poses the paper's worked example (see [`crate::paper`]). Default: none.

@@ -26,79 +26,56 @@ pub const DEFAULT_SEEDS: usize = 8;
 /// Default success rate a level of a random dimension needs.
 pub const DEFAULT_SUCCESS_RATE: f64 = 0.875;
 
-/// `[margins]`: least robustness margins `run`/`check` gate (each checked with one
-/// run at the gate, not searched; reported and baselined as `margin_<dimension>`),
-/// and how `anholonomy margin` searches them. A margin is a perturbation magnitude:
-/// the amount for latencies, lags and noise, the distance from 1 for factors.
-#[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize, JsonSchema)]
-#[serde(deny_unknown_fields)]
-pub struct MarginsConfig {
-    /// Least command-latency margin, s: `check` runs the scenario once at this latency and fails when a gate breaks there.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    #[schemars(range(min = 0))]
-    pub command_latency: Option<f64>,
-    /// Least actuator-lag margin, s.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    #[schemars(range(min = 0))]
-    pub actuator_tau: Option<f64>,
-    /// Least torque-loss margin (fraction of the torque limit).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    #[schemars(range(min = 0), extend("exclusiveMaximum" = 1))]
-    pub torque_scale: Option<f64>,
-    /// Least state-noise margin (σ, m or rad): checked with `seeds` runs at this σ.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    #[schemars(range(min = 0))]
-    pub state_noise: Option<f64>,
-    /// Least state-latency margin, s.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    #[schemars(range(min = 0))]
-    pub state_latency: Option<f64>,
-    /// Least wheel-wear margin (fraction of the radius).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    #[schemars(range(min = 0), extend("exclusiveMaximum" = 1))]
-    pub wheel_radius_scale: Option<f64>,
-    /// Least friction-loss margin (fraction of the coefficient).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    #[schemars(range(min = 0), extend("exclusiveMaximum" = 1))]
-    pub friction_scale: Option<f64>,
-    /// Least added-mass margin (fraction of the masses).
-    #[serde(skip_serializing_if = "Option::is_none")]
-    #[schemars(range(min = 0))]
-    pub mass_scale: Option<f64>,
-    /// Relative resolution of the search: bisect until the edge lies within margin·(1 + resolution); default 0.05.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    #[schemars(range(max = 1), extend("exclusiveMinimum" = 0))]
-    pub resolution: Option<f64>,
-    /// Seeds per level of a random dimension (`state_noise`); default 8.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    #[schemars(range(min = 1, max = 1000))]
-    pub seeds: Option<usize>,
-    /// Fraction of a random level's seeds that must pass; default 0.875.
-    #[serde(skip_serializing_if = "Option::is_none")]
-    #[schemars(range(max = 1), extend("exclusiveMinimum" = 0))]
-    pub success_rate: Option<f64>,
+macro_rules! margins_table {
+    ($(
+        $(#[$meta:meta])*
+        $field:ident : $Var:ident {
+            worse: $worse:ident, unit: $unit:literal, reaches: $reaches:ident, random: $random:literal,
+            search: [$start:expr, $floor:expr, $ceiling:expr],
+            margin: [$(#[$mmeta:meta])*] $(,)?
+        }
+    ),* $(,)?) => {
+        /// `[margins]`: least robustness margins `run`/`check` gate (each checked with one
+        /// run at the gate, not searched; reported and baselined as `margin_<dimension>`),
+        /// and how `anholonomy margin` searches them. A margin is a perturbation magnitude:
+        /// the amount for latencies, lags and noise, the distance from 1 for factors.
+        #[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize, JsonSchema)]
+        #[serde(deny_unknown_fields)]
+        pub struct MarginsConfig {
+            $(
+                $(#[$mmeta])*
+                #[serde(skip_serializing_if = "Option::is_none")]
+                pub $field: Option<f64>,
+            )*
+            /// Relative resolution of the search: bisect until the edge lies within margin·(1 + resolution); default 0.05.
+            #[serde(skip_serializing_if = "Option::is_none")]
+            #[schemars(range(max = 1), extend("exclusiveMinimum" = 0))]
+            pub resolution: Option<f64>,
+            /// Seeds per level of a random dimension (`state_noise`); default 8.
+            #[serde(skip_serializing_if = "Option::is_none")]
+            #[schemars(range(min = 1, max = 1000))]
+            pub seeds: Option<usize>,
+            /// Fraction of a random level's seeds that must pass; default 0.875.
+            #[serde(skip_serializing_if = "Option::is_none")]
+            #[schemars(range(max = 1), extend("exclusiveMinimum" = 0))]
+            pub success_rate: Option<f64>,
+        }
+
+        impl MarginsConfig {
+            /// The gated dimensions and their least margins, in row order.
+            pub fn gates(&self) -> Vec<(Dimension, f64)> {
+                [$( (Dimension::$Var, self.$field) ),*]
+                    .into_iter()
+                    .filter_map(|(d, g)| g.map(|g| (d, g)))
+                    .collect()
+            }
+        }
+    };
 }
 
-impl MarginsConfig {
-    /// The gated dimensions and their least margins, in [`Dimension::ALL`] order.
-    pub fn gates(&self) -> Vec<(Dimension, f64)> {
-        let v = [
-            self.command_latency,
-            self.actuator_tau,
-            self.torque_scale,
-            self.state_noise,
-            self.state_latency,
-            self.wheel_radius_scale,
-            self.friction_scale,
-            self.mass_scale,
-        ];
-        Dimension::ALL
-            .into_iter()
-            .zip(v)
-            .filter_map(|(d, g)| g.map(|g| (d, g)))
-            .collect()
-    }
+crate::engine::perturb::dimensions!(margins_table);
 
+impl MarginsConfig {
     /// The metric a gated margin is reported (and baselined) as:
     /// `margin_<dimension>`, the gate when it holds (NaN when it breaks).
     pub fn metric(d: Dimension) -> String {
@@ -131,11 +108,7 @@ impl MarginsConfig {
     /// Ranges (messages start with the key).
     pub fn validate(&self) -> Result<(), SetupError> {
         for (d, g) in self.gates() {
-            let top = match d {
-                Dimension::MassScale => f64::INFINITY,
-                d if d.kind() == crate::engine::perturb::Kind::Scale => 1.0,
-                _ => f64::INFINITY,
-            };
+            let top = d.magnitude_limit();
             if !(g >= 0.0 && g < top) {
                 return Err(SetupError::key(
                     format!("margins.{d}"),

@@ -253,7 +253,7 @@ fn key_rng(seed: u64, path: &str) -> ChaCha8Rng {
     rng
 }
 
-use crate::engine::perturb::standard_normal;
+use crate::engine::perturb::reality::standard_normal;
 
 /// The randomised parameters of one variant.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize)]

@@ -142,8 +142,8 @@ impl System for OwnPlan {
     ) -> (Vec<(String, f64)>, Vec<Series>) {
         self.inner.analysis_with(goal, ideal, early, sim, cmp)
     }
-    fn perturbable(&self, plan: &Plan) -> Vec<crate::engine::perturb::Dimension> {
-        self.inner.perturbable(plan)
+    fn exposure(&self, plan: &Plan) -> crate::engine::perturb::Exposure {
+        self.inner.exposure(plan)
     }
     fn metric_direction(&self, name: &str) -> Option<Direction> {
         self.inner.metric_direction(name)

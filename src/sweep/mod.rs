@@ -17,10 +17,10 @@ pub mod summary;
 
 use crate::cancel::Cancel;
 use crate::error::Error;
+use crate::progress::Work;
 use crate::runner::{run, RunOptions, RunOutcome, Timings};
 pub use crate::scenario::{variant_seed, SweepConfig, Variant};
 use crate::validate::Prepared;
-use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 use rayon::prelude::*;
 use records::{Entry, Header, Scan};
 use serde::{Deserialize, Serialize};
@@ -227,16 +227,15 @@ pub fn distribution(values: &[f64]) -> Option<[f64; 3]> {
     Some([rank(0.5), rank(0.95), v[v.len() - 1]])
 }
 
-/// Run the sweep of a prepared scenario (which must have `[sweep]`); prints a table and writes
+/// Run the sweep of a prepared scenario (which must have `[sweep]`); writes
 /// `<log_root>/<name>/variants.jsonl` and `sweep.json` (or the shard's files).
+/// [`run_sweep_report`] gives its table too.
 pub fn run_sweep(
     prep: &Prepared,
     opts: &RunOptions,
     shard: Option<Shard>,
 ) -> Result<RunOutcome, Error> {
-    let (outcome, table) = run_sweep_report(prep, opts, shard, None)?;
-    crate::emit(&table);
-    Ok(outcome)
+    run_sweep_report(prep, opts, shard, None).map(|(outcome, _)| outcome)
 }
 
 /// The header a sweep (or shard) writes and a resumed file must match.
@@ -376,20 +375,8 @@ pub fn run_sweep_report(
     };
     let memory: Mutex<Vec<Entry>> = Mutex::new(Vec::new());
     let write_error: Mutex<Option<String>> = Mutex::new(None);
-    let bar = ProgressBar::with_draw_target(
-        Some(todo.len() as u64),
-        if opts.progress {
-            ProgressDrawTarget::stderr()
-        } else {
-            ProgressDrawTarget::hidden()
-        },
-    );
-    if let Ok(style) =
-        ProgressStyle::with_template("{prefix:>24} [{bar:40}] {pos}/{len} {elapsed}/{eta}")
-    {
-        bar.set_style(style.progress_chars("=> "));
-    }
-    bar.set_prefix(sc.name.clone());
+    opts.progress
+        .started(Work::Sweep, &sc.name, todo.len() as u64);
     let resumed = done.iter().filter(|d| **d).count();
     let groups = if opts.batch {
         batch::groups(prep, &todo)
@@ -428,10 +415,10 @@ pub fn run_sweep_report(
                     }
                 }
             }
-            bar.inc(1);
+            opts.progress.advanced(Work::Sweep, &sc.name, 1);
         }
     });
-    bar.finish_and_clear();
+    opts.progress.finished(Work::Sweep, &sc.name);
     if let Some(e) = write_error.into_inner().ok().flatten() {
         return Err(log_err(e));
     }

@@ -507,7 +507,7 @@ settle = 0.3
     std::fs::write(&path, text).unwrap();
     let opts = RunOptions {
         log_root: None,
-        progress: false,
+        progress: Default::default(),
         pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
         cancel: Default::default(),
         keep: anholonomy::log::Keep::All,

@@ -15,7 +15,7 @@ fn example(rel: &str) -> PathBuf {
 
 fn quiet() -> RunOptions {
     RunOptions {
-        progress: false,
+        progress: Default::default(),
         ..RunOptions::default()
     }
 }

@@ -84,7 +84,7 @@ fn law_command(mode: &str, dir: &Path) -> Vec<String> {
 fn opts(logs: Option<&Path>) -> RunOptions {
     RunOptions {
         log_root: logs.map(Path::to_path_buf),
-        progress: false,
+        progress: Default::default(),
         pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
         cancel: Default::default(),
         keep: anholonomy::log::Keep::All,
@@ -149,7 +149,7 @@ fn fault_in(dir: &tempfile::TempDir, mode: &str, extra: &str) -> (String, &'stat
     let Error::Law { run, message, .. } = &err else {
         panic!("{mode}: expected Error::Law, got {err:?}");
     };
-    assert_eq!(err.exit_code(), 3);
+    assert_eq!(err.kind(), anholonomy::error::ErrorKind::Runtime);
     // Nothing half-written: the scenario's log directory was never made.
     assert!(!logs.join(mode).exists(), "{mode}: logs written");
     let pids = pids(dir.path());
@@ -179,10 +179,13 @@ fn a_law_that_answers_without_reading_ends_the_run() {
     let t0 = std::time::Instant::now();
     let (m, _, _) = fault("noread", "period = 0.002\nhorizon = 5.0\ntimeout = 2.0");
     // Which sample finds the surplus depends on how fast the law writes.
-    assert!(
-        m.contains("a second answer to sample ") && m.contains("(one answer per request)"),
-        "{m}"
-    );
+    // On a loaded machine the law's answers can arrive after its stdin has
+    // filled: then the send times out first, and the message says why (the
+    // law does not read). Both end the run at once with the cause named.
+    let surplus =
+        m.contains("a second answer to sample ") && m.contains("(one answer per request)");
+    let unread = m.contains("within 2 s (planner.timeout): the law does not read its input");
+    assert!(surplus || unread, "{m}");
     assert!(t0.elapsed().as_secs_f64() < 10.0);
 }
 
@@ -358,7 +361,7 @@ fn a_program_that_cannot_start() {
     std::fs::write(dir.path().join("law.py"), "print('hi')\n").unwrap();
     let path = disk_with_law(dir.path(), "noexec", &["./law.py".to_string()], "");
     let e = Scenario::load(&path).unwrap_err();
-    assert_eq!(e.exit_code(), 2);
+    assert_eq!(e.kind(), anholonomy::error::ErrorKind::BadInput);
     assert!(
         e.to_string()
             .contains("key `planner.command`: program is not an executable file"),
@@ -385,7 +388,7 @@ fn a_program_that_cannot_start() {
     };
     prep.planned = anholonomy::sources::external::plan(&params, program, &["x"], &["a", "b"]);
     let err = run(&prep, &opts(None)).unwrap_err();
-    assert_eq!(err.exit_code(), 3);
+    assert_eq!(err.kind(), anholonomy::error::ErrorKind::Runtime);
     assert!(
         err.to_string().contains("cannot start `no_such_program`"),
         "{err}"

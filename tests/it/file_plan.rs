@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 fn opts(logs: Option<&Path>) -> RunOptions {
     RunOptions {
         log_root: logs.map(Path::to_path_buf),
-        progress: false,
+        progress: Default::default(),
         pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
         cancel: Default::default(),
         keep: anholonomy::log::Keep::All,

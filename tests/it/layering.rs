@@ -619,3 +619,94 @@ fn command_line_code_in_the_library_is_detected() {
     assert_eq!(found.len(), 1, "{found:?}");
     assert!(found[0].contains("init.rs"));
 }
+
+/// Files that are test modules (`#[cfg(test)] mod name;` in their parent).
+fn test_only_files(src: &Path) -> Vec<PathBuf> {
+    let mut out = Vec::new();
+    for f in rust_files(src) {
+        let text = std::fs::read_to_string(&f).unwrap();
+        let lines: Vec<&str> = text.lines().map(str::trim).collect();
+        for w in lines.windows(2) {
+            let decl = w[1].strip_prefix("pub(crate) ").unwrap_or(w[1]);
+            let Some(name) = decl.strip_prefix("mod ").and_then(|d| d.strip_suffix(';')) else {
+                continue;
+            };
+            if w[0] != "#[cfg(test)]" {
+                continue;
+            }
+            let stem = f.file_stem().unwrap().to_string_lossy();
+            let dir = if stem == "mod" || stem == "lib" {
+                f.parent().unwrap().to_path_buf()
+            } else {
+                f.parent().unwrap().join(&*stem)
+            };
+            out.push(dir.join(format!("{name}.rs")));
+            out.push(dir.join(name).join("mod.rs"));
+        }
+    }
+    out
+}
+
+/// Lines of the library that write to the terminal or decide an exit
+/// status (test modules left out): the binary owns the terminal; progress
+/// reaches it through `progress::Observer`.
+fn terminal_code_in_library(src: &Path) -> Vec<String> {
+    let binary = [src.join("main.rs"), src.join("cmd")];
+    let tests = test_only_files(src);
+    let banned = [
+        "println!",
+        "eprintln!",
+        "print!(",
+        "eprint!(",
+        "stdout()",
+        "stderr()",
+        "indicatif",
+        "process::exit",
+        "ExitCode",
+        "dbg!(",
+    ];
+    rust_files(src)
+        .into_iter()
+        .filter(|f| !binary.iter().any(|b| f.starts_with(b)) && !tests.contains(f))
+        .flat_map(|f| {
+            let text = std::fs::read_to_string(&f).unwrap();
+            code_lines(&text)
+                .into_iter()
+                .filter(|l| banned.iter().any(|b| l.contains(b)))
+                .map(|l| format!("{}: {}", f.display(), l.trim()))
+                .collect::<Vec<_>>()
+        })
+        .collect()
+}
+
+#[test]
+fn the_library_neither_prints_nor_decides_exit_codes() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let found = terminal_code_in_library(&src);
+    assert!(
+        found.is_empty(),
+        "terminal code in the library:\n{}",
+        found.join("\n")
+    );
+}
+
+#[test]
+fn terminal_code_in_the_library_is_detected() {
+    let dir = tempfile::tempdir().unwrap();
+    let src = dir.path();
+    std::fs::create_dir_all(src.join("cmd")).unwrap();
+    std::fs::create_dir_all(src.join("a")).unwrap();
+    std::fs::write(src.join("main.rs"), "fn main() { println!(\"ok\"); }\n").unwrap();
+    std::fs::write(src.join("cmd/run.rs"), "use indicatif::ProgressBar;\n").unwrap();
+    std::fs::write(src.join("a/mod.rs"), "#[cfg(test)]\nmod tests;\nmod b;\n").unwrap();
+    std::fs::write(src.join("a/tests.rs"), "fn t() { eprintln!(\"x\"); }\n").unwrap();
+    std::fs::write(src.join("a/b.rs"), "fn f() { eprintln!(\"x\"); }\n").unwrap();
+    std::fs::write(
+        src.join("lib.rs"),
+        "pub mod a;\n#[cfg(test)]\nmod tests {\n    fn t() { println!(); }\n}\n",
+    )
+    .unwrap();
+    let found = terminal_code_in_library(src);
+    assert_eq!(found.len(), 1, "{found:?}");
+    assert!(found[0].contains("b.rs"));
+}

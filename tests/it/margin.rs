@@ -34,7 +34,7 @@ fn write(dir: &Path, name: &str, text: &str) -> std::path::PathBuf {
 fn run_logged(path: &Path, logs: &Path) -> RunOutcome {
     let opts = RunOptions {
         log_root: Some(logs.to_path_buf()),
-        progress: false,
+        progress: Default::default(),
         pose_rate: 0.0,
         keep: Default::default(),
         cancel: Default::default(),

@@ -80,7 +80,7 @@ fn load(dir: &Path, name: &str, text: &str) -> Result<Prepared, anholonomy::erro
 fn run_quiet(prep: &Prepared) -> RunOutcome {
     let opts = RunOptions {
         log_root: None,
-        progress: false,
+        progress: Default::default(),
         pose_rate: 0.0,
         keep: Default::default(),
         cancel: Default::default(),
@@ -163,7 +163,7 @@ fn model_row(model: &str, file: &str, stronger: &[(Dimension, f64)]) {
     let nominal = run_quiet(&prep);
     let list = does_not_apply();
     let mut problems = Vec::new();
-    for d in Dimension::ALL {
+    for d in Dimension::all() {
         let v = stronger
             .iter()
             .find(|(x, _)| *x == d)
@@ -199,7 +199,7 @@ fn model_row(model: &str, file: &str, stronger: &[(Dimension, f64)]) {
                 Ok(_) => problems.push(format!("{d} = {v}: not declared, but accepted")),
                 Err(e) => {
                     let msg = e.to_string();
-                    if e.exit_code() != 2
+                    if e.kind() != anholonomy::error::ErrorKind::BadInput
                         || !msg.contains(&format!("key `sim.perturb.{d}`"))
                         || !msg.contains("does not apply")
                     {
@@ -300,7 +300,7 @@ fn rover_open_loop_replay_refuses_what_it_cannot_see() {
     for d in [Dimension::StateNoise, Dimension::StateLatency] {
         let case = with_perturb(&text, &format!("{d} = 0.05\n"));
         let e = load(dir.path(), "r.toml", &case).err().expect("refused");
-        assert_eq!(e.exit_code(), 2);
+        assert_eq!(e.kind(), anholonomy::error::ErrorKind::BadInput);
         assert!(
             e.to_string().contains(&format!("key `sim.perturb.{d}`")),
             "{e}"

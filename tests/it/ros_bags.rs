@@ -241,7 +241,7 @@ fn custom_type_through_planner_map() {
 fn opts() -> RunOptions {
     RunOptions {
         log_root: None,
-        progress: false,
+        progress: Default::default(),
         pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
         cancel: Default::default(),
         keep: anholonomy::log::Keep::All,

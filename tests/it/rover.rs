@@ -129,7 +129,7 @@ fn small_sweep_reports_rate_and_distribution_and_shards_agree() {
     let logs = dir.path().join("logs");
     let opts = RunOptions {
         log_root: Some(logs.clone()),
-        progress: false,
+        progress: Default::default(),
         pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
         cancel: Default::default(),
         keep: anholonomy::log::Keep::All,

@@ -11,6 +11,7 @@
 pub mod kinematics;
 pub mod physics;
 
+use crate::engine::perturb::Exposure;
 use crate::engine::required::Named;
 use crate::engine::{PhysicsSettings, PhysicsSystem};
 use crate::error::SetupError;
@@ -211,10 +212,11 @@ impl System for Car {
         self.world.physics(Box::new(inner), sim)
     }
     /// Its wheels can wear or differ from the URDF (`wheel_radius_scale`).
-    fn perturbable(&self, plan: &Plan) -> Vec<crate::engine::perturb::Dimension> {
-        let mut d = crate::engine::perturb::Dimension::common(plan);
-        d.push(crate::engine::perturb::Dimension::WheelRadiusScale);
-        d
+    fn exposure(&self, plan: &Plan) -> Exposure {
+        Exposure {
+            wheels: true,
+            ..Exposure::of(plan)
+        }
     }
     fn extra_metric_names(&self) -> Vec<String> {
         let mut out: Vec<String> = SLIP_METRICS.map(String::from).to_vec();

@@ -348,7 +348,8 @@ impl CarPhysics {
         let all: Vec<&Wheel> = geom.rear.iter().chain(&geom.front).collect();
         let wear = (1.0 - sim.wheel_radius_scale) * all[0].radius;
         let links: Vec<&str> = all.iter().map(|w| w.link.as_str()).collect();
-        let worn = crate::engine::perturb::worn_wheels(robot, &links, sim.wheel_radius_scale);
+        let worn =
+            crate::engine::perturb::world::worn_wheels(robot, &links, sim.wheel_radius_scale);
         let root = wheeled::root_pose(
             &frames,
             &names.base,

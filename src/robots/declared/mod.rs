@@ -8,7 +8,7 @@
 pub mod kinematics;
 pub mod physics;
 
-use crate::engine::perturb::Dimension;
+use crate::engine::perturb::Exposure;
 use crate::engine::required::Named;
 use crate::engine::{PhysicsSettings, PhysicsSystem};
 use crate::error::SetupError;
@@ -255,9 +255,10 @@ impl System for DeclaredSystem {
         )?))
     }
     /// Wheels (the children of continuous joints) can wear (`wheel_radius_scale`).
-    fn perturbable(&self, plan: &Plan) -> Vec<Dimension> {
-        let mut d = Dimension::common(plan);
-        d.push(Dimension::WheelRadiusScale);
-        d
+    fn exposure(&self, plan: &Plan) -> Exposure {
+        Exposure {
+            wheels: true,
+            ..Exposure::of(plan)
+        }
     }
 }

@@ -208,7 +208,8 @@ impl DeclaredPhysics {
             .map(|j| j.child.link.as_str())
             .filter(|l| crate::engine::urdf::collision_radius(robot, l).is_some())
             .collect();
-        let worn = crate::engine::perturb::worn_wheels(robot, &wheels, sim.wheel_radius_scale);
+        let worn =
+            crate::engine::perturb::world::worn_wheels(robot, &wheels, sim.wheel_radius_scale);
         let robot: &urdf_rs::Robot = &worn;
         let root = place_root(robot, rig, start)?;
         let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root)?;

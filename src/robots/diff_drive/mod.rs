@@ -10,6 +10,7 @@
 pub mod kinematics;
 pub mod physics;
 
+use crate::engine::perturb::Exposure;
 use crate::engine::required::Named;
 use crate::engine::{PhysicsSettings, PhysicsSystem};
 use crate::error::SetupError;
@@ -184,10 +185,11 @@ impl System for DiffDrive {
         self.world.physics(Box::new(inner), sim)
     }
     /// Its wheels can wear or differ from the URDF (`wheel_radius_scale`).
-    fn perturbable(&self, plan: &Plan) -> Vec<crate::engine::perturb::Dimension> {
-        let mut d = crate::engine::perturb::Dimension::common(plan);
-        d.push(crate::engine::perturb::Dimension::WheelRadiusScale);
-        d
+    fn exposure(&self, plan: &Plan) -> Exposure {
+        Exposure {
+            wheels: true,
+            ..Exposure::of(plan)
+        }
     }
     fn overlays(&self, _start: &State, _goal: &State) -> Vec<crate::record::Overlay> {
         self.world.overlays()

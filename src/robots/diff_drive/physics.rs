@@ -282,7 +282,8 @@ impl DiffDrivePhysics {
             start[2],
         );
         let links: Vec<&str> = geom.wheels.iter().map(|w| w.link.as_str()).collect();
-        let worn = crate::engine::perturb::worn_wheels(robot, &links, sim.wheel_radius_scale);
+        let worn =
+            crate::engine::perturb::world::worn_wheels(robot, &links, sim.wheel_radius_scale);
         let mut sw = SimWorld::on_ground(&worn, urdf_dir, sim, root)?;
         let (base, base_offset) = sw.require_frame(&names.base)?;
         let wheels = geom

@@ -40,7 +40,7 @@ pub use config::{
     DEFAULT_MAX_FORCE, DEFAULT_MAX_MOMENT,
 };
 
-use crate::engine::perturb::Dimension;
+use crate::engine::perturb::Exposure;
 use crate::engine::PhysicsSettings;
 use crate::engine::PhysicsSystem;
 use crate::error::SetupError;
@@ -408,10 +408,11 @@ impl SimFollower for FollowSim {
 
 impl System for Dilf {
     /// A differential drive: its wheels (and casters) can wear (`wheel_radius_scale`).
-    fn perturbable(&self, plan: &Plan) -> Vec<Dimension> {
-        let mut d = Dimension::common(plan);
-        d.push(Dimension::WheelRadiusScale);
-        d
+    fn exposure(&self, plan: &Plan) -> Exposure {
+        Exposure {
+            wheels: true,
+            ..Exposure::of(plan)
+        }
     }
 
     fn paper(&self, start: &State, goal: &State, _plan: &Plan) -> Vec<crate::paper::PaperRow> {

@@ -4,7 +4,7 @@ pub mod kinematics;
 pub mod physics;
 pub mod stokes;
 
-use crate::engine::perturb::Dimension;
+use crate::engine::perturb::Exposure;
 use crate::engine::PhysicsSettings;
 use crate::engine::PhysicsSystem;
 use crate::error::SetupError;
@@ -54,10 +54,11 @@ pub fn build(
 
 impl System for Disk {
     /// The wheel rolls: its radius can wear (`wheel_radius_scale`).
-    fn perturbable(&self, plan: &Plan) -> Vec<Dimension> {
-        let mut d = Dimension::common(plan);
-        d.push(Dimension::WheelRadiusScale);
-        d
+    fn exposure(&self, plan: &Plan) -> Exposure {
+        Exposure {
+            wheels: true,
+            ..Exposure::of(plan)
+        }
     }
     fn model(&self) -> &dyn KinematicModel {
         &self.model

@@ -73,7 +73,7 @@ impl DiskPhysics {
         crate::engine::urdf::require_radius(robot, WHEEL, "the wheel", radius)?;
         // A worn wheel (`wheel_radius_scale`): the model keeps `radius`.
         let s = sim.wheel_radius_scale;
-        let worn = crate::engine::perturb::worn_wheels(robot, &[WHEEL], s);
+        let worn = crate::engine::perturb::world::worn_wheels(robot, &[WHEEL], s);
         let robot: &urdf_rs::Robot = &worn;
         let radius = radius * s;
         let yaw0 = FRAC_PI_2 - start[3];

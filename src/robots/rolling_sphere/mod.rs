@@ -23,7 +23,7 @@ mod test_support;
 pub mod triangle;
 
 use crate::compare::sample;
-use crate::engine::perturb::Dimension;
+use crate::engine::perturb::Exposure;
 use crate::engine::PhysicsSettings;
 use crate::engine::PhysicsSystem;
 use crate::error::SetupError;
@@ -110,10 +110,11 @@ pub fn orientation_tracking(ideal: &Trajectory, sim: &Trajectory, grid: &[f64]) 
 
 impl System for Sphere {
     /// The ball is the wheel: its rolling radius can differ (`wheel_radius_scale`).
-    fn perturbable(&self, plan: &Plan) -> Vec<Dimension> {
-        let mut d = Dimension::common(plan);
-        d.push(Dimension::WheelRadiusScale);
-        d
+    fn exposure(&self, plan: &Plan) -> Exposure {
+        Exposure {
+            wheels: true,
+            ..Exposure::of(plan)
+        }
     }
     fn model(&self) -> &dyn KinematicModel {
         &self.quat

@@ -63,7 +63,7 @@ impl SpherePhysics {
         crate::engine::urdf::require_radius(robot, BALL, "the ball", radius)?;
         // A ball of another radius than the model's (`wheel_radius_scale`).
         let s = sim.wheel_radius_scale;
-        let worn = crate::engine::perturb::worn_wheels(robot, &[BALL], s);
+        let worn = crate::engine::perturb::world::worn_wheels(robot, &[BALL], s);
         let robot: &urdf_rs::Robot = &worn;
         let radius = radius * s;
         if start.len() != 6 {

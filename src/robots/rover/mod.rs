@@ -12,7 +12,7 @@ pub mod kinematics;
 pub mod physics;
 pub mod primitives;
 
-use crate::engine::perturb::Dimension;
+use crate::engine::perturb::Exposure;
 use crate::engine::PhysicsSettings;
 use crate::engine::PhysicsSystem;
 use crate::error::SetupError;
@@ -169,13 +169,14 @@ pub fn time_to_goal(tr: &Trajectory, goal: &State, eps: f64) -> f64 {
 impl System for Rover {
     /// Wheeled; the open-loop replay reads no state (its plan is a held
     /// sequence of recorded commands), so state noise and latency do not apply.
-    fn perturbable(&self, plan: &Plan) -> Vec<Dimension> {
-        let mut d = Dimension::common(plan);
-        if self.open_loop {
-            d.retain(|d| !d.observes());
+    fn exposure(&self, plan: &Plan) -> Exposure {
+        let e = Exposure::of(plan);
+        Exposure {
+            wheels: true,
+            // The recorded commands are replayed: no law sees the state.
+            feedback: e.feedback && !self.open_loop,
+            ..e
         }
-        d.push(Dimension::WheelRadiusScale);
-        d
     }
     fn model(&self) -> &dyn KinematicModel {
         &self.model

@@ -134,7 +134,7 @@ impl RoverPhysics {
         // Worn wheels (`wheel_radius_scale`): all five, the chassis lower by
         // as much; the drive still converts u1 with the model's radius.
         let s = sim.wheel_radius_scale;
-        let worn = crate::engine::perturb::worn_wheels(robot, &WHEELS, s);
+        let worn = crate::engine::perturb::world::worn_wheels(robot, &WHEELS, s);
         let robot: &urdf_rs::Robot = &worn;
         let rim = rho * s;
         let root = crate::engine::rapier::math::Pose::from_parts(

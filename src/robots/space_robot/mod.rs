@@ -25,7 +25,7 @@ pub mod physics;
 pub mod stokes;
 
 use crate::compare::{coord_error, sample};
-use crate::engine::perturb::Dimension;
+use crate::engine::perturb::Exposure;
 use crate::engine::PhysicsSettings;
 use crate::engine::PhysicsSystem;
 use crate::error::SetupError;
@@ -148,10 +148,11 @@ fn manipulator(r: &SpaceRobot) -> SpaceManipulator {
 
 impl System for Space {
     /// Free-floating: nothing touches anything, so friction does not apply.
-    fn perturbable(&self, plan: &Plan) -> Vec<Dimension> {
-        let mut d = Dimension::common(plan);
-        d.retain(|d| *d != Dimension::FrictionScale);
-        d
+    fn exposure(&self, plan: &Plan) -> Exposure {
+        Exposure {
+            friction: false,
+            ..Exposure::of(plan)
+        }
     }
     fn model(&self) -> &dyn KinematicModel {
         &self.model

@@ -32,7 +32,7 @@ pub fn prepared(path: &Path) -> Prepared {
 pub fn run_prepared(prep: &Prepared, logs: Option<&Path>) -> RunOutcome {
     let opts = RunOptions {
         log_root: logs.map(Path::to_path_buf),
-        progress: false,
+        progress: Default::default(),
         pose_rate: anholonomy::runner::DEFAULT_POSE_RATE,
         cancel: Default::default(),
         keep: anholonomy::log::Keep::All,

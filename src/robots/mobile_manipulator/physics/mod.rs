@@ -306,7 +306,7 @@ impl MobileManipulatorPhysics {
         let wear = (1.0 - sim.wheel_radius_scale) * WHEEL_RADIUS;
         let worn = (wear != 0.0).then(|| {
             let tyres = ["left_wheel", "right_wheel", "caster_front", "caster_rear"];
-            crate::engine::perturb::shrink_round_collisions(robot, &tyres, 1.0, Some(wear))
+            crate::engine::perturb::world::shrink_round_collisions(robot, &tyres, 1.0, Some(wear))
         });
         let robot = worn.as_ref().unwrap_or(robot);
         let mut sw = SimWorld::new(
