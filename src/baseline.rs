@@ -9,15 +9,11 @@
 //!
 //! # Direction rule
 //!
-//! Whether a metric regresses when it rises or when it falls is decided in
-//! one place, [`direction`]:
-//! 1. the system's declaration, [`System::metric_direction`], if it makes one;
-//! 2. otherwise the harness convention, [`Direction::conventional`]:
-//!    `sweep_variants` is informational (a configuration count); a name ending
-//!    in `success_rate`, or with a `min`, `clearance` or `margin` token
-//!    (`_`-separated), is higher-is-better (a minimum over a run is a safety
-//!    margin); every other metric (errors, maxima, times, counts) is
-//!    lower-is-better.
+//! Whether a metric regresses when it rises or when it falls is its row's
+//! [`crate::metric::Direction`] ([`direction`]): errors, maxima, times and
+//! counts are lower-is-better; success rates, fractions inside an envelope
+//! and minimum clearances higher-is-better; configuration counts and the
+//! time a stall was declared informational.
 //!
 //! # Tolerance
 //!
@@ -35,7 +31,6 @@
 use crate::error::Error;
 pub use crate::metric::Direction;
 use crate::numfmt::fmt_value;
-use crate::robots::System;
 use crate::runner::RunOutcome;
 use crate::scenario::regression::RegressionConfig;
 use serde::{Deserialize, Serialize};
@@ -46,11 +41,10 @@ use std::path::{Path, PathBuf};
 /// Version of the baseline file format.
 pub const FORMAT: u64 = 1;
 
-/// The direction of `name` for `system`: its declaration, else the convention.
-pub fn direction(system: &dyn System, name: &str) -> Direction {
-    system
-        .metric_direction(name)
-        .unwrap_or_else(|| Direction::conventional(name))
+/// The direction of metric `name`, from its row ([`crate::robots::metric`]);
+/// a name without a row is only reported.
+pub fn direction(name: &str) -> Direction {
+    crate::robots::metric(name).map_or(Direction::Informational, |r| r.direction)
 }
 
 /// The committed metrics of one scenario.
@@ -419,24 +413,6 @@ mod tests {
     use Direction::*;
 
     #[test]
-    fn convention() {
-        for (n, d) in [
-            ("tracking_position_max", LowerIsBetter),
-            ("sim_goal_se2", LowerIsBetter),
-            ("sim_time_to_goal", LowerIsBetter),
-            ("sim_obstacle_contacts", LowerIsBetter),
-            ("sweep_success_rate", HigherIsBetter),
-            ("ideal_min_clearance", HigherIsBetter),
-            ("sim_min_clearance", HigherIsBetter),
-            ("sweep_variants", Informational),
-            ("max_contact_pairs", LowerIsBetter),
-            ("minimum_jerk", LowerIsBetter),
-        ] {
-            assert_eq!(Direction::conventional(n), d, "{n}");
-        }
-    }
-
-    #[test]
     fn nan_rules() {
         let j = |b, n| judge(LowerIsBetter, b, n, 0.02, 1e-9).0;
         assert_eq!(j(1.0, f64::NAN), Status::Regressed);
@@ -474,7 +450,7 @@ mod tests {
             &base,
             &outcome(&[("a", 1.0), ("c", 3.0)]),
             &RegressionConfig::default(),
-            Direction::conventional,
+            |_: &str| LowerIsBetter,
         );
         let st: Vec<(&str, Status)> = d.iter().map(|d| (d.metric.as_str(), d.status)).collect();
         assert_eq!(

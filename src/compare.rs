@@ -137,6 +137,22 @@ impl MetricSpec<'_> {
         }
     }
 
+    /// The unit of coordinate metric `coord` (as [`MetricSpec::coords`]
+    /// names it): degrees for an angle, metres for a planar position, else
+    /// none known (a declared model's other states).
+    pub fn coord_unit(&self, coord: &str) -> &'static str {
+        let planar: Vec<usize> = self.positions.iter().flatten().copied().collect();
+        let position =
+            coord == "position" || self.robot_position_coords().iter().any(|c| c == coord);
+        let index = (0..self.names.len()).find(|&i| self.coord_name(i).0 == coord);
+        match index {
+            Some(i) if self.angular.contains(&i) => "°",
+            Some(i) if planar.contains(&i) => "m",
+            _ if position => "m",
+            _ => "",
+        }
+    }
+
     /// All metric names this model produces (for validating thresholds up front).
     pub fn names(&self) -> Vec<String> {
         let mut out = Vec::new();

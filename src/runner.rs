@@ -728,6 +728,12 @@ fn summary_json(
             "final_segment": final_segment(plan, &sim.traj),
         },
         "metrics": o.metrics.iter().cloned().collect::<std::collections::BTreeMap<_, _>>(),
+        // Each metric's unit (empty: none), from its row.
+        "units": o
+            .metrics
+            .iter()
+            .map(|(n, _)| (n.clone(), crate::robots::metric_unit(n, &crate::compare::metric_spec(model))))
+            .collect::<std::collections::BTreeMap<_, _>>(),
         // Metric families whose numbers mean nothing for this run, and why.
         "not_meaningful": if o.tracking_meaningful {
             json!({})

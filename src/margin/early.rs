@@ -1,7 +1,7 @@
 //! Early stop: a margin level's run ends as soon as a gate is **certain** to
 //! break, judged on the run so far. Which gates can be judged early depends
-//! on how their metric evolves as the run goes on, by family (named by the
-//! metric, [`family`]):
+//! on how their metric evolves as the run goes on, by family (declared by
+//! the metric's row, [`family`]):
 //!
 //! * **running maximum** (`tracking_*_max`, `*_max`, `max_*`, `*_max_*`,
 //!   contact counts `*_contacts`, `*_violations`): the value over a prefix
@@ -26,46 +26,14 @@
 //! first-passage threshold.
 
 use crate::gate::Breach;
+use crate::metric::Family;
 use crate::record::SimTrajectory;
 
-/// How a metric evolves along a run (module docs).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Family {
-    /// Can only grow.
-    RunningMax,
-    /// Can only fall.
-    RunningMin,
-    /// The first time something happens (NaN: not yet).
-    FirstPassage,
-    /// Known only at the end.
-    EndOnly,
-}
-
-/// The family of gate `metric` (a `[minimums]` gate when `minimum`).
+/// The family of gate `metric` (a `[minimums]` gate when `minimum`), from
+/// its row ([`crate::metric::Metric::family_of`]); judged at the end when it
+/// has none.
 pub fn family(metric: &str, minimum: bool) -> Family {
-    if metric.starts_with("ideal_") {
-        return Family::EndOnly;
-    }
-    let tokens: Vec<&str> = metric.split('_').collect();
-    if minimum {
-        if tokens.iter().any(|t| matches!(*t, "min" | "clearance")) {
-            return Family::RunningMin;
-        }
-        return Family::EndOnly;
-    }
-    if metric.ends_with("time_to_goal") {
-        return Family::FirstPassage;
-    }
-    let running_max = metric.ends_with("_max")
-        || metric.starts_with("max_")
-        || metric.contains("_max_")
-        || metric.ends_with("_contacts")
-        || metric.ends_with("_violations");
-    if running_max {
-        Family::RunningMax
-    } else {
-        Family::EndOnly
-    }
+    crate::robots::metric(metric).map_or(Family::EndOnly, |r| r.family_of(metric, minimum))
 }
 
 /// Whether a gate of `family` with `bound` certainly breaks, given its
@@ -118,27 +86,8 @@ mod tests {
     use super::*;
 
     #[test]
-    fn families_by_name() {
+    fn certain_by_family() {
         use Family::*;
-        for (m, min, f) in [
-            ("tracking_position_max", false, RunningMax),
-            ("tracking_theta_deg_max", false, RunningMax),
-            ("max_abs_angular_momentum", false, RunningMax),
-            ("sim_max_tilt_deg", false, RunningMax),
-            ("sim_obstacle_contacts", false, RunningMax),
-            ("sim_vdot_violations", false, RunningMax),
-            ("sim_time_to_goal", false, FirstPassage),
-            ("sim_goal_se2", false, EndOnly),
-            ("tracking_position_rms", false, EndOnly),
-            ("envelope_outside_fraction", false, EndOnly),
-            ("ideal_vdot_violations", false, EndOnly),
-            ("sim_min_clearance", true, RunningMin),
-            ("sim_robot_clearance", true, RunningMin),
-            ("sim_goal_position", true, EndOnly),
-            ("ideal_min_clearance", true, EndOnly),
-        ] {
-            assert_eq!(family(m, min), f, "{m}");
-        }
         assert!(certain(FirstPassage, f64::NAN, 40.0, 40.1));
         assert!(!certain(FirstPassage, f64::NAN, 40.0, 39.9));
         assert!(!certain(FirstPassage, 12.0, 40.0, 50.0));

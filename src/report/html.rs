@@ -96,18 +96,10 @@ fn primary(summary: &Value) -> Option<String> {
         .find_map(|k| k.strip_prefix("ideal_goal_").map(String::from))
 }
 
-/// The unit of a goal or tracking metric on coordinate `c` (as `primary`
-/// names it): degrees for `*_deg`, metres for the planar position and `x`,
-/// `y`, `z` coordinates, else none known.
-fn unit_of(c: &str) -> &'static str {
-    let bare = c.trim_end_matches(|ch: char| ch.is_ascii_digit() || ch == '_');
-    if c.ends_with("_deg") {
-        "°"
-    } else if c == "position" || c.starts_with("position_") || ["x", "y", "z"].contains(&bare) {
-        "m"
-    } else {
-        ""
-    }
+/// The unit of metric `name` as the run wrote it (`units` in its summary,
+/// from the metric's row and the model), else none.
+fn unit_of<'a>(summary: &'a Value, name: &str) -> &'a str {
+    summary["units"][name].as_str().unwrap_or("")
 }
 
 /// A number with its unit (`0.0017 m`, `0.51 °`).
@@ -160,9 +152,15 @@ pub fn index_page(runs: &[Loaded], unreadable: &[crate::error::Error]) -> String
                     esc(summary["planner"]["kind"].as_str().unwrap_or("")),
                     verdict(summary),
                     esc(&c),
-                    with_unit(metric(summary, &format!("sim_goal_{c}")), unit_of(&c)),
+                    with_unit(
+                        metric(summary, &format!("sim_goal_{c}")),
+                        unit_of(summary, &format!("sim_goal_{c}"))
+                    ),
                     if tracking_meaningful(summary) {
-                        with_unit(metric(summary, &format!("tracking_{c}_max")), unit_of(&c))
+                        with_unit(
+                            metric(summary, &format!("tracking_{c}_max")),
+                            unit_of(summary, &format!("tracking_{c}_max"))
+                        )
                     } else {
                         "<span class=\"muted\" title=\"feedback policy: the runs reach the goal at different times\">n/a</span>".into()
                     },
@@ -185,12 +183,11 @@ pub fn index_page(runs: &[Loaded], unreadable: &[crate::error::Error]) -> String
                     s["variants_run"].as_u64().unwrap_or(0),
                     with_unit(
                         s["final_error"]["median"].as_f64(),
-                        unit_of(
-                            s["sweep"]["success_metric"]
-                                .as_str()
-                                .unwrap_or("")
-                                .trim_start_matches("sim_goal_")
-                        )
+                        {
+                            // A sweep's success metric: its row's unit.
+                            let m = s["sweep"]["success_metric"].as_str().unwrap_or("");
+                            crate::robots::metric(m).map_or("", |r| r.unit.symbol(m))
+                        }
                     ),
                     sweep_wall(s),
                     baseline_summary(&l.regression),

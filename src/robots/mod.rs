@@ -52,7 +52,7 @@ use crate::engine::PhysicsSettings;
 use crate::engine::PhysicsSystem;
 use crate::error::SetupError;
 use crate::integrate::Trajectory;
-use crate::metric::Direction;
+use crate::metric::Metric;
 use crate::model::{KinematicModel, State};
 use crate::paper::PaperRow;
 use crate::plan::{Limits, Plan};
@@ -228,12 +228,6 @@ pub trait System: Send + Sync {
             ControlLaw::OpenLoop(_) | ControlLaw::Piecewise { .. }
         )
     }
-    /// Which way one of this system's metrics regresses, when the harness convention
-    /// ([`Direction::conventional`]: `min`/`clearance`/`margin` tokens and success rates are
-    /// higher-is-better, the rest lower-is-better) does not fit. Default: no declaration.
-    fn metric_direction(&self, _name: &str) -> Option<Direction> {
-        None
-    }
     /// What of this system a perturbation can reach under `plan` (friction,
     /// wheels, a feedback law): each `[sim.perturb]` row says what it needs
     /// ([`crate::engine::perturb::Reaches`]). Default: [`Exposure::of`]
@@ -279,4 +273,38 @@ pub(crate) fn no_planner(model: &str) -> PlanError {
             "model `{model}` has no built-in planner: use kind = \"file\" or kind = \"external\""
         ),
     }
+}
+
+/// Every robot room's metric rows, then the harness's.
+fn metric_rows() -> impl Iterator<Item = &'static Metric> {
+    [
+        space_robot::METRICS,
+        rover::METRICS,
+        rolling_sphere::METRICS,
+        mobile_manipulator::METRICS,
+        car::METRICS,
+        crate::metric::HARNESS,
+    ]
+    .into_iter()
+    .flatten()
+}
+
+/// The row of metric `name` (a robot's own before the harness's), if any.
+pub fn metric(name: &str) -> Option<&'static Metric> {
+    crate::metric::find_row(metric_rows(), name)
+}
+
+/// The unit of metric `name` as written after its values (`m`, `°`, `s`;
+/// empty when it has none or none is known), for a model whose coordinates
+/// `spec` describes.
+pub fn metric_unit(name: &str, spec: &crate::compare::MetricSpec<'_>) -> &'static str {
+    let Some(row) = metric(name) else {
+        return "";
+    };
+    if row.unit != crate::metric::Unit::Coordinate {
+        return row.unit.symbol(name);
+    }
+    crate::metric::captures(row.name, name)
+        .and_then(|c| c.into_iter().find(|(hole, _)| *hole == "coord"))
+        .map_or("", |(_, coord)| spec.coord_unit(coord))
 }

@@ -8,7 +8,6 @@ use crate::engine::required::Named;
 use crate::engine::{PhysicsSettings, PhysicsSystem};
 use crate::error::SetupError;
 use crate::integrate::Trajectory;
-use crate::metric::Direction;
 use crate::model::{KinematicModel, State};
 use crate::plan::{Limits, Plan};
 use crate::planner::PlanError;
@@ -144,9 +143,6 @@ impl System for OwnPlan {
     }
     fn exposure(&self, plan: &Plan) -> crate::engine::perturb::Exposure {
         self.inner.exposure(plan)
-    }
-    fn metric_direction(&self, name: &str) -> Option<Direction> {
-        self.inner.metric_direction(name)
     }
     // No `paper`: the seeds' printed numbers are about their planners' plans.
     // No `planning_horizon`: nothing is integrated while planning.

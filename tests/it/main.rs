@@ -30,6 +30,7 @@ mod layering;
 mod log_roundtrip;
 mod log_unit;
 mod margin;
+mod metrics;
 mod obstacles;
 mod own_plan_examples;
 mod paper;

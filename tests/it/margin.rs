@@ -499,8 +499,9 @@ fn check_runs_a_gate_once_and_fails_when_a_gated_margin_drops() {
 /// final one is later or never). Gates of every family, four systems.
 #[test]
 fn early_stop_families_hold_on_prefixes_of_real_runs() {
-    use anholonomy::margin::early::{family, prefix, Family};
+    use anholonomy::margin::early::{family, prefix};
     use anholonomy::margin::level::Ctx;
+    use anholonomy::metric::Family;
     use anholonomy::record::SimTrajectory;
     let mut checked = BTreeMap::<&str, usize>::new();
     for file in [

@@ -16,6 +16,7 @@ use crate::engine::required::Named;
 use crate::engine::{PhysicsSettings, PhysicsSystem};
 use crate::error::SetupError;
 use crate::integrate::Trajectory;
+use crate::metric::{m, Direction::*, Family::*, Metric, Unit};
 use crate::model::{KinematicModel, State};
 use crate::plan::{Limits, Plan};
 use crate::planner::PlanError;
@@ -31,6 +32,15 @@ use crate::robots::{check_names, no_planner};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
+
+/// The car's own metrics.
+pub const METRICS: &[Metric] = &[m(
+    "steer_clipped_fraction",
+    Unit::Fraction,
+    LowerIsBetter,
+    EndOnly,
+    "Fraction of the ideal run's samples whose steering exceeds the joints' limits.",
+)];
 
 /// A car (kinematic bicycle: x, y, θ, φ; inputs v, φ'; or steered by angle:
 /// x, y, θ; inputs v, φ) on four wheels with Ackermann steering and

@@ -45,6 +45,7 @@ use crate::engine::PhysicsSettings;
 use crate::engine::PhysicsSystem;
 use crate::error::SetupError;
 use crate::integrate::Trajectory;
+use crate::metric::{m, Direction::*, Family::*, Metric, Unit};
 use crate::model::{KinematicModel, State};
 use crate::plan::{Limits, Plan};
 use crate::planner::PlanError;
@@ -64,6 +65,122 @@ use crate::robots::{EarlyAnalysis, SimFollower, System};
 use overlay::{wireframe, ClearanceProbe};
 use std::path::Path;
 use std::sync::Arc;
+
+/// The mobile manipulators' own metrics: obstacles, the law's claims, the arms, the carried beam.
+pub const METRICS: &[Metric] = &[
+    m(
+        "{run}_min_obstacle_function",
+        Unit::Ratio,
+        HigherIsBetter,
+        RunningMin,
+        "Least obstacle function β of the ellipsoid model (> 0: free).",
+    ),
+    m(
+        "{run}_vdot_violations",
+        Unit::Count,
+        LowerIsBetter,
+        RunningMax,
+        "Policy samples with V̇ < 0 under the applied input (the paper claims none).",
+    ),
+    m(
+        "{run}_min_manipulability",
+        Unit::Ratio,
+        HigherIsBetter,
+        RunningMin,
+        "Least manipulability |det J| of any arm at the policy samples, m³.",
+    ),
+    m(
+        "{run}_stall_time",
+        Unit::Second,
+        Informational,
+        EndOnly,
+        "When the law declared a stall (NaN: never); the verdict shows in the time to goal.",
+    ),
+    m(
+        "joint_rate_error_max",
+        Unit::RadianPerSecond,
+        LowerIsBetter,
+        RunningMax,
+        "Largest difference between a commanded and a simulated joint rate.",
+    ),
+    m(
+        "sim_max_tilt_deg",
+        Unit::Degree,
+        LowerIsBetter,
+        RunningMax,
+        "Largest platform tilt in physics.",
+    ),
+    m(
+        "sim_max_tilt_{n}_deg",
+        Unit::Degree,
+        LowerIsBetter,
+        RunningMax,
+        "Largest platform tilt of robot n in physics.",
+    ),
+    m(
+        "sim_robot_clearance",
+        Unit::Meter,
+        HigherIsBetter,
+        RunningMin,
+        "Least distance between the two robots in physics.",
+    ),
+    m(
+        "sim_body_contacts",
+        Unit::Count,
+        LowerIsBetter,
+        RunningMax,
+        "Most contacts between the robots' own bodies at any step.",
+    ),
+    m(
+        "{run}_grasp_wrench_ratio",
+        Unit::Ratio,
+        LowerIsBetter,
+        EndOnly,
+        "Largest grasp wrench over its bound, |F|/F_max or |M|/M_max (below 1: kept).",
+    ),
+    m(
+        "sim_grasp_force_max",
+        Unit::Newton,
+        LowerIsBetter,
+        RunningMax,
+        "Largest grasp force at any physics step.",
+    ),
+    m(
+        "sim_grasp_torque_max",
+        Unit::NewtonMeter,
+        LowerIsBetter,
+        RunningMax,
+        "Largest grasp moment at any physics step.",
+    ),
+    m(
+        "sim_wrist_travel_used",
+        Unit::Fraction,
+        LowerIsBetter,
+        EndOnly,
+        "Largest compliant-wrist deflection over its travel (1: at the stop).",
+    ),
+    m(
+        "{run}_max_deformation",
+        Unit::Meter,
+        LowerIsBetter,
+        RunningMax,
+        "Largest deformation of the carried beam.",
+    ),
+    m(
+        "sim_beam_max_deformation",
+        Unit::Meter,
+        LowerIsBetter,
+        RunningMax,
+        "Largest deformation of the physics beam.",
+    ),
+    m(
+        "sim_beam_fe_gap",
+        Unit::Meter,
+        LowerIsBetter,
+        EndOnly,
+        "Largest gap between the physics beam and the finite-element model.",
+    ),
+];
 
 struct Dilf {
     model: MobileManipulator,
@@ -514,12 +631,6 @@ impl System for Dilf {
             }
         }
         out
-    }
-    fn metric_direction(&self, name: &str) -> Option<crate::metric::Direction> {
-        // A stall shows as a goal not reached; when it is declared is
-        // information (earlier is neither better nor worse).
-        name.ends_with("_stall_time")
-            .then_some(crate::metric::Direction::Informational)
     }
     fn extra_metric_names(&self) -> Vec<String> {
         let mut names: Vec<String> = [

@@ -28,6 +28,7 @@ use crate::engine::PhysicsSettings;
 use crate::engine::PhysicsSystem;
 use crate::error::SetupError;
 use crate::integrate::Trajectory;
+use crate::metric::{m, Direction::*, Family::*, Metric, Unit};
 use crate::model::{KinematicModel, State};
 use crate::paper::{detail, rows_from, same, PaperRow};
 use crate::plan::{Limits, Plan};
@@ -67,6 +68,38 @@ pub enum SpherePlanner {
 }
 
 use SpherePlanner as Planner;
+
+/// The sphere's own metrics: orientation errors as one angle.
+pub const METRICS: &[Metric] = &[
+    m(
+        "{run}_goal_orientation_deg",
+        Unit::Degree,
+        LowerIsBetter,
+        EndOnly,
+        "Angle between the ball's final orientation and the goal's.",
+    ),
+    m(
+        "tracking_orientation_deg_max",
+        Unit::Degree,
+        LowerIsBetter,
+        RunningMax,
+        "Largest angle between the two runs' orientations.",
+    ),
+    m(
+        "tracking_orientation_deg_rms",
+        Unit::Degree,
+        LowerIsBetter,
+        EndOnly,
+        "RMS angle between the two runs' orientations.",
+    ),
+    m(
+        "tracking_orientation_deg_final",
+        Unit::Degree,
+        LowerIsBetter,
+        EndOnly,
+        "Angle between the two runs' final orientations.",
+    ),
+];
 
 struct Sphere {
     euler: RollingSphere,

@@ -17,7 +17,7 @@ use crate::engine::PhysicsSettings;
 use crate::engine::PhysicsSystem;
 use crate::error::SetupError;
 use crate::integrate::{simulate, Trajectory};
-use crate::metric::Direction;
+use crate::metric::{m, Direction::*, Family::*, Metric, Unit};
 use crate::model::{Input, KinematicModel, State};
 use crate::paper::{rows_from, same, PaperRow};
 use crate::plan::{Command, ControlLaw, Controller, Limits, Plan, PolicyFactory};
@@ -32,6 +32,38 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 use std::path::{Path, PathBuf};
 use std::sync::Arc;
+
+/// The rover's own metrics: the SE(2) error and the primitives' envelope.
+pub const METRICS: &[Metric] = &[
+    m(
+        "{run}_goal_se2",
+        Unit::Ratio,
+        LowerIsBetter,
+        EndOnly,
+        "Final error in the seed's SE(2) metric √(Δx² + Δy² + Δθ²), m and rad alike.",
+    ),
+    m(
+        "envelope_fraction",
+        Unit::Fraction,
+        HigherIsBetter,
+        EndOnly,
+        "Fraction of the physics run inside the primitives' envelope.",
+    ),
+    m(
+        "envelope_outside_fraction",
+        Unit::Fraction,
+        LowerIsBetter,
+        EndOnly,
+        "Fraction of the physics run outside the envelope.",
+    ),
+    m(
+        "envelope_distance_max",
+        Unit::Meter,
+        LowerIsBetter,
+        RunningMax,
+        "Largest distance outside the envelope.",
+    ),
+];
 
 /// σ(t) of the ideal run.
 #[derive(Debug, Clone, Copy, PartialEq, Deserialize, Serialize, JsonSchema)]
@@ -256,10 +288,6 @@ impl System for Rover {
             start,
             sim,
         )?))
-    }
-    /// `envelope_fraction` (samples inside the allowed velocity set) regresses when it falls.
-    fn metric_direction(&self, name: &str) -> Option<Direction> {
-        (name == "envelope_fraction").then_some(Direction::HigherIsBetter)
     }
     /// Seed 002 Fig. 2: from (0, 0, 90°) to (8, 2, 90°) the paper's run turns 330° left in P1.
     fn paper(&self, start: &State, goal: &State, plan: &Plan) -> Vec<PaperRow> {

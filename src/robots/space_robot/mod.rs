@@ -30,6 +30,7 @@ use crate::engine::PhysicsSettings;
 use crate::engine::PhysicsSystem;
 use crate::error::SetupError;
 use crate::integrate::Trajectory;
+use crate::metric::{m, Direction::*, Family::*, Metric, Unit};
 use crate::model::{KinematicModel, State};
 use crate::paper::{rows_from, same, PaperRow};
 use crate::plan::{Limits, Plan};
@@ -66,6 +67,59 @@ pub enum SpacePlanner {
 }
 
 use SpacePlanner as Planner;
+
+/// The space robot's own metrics: momentum conservation, planarity, via points.
+pub const METRICS: &[Metric] = &[
+    m(
+        "{run}_via_error_deg",
+        Unit::Degree,
+        LowerIsBetter,
+        EndOnly,
+        "Largest error at a via point (seed 001), deg.",
+    ),
+    m(
+        "max_abs_angular_momentum",
+        Unit::AngularMomentum,
+        LowerIsBetter,
+        RunningMax,
+        "Largest |angular momentum| of the free-floating system in physics (0 in the model).",
+    ),
+    m(
+        "max_angular_momentum_out_of_plane",
+        Unit::AngularMomentum,
+        LowerIsBetter,
+        RunningMax,
+        "Largest out-of-plane angular momentum in physics.",
+    ),
+    m(
+        "max_linear_momentum",
+        Unit::LinearMomentum,
+        LowerIsBetter,
+        RunningMax,
+        "Largest |linear momentum| in physics (0 in the model).",
+    ),
+    m(
+        "max_com_drift",
+        Unit::Meter,
+        LowerIsBetter,
+        RunningMax,
+        "Largest drift of the centre of mass in physics.",
+    ),
+    m(
+        "max_out_of_plane",
+        Unit::Meter,
+        LowerIsBetter,
+        RunningMax,
+        "Largest motion out of the plane in physics.",
+    ),
+    m(
+        "max_contact_pairs",
+        Unit::Count,
+        LowerIsBetter,
+        RunningMax,
+        "Most contact pairs at any step (the links must not touch).",
+    ),
+];
 
 struct Space {
     model: SpaceRobotModel,
