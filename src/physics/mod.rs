@@ -13,8 +13,8 @@ pub mod robots;
 // The engine (worlds, URDF loading, the replay) and the robots (each
 // model's Rapier counterpart), under their old paths too.
 pub use engine::{
-    angles, batch, lump, mesh, obstacles, perturb, reading, real, replay, required, settings, urdf,
-    world,
+    angles, batch, lump, mesh, obstacles, packages, perturb, reading, real, replay, required,
+    settings, urdf, world,
 };
 pub use robots::{
     beam, car, declared, diff_drive, disk, mobile_manipulator, rover, space_robot, sphere, wheeled,

@@ -243,6 +243,7 @@ fn meshes_resolve_through_packages_ros_package_path_and_ament_prefix_path() {
         packages: [("mine".to_string(), d.join("mine"))].into(),
         ros_package_path: vec![d.join("ros"), d.join("ros_self/selfpkg")],
         ament_prefix_path: vec![d.join("prefix")],
+        ..Default::default()
     };
     let here = Path::new("/nowhere");
     assert_eq!(

@@ -7,6 +7,7 @@ pub mod batch;
 pub mod lump;
 pub mod mesh;
 pub mod obstacles;
+pub mod packages;
 pub mod perturb;
 pub mod reading;
 pub mod real;
