@@ -379,18 +379,6 @@ fn bad_meshes_are_refused_and_nothing_is_written() {
     refused(&out, dir.path(), &["package `pocket_bot_description`"]);
 }
 
-/// `PATH` without any directory that holds a `xacro`.
-fn path_without_xacro() -> String {
-    let path = std::env::var_os("PATH").unwrap_or_default();
-    let kept: Vec<PathBuf> = std::env::split_paths(&path)
-        .filter(|d| !d.join("xacro").exists())
-        .collect();
-    std::env::join_paths(kept)
-        .unwrap()
-        .to_string_lossy()
-        .into_owned()
-}
-
 fn xacro_scenario(dir: &Path) -> PathBuf {
     let text = std::fs::read_to_string(example("ros_robot/pocket_bot_xacro.toml")).unwrap();
     let ex = example("ros_robot");
@@ -414,32 +402,25 @@ fn xacro_without_the_xacro_command_is_refused_naming_it() {
     let sc = xacro_scenario(dir.path());
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_anholonomy"))
         .current_dir(dir.path())
-        .env("PATH", path_without_xacro())
+        .env("PATH", python::path_without_xacro())
         .args(["run", sc.to_str().unwrap(), "--logs", "logs"])
         .output()
         .unwrap();
     refused(
         &out,
         dir.path(),
-        &["holds xacro markup (<xacro:...> elements): install the `xacro` command"],
+        &["holds xacro markup (xacro elements): install the `xacro` command"],
     );
 }
 
 #[test]
 fn xacro_is_expanded_when_the_command_is_there() {
     // `xacro` from PATH, or from the test venv (made once with pip).
-    let has = std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default())
-        .any(|d| d.join("xacro").is_file());
-    let mut path =
-        std::env::split_paths(&std::env::var_os("PATH").unwrap_or_default()).collect::<Vec<_>>();
-    if !has {
-        path.insert(0, python::venv_bin());
-    }
     let dir = tempfile::tempdir().unwrap();
     let sc = xacro_scenario(dir.path());
     let out = std::process::Command::new(env!("CARGO_BIN_EXE_anholonomy"))
         .current_dir(dir.path())
-        .env("PATH", std::env::join_paths(path).unwrap())
+        .env("PATH", python::path_with_xacro())
         .args(["plan", sc.to_str().unwrap(), "--json"])
         .output()
         .unwrap();
@@ -525,11 +506,10 @@ fn the_summary_says_what_was_read_from_the_urdf() {
     assert_eq!(r["wheels"][0]["shape"], "cylinder");
     assert_eq!(r["geometry"][0][0], "track_m");
     assert!((r["geometry"][0][1][0].as_f64().unwrap() - 0.2).abs() < 1e-12);
-    assert_eq!(r["drives"][0]["source"], "default");
+    // The scenario sets [sim] motor_max_torque: the cap is its choice, no warning.
+    assert_eq!(r["drives"][0]["source"], "scenario");
     assert_eq!(r["drives"][0]["torque_limit"], 0.5);
-    assert!(r["warnings"]
-        .to_string()
-        .contains("gives no <limit effort>"));
+    assert!(!r["warnings"].to_string().contains("limit effort"), "{r}");
     // The report says the same.
     let out = cli(dir.path(), &["report", dir.path().to_str().unwrap()]);
     assert!(
@@ -539,7 +519,8 @@ fn the_summary_says_what_was_read_from_the_urdf() {
     );
     let html = std::fs::read_to_string(dir.path().join("pocket_bot_plan/report.html")).unwrap();
     assert!(html.contains("Robot as read from the URDF"));
-    assert!(html.contains("gives no &lt;limit effort&gt;"));
+    assert!(html.contains("[sim] motor_max_torque"));
+    assert!(!html.contains("gives no &lt;limit effort&gt;"));
     assert!(
         html.contains("caster_back_link, imu_link"),
         "lumped links listed"

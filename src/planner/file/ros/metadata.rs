@@ -124,7 +124,10 @@ pub fn bag_files(dir: &Path) -> Result<(Storage, Vec<PathBuf>), PlanError> {
         if got.as_deref() != Some(ext) {
             return Err(err(
                 line(name),
-                format!("`{name}` is not a .{ext} file, as a bag of {} storage holds: {CONVERT}", if ext == "db3" { "sqlite3" } else { "mcap" }),
+                format!(
+                    "`{name}` is not a .{ext} file, as a bag of {} storage holds: {CONVERT}",
+                    if ext == "db3" { "sqlite3" } else { "mcap" }
+                ),
             ));
         }
         if !path.is_file() {

@@ -397,7 +397,11 @@ pub fn read_with(
         paths_used: Vec::new(),
     };
     for (fi, file) in inv.files.iter().enumerate() {
-        let ids: Vec<u16> = chans.iter().filter(|c| c.file == fi).map(|c| c.id).collect();
+        let ids: Vec<u16> = chans
+            .iter()
+            .filter(|c| c.file == fi)
+            .map(|c| c.id)
+            .collect();
         if ids.is_empty() {
             continue;
         }
@@ -610,8 +614,13 @@ impl Decoder<'_> {
 /// The messages of the decoder's topic in the MCAP file `file` (index `fi`).
 fn mcap_messages(file: &Path, fi: usize, dec: &mut Decoder<'_>) -> Result<(), PlanError> {
     let bytes = read_bytes(file)?;
-    let bad =
-        |e: mcap::McapError| PlanError::file(file.to_path_buf(), None, format!("not a readable MCAP file: {e}"));
+    let bad = |e: mcap::McapError| {
+        PlanError::file(
+            file.to_path_buf(),
+            None,
+            format!("not a readable MCAP file: {e}"),
+        )
+    };
     for m in mcap::MessageStream::new(&bytes).map_err(bad)? {
         let m = m.map_err(bad)?;
         if m.channel.topic != dec.topic() {

@@ -20,7 +20,10 @@ pub const BUILT_IN: &[(&str, &str)] = &[
     ("geometry_msgs/msg/Twist", TWIST),
     ("geometry_msgs/msg/TwistStamped", TWIST_STAMPED),
     ("ackermann_msgs/msg/AckermannDrive", ACKERMANN),
-    ("ackermann_msgs/msg/AckermannDriveStamped", ACKERMANN_STAMPED),
+    (
+        "ackermann_msgs/msg/AckermannDriveStamped",
+        ACKERMANN_STAMPED,
+    ),
 ];
 
 const TWIST: &str = "geometry_msgs/Vector3 linear\ngeometry_msgs/Vector3 angular\n================================================================================\nMSG: geometry_msgs/Vector3\nfloat64 x\nfloat64 y\nfloat64 z\n";
@@ -176,9 +179,7 @@ pub fn messages(
     let defs = definitions(&conn, file)?;
     let mut types: HashMap<u16, String> = HashMap::new();
     {
-        let mut st = conn
-            .prepare("SELECT id, type FROM topics")
-            .map_err(bad)?;
+        let mut st = conn.prepare("SELECT id, type FROM topics").map_err(bad)?;
         let rows = st
             .query_map([], |r| Ok((r.get::<_, i64>(0)?, r.get::<_, String>(1)?)))
             .map_err(bad)?;
@@ -201,14 +202,20 @@ pub fn messages(
         let id: i64 = row.get(0).map_err(bad)?;
         let ns: i64 = row.get(1).map_err(bad)?;
         let data = row.get_ref(2).map_err(bad)?;
-        let data = data
-            .as_blob()
-            .map_err(|_| err(file, format!("topic `{}`: a message that is not bytes", dec.topic())))?;
+        let data = data.as_blob().map_err(|_| {
+            err(
+                file,
+                format!("topic `{}`: a message that is not bytes", dec.topic()),
+            )
+        })?;
         let channel = u16::try_from(id).unwrap_or(u16::MAX);
         let log_time = u64::try_from(ns).map_err(|_| {
             err(
                 file,
-                format!("topic `{}`: a message logged at {ns} ns, before 1970", dec.topic()),
+                format!(
+                    "topic `{}`: a message logged at {ns} ns, before 1970",
+                    dec.topic()
+                ),
             )
         })?;
         let ty = types.get(&channel).cloned().unwrap_or_default();
