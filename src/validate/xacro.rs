@@ -125,7 +125,11 @@ pub fn expand(
         return Err(XacroError::AbsentPackages { absent, urdf });
     }
     if !status.success() {
-        let mut message = first_error(&stderr);
+        // Files in the description's own directory as the user names them.
+        let mut message = match file.parent() {
+            Some(d) => first_error(&stderr).replace(&format!("{}/", d.display()), ""),
+            None => first_error(&stderr),
+        };
         if !absent.is_empty() {
             let names: Vec<String> = absent.iter().map(|a| format!("`{}`", a.package)).collect();
             message.push_str(&format!(
