@@ -489,3 +489,31 @@ fn a_sqlite3_bag_replays_the_commands_of_its_mcap_conversion() {
         assert!(sq.metric("ideal_goal_position").unwrap() > 0.05);
     }
 }
+
+/// The committed sqlite3 bag (make_bags.py: twist_steps' commands in
+/// sqlite3 storage), as a directory and as its one `.db3` file, plans what
+/// the MCAP bag plans.
+#[test]
+fn the_committed_sqlite3_bag_plans_what_its_mcap_twin_plans() {
+    let dir = tempfile::tempdir().unwrap();
+    let start = [0.3, 0.1, -40.0];
+    let end = |name: &str, path: PathBuf| {
+        let sc = scenario(
+            dir.path(),
+            name,
+            &diff_drive(),
+            start,
+            &format!("path = \"{}\"\ntopic = \"/cmd_vel\"", path.display()),
+        );
+        ideal_end(&sc)
+    };
+    let (s0, mcap) = end("mcap", bag("twist_steps"));
+    assert_close("closed form", mcap, closed_form(s0, &STEPS), 1e-9);
+    for (name, path) in [
+        ("sqlite3_dir", bag("sqlite3")),
+        ("sqlite3_file", bag("sqlite3/sqlite3.db3")),
+    ] {
+        let (_, got) = end(name, path);
+        assert_eq!(got.map(f64::to_bits), mcap.map(f64::to_bits), "{name}");
+    }
+}

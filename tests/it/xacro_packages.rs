@@ -222,7 +222,7 @@ fn refused(dir: &Path, path: &std::ffi::OsStr, scenario: &str, needles: &[&str])
 
 /// The venv xacro runs in has xacro and no ROS Python module: `$(find)`
 /// is answered by the harness's resolver, nothing else.
-fn assert_no_ros_python() {
+pub fn assert_no_ros_python() {
     let path = python::path_with_xacro();
     let xacro = std::env::split_paths(&path)
         .map(|d| d.join("xacro"))
