@@ -298,9 +298,7 @@ pub struct UrdfSourceConfig {
     /// (the `xacro` command expands it: `pip install xacro`).
     #[serde(default)]
     pub xacro_args: BTreeMap<String, String>,
-    /// What xacro makes of `$(find PKG)` for a package found nowhere: `"error"`
-    /// names every absent package (and the file that includes it) and stops;
-    /// `"empty"` expands each include of one to nothing and warns once.
+    /// What xacro makes of `$(find PKG)` for a package found nowhere.
     #[serde(default)]
     pub missing_packages: crate::physics::packages::MissingPackages,
 }

@@ -70,7 +70,10 @@ pub fn undriven(robot: &Robot, reading: &UrdfReading, names: &[Named]) -> Option
         .filter_map(|n| n.required.key)
         .collect();
     keys.dedup();
-    let hint = if keys.is_empty() {
+    let hint = if keys.contains(&"left_wheel_joint") {
+        // A differential drive: a skid steer lists every wheel of a side.
+        " (a skid steer lists every wheel of a side: [model] `left_wheel_joints`, `right_wheel_joints`)".to_string()
+    } else if keys.is_empty() {
         String::new()
     } else {
         format!(
