@@ -208,7 +208,7 @@ pub fn first_error(stderr: &str) -> String {
     let plain = strip_ansi(stderr);
     let lines: Vec<&str> = plain.lines().map(str::trim).collect();
     let is_error = |l: &&str| l.starts_with("error:") || l.starts_with("XML parsing error");
-    let Some(start) = lines.iter().position(|l| is_error(l)) else {
+    let Some(start) = lines.iter().position(is_error) else {
         return lines
             .iter()
             .rev()

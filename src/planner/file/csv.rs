@@ -11,16 +11,6 @@ use crate::planner::PlanError;
 /// The optional label column.
 const LABEL: &str = "label";
 
-/// A hint for a column (or JSON input) named `name` that is not one of
-/// the model's `inputs`: a steering angle for a car steered by rate.
-pub fn unknown_input_hint(name: &str, inputs: &[String]) -> &'static str {
-    if name == "steer" && inputs.iter().any(|i| i == "steer_rate") {
-        "; `steer` is a steering angle: steer the car by angle with `[model] steering = \"angle\"`"
-    } else {
-        ""
-    }
-}
-
 /// A hint for a field that is not a number: numpy 2 writes its scalars as
 /// `np.float64(0.2)` when they are formatted with `repr` (or in a list).
 fn not_a_number_hint(field: &str) -> &'static str {
@@ -75,7 +65,7 @@ pub fn read(mut r: Reader<'_>) -> Result<Samples, PlanError> {
                 format!(
                     "unknown column (expected t, {} and optionally label){}",
                     names.join(", "),
-                    unknown_input_hint(name, &names)
+                    super::unknown_input_hint(name, &names)
                 ),
             ));
         };

@@ -66,7 +66,7 @@ pub fn read(mut r: Reader<'_>) -> Result<Samples, PlanError> {
                 format!(
                     "unknown input (the model's inputs: {}){}",
                     names.join(", "),
-                    super::csv::unknown_input_hint(key, &names)
+                    super::unknown_input_hint(key, &names)
                 ),
             ));
         }

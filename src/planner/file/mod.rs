@@ -415,6 +415,16 @@ impl<'a> Reader<'a> {
     }
 }
 
+/// A hint for a column (or JSON input) named `name` that is not one of
+/// the model's `inputs`: a steering angle for a car steered by rate.
+pub fn unknown_input_hint(name: &str, inputs: &[String]) -> &'static str {
+    if name == "steer" && inputs.iter().any(|i| i == "steer_rate") {
+        "; `steer` is a steering angle: steer the car by angle with `[model] steering = \"angle\"`"
+    } else {
+        ""
+    }
+}
+
 /// Read and check the plan file of `params` for a model with `input_names`.
 pub fn read(params: &FilePlanParams, input_names: &[&str]) -> Result<Samples, PlanError> {
     Ok(read_detailed(params, input_names)?.0)
