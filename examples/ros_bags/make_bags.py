@@ -9,7 +9,8 @@ registered from their .msg text); nothing here writes CDR or MCAP bytes by
 hand. The bad bags of tests/data/ros_bags/ are valid bags whose contents
 are wrong in one way each (a message cut short after serialization, a
 topic recorded without its definition, time going backwards, a topic with
-no message, sqlite3 storage).
+no message); tests/data/ros_bags/sqlite3 holds twist_steps' commands in
+sqlite3 storage.
 
     python3 examples/ros_bags/make_bags.py          # rewrite them all
     python3 examples/ros_bags/make_bags.py --goals  # print the examples' goals

@@ -4,8 +4,9 @@
 //! Robot descriptions name meshes as `package://PKG/path` (a ROS package),
 //! `file:///abs/path`, or a path relative to the URDF. A package is looked
 //! up in the scenario's `[model] packages` table (directories relative to
-//! the scenario), then `ROS_PACKAGE_PATH` (an entry is the package itself,
-//! or holds it), then `AMENT_PREFIX_PATH` (`PREFIX/share/PKG`). STL, OBJ and
+//! the scenario), then the URDF's own package (the nearest `package.xml`
+//! above it names it), then `ROS_PACKAGE_PATH` (an entry is the package
+//! itself, or holds it), then `AMENT_PREFIX_PATH` (`PREFIX/share/PKG`). STL, OBJ and
 //! Collada files are read by `mesh-loader` (the loader urdf-viz uses); every
 //! submesh of a file is merged, and the URDF's `scale` applied.
 //!
@@ -29,6 +30,8 @@ pub const FORMATS: [&str; 3] = ["stl", "obj", "dae"];
 pub struct Search {
     /// Package directories by name, from the scenario.
     pub packages: BTreeMap<String, PathBuf>,
+    /// The package the URDF is in (its `package.xml`'s name, its directory).
+    pub own: Option<(String, PathBuf)>,
     /// `ROS_PACKAGE_PATH` entries.
     pub ros_package_path: Vec<PathBuf>,
     /// `AMENT_PREFIX_PATH` entries.
@@ -49,9 +52,54 @@ impl Search {
         };
         Search {
             packages,
+            own: None,
             ros_package_path: split("ROS_PACKAGE_PATH"),
             ament_prefix_path: split("AMENT_PREFIX_PATH"),
         }
+    }
+
+    /// [`Search::from_env`] for the URDF at `urdf`, which also finds the
+    /// package it is in.
+    pub fn for_urdf(packages: BTreeMap<String, PathBuf>, urdf: &Path) -> Search {
+        Search {
+            own: crate::engine::packages::own_package(urdf),
+            ..Search::from_env(packages)
+        }
+    }
+
+    /// Every package this search finds, by name, each at the directory
+    /// [`Search::package`] gives it: the scenario's, the URDF's own, the
+    /// subdirectories (and the entry itself) of each `ROS_PACKAGE_PATH`
+    /// entry, each `AMENT_PREFIX_PATH` entry's `share/*`.
+    pub fn known(&self) -> BTreeMap<String, PathBuf> {
+        use crate::engine::packages::subdirectories;
+        let mut out = BTreeMap::new();
+        let mut add = |name: &str, dir: &Path| {
+            if dir.is_dir() {
+                out.entry(name.to_string())
+                    .or_insert_with(|| dir.to_path_buf());
+            }
+        };
+        for (name, dir) in &self.packages {
+            add(name, dir);
+        }
+        if let Some((name, dir)) = &self.own {
+            add(name, dir);
+        }
+        for e in &self.ros_package_path {
+            for (name, dir) in subdirectories(e) {
+                add(&name, &dir);
+            }
+            if let Some(name) = e.file_name().and_then(|n| n.to_str()) {
+                add(name, e);
+            }
+        }
+        for e in &self.ament_prefix_path {
+            for (name, dir) in subdirectories(&e.join("share")) {
+                add(&name, &dir);
+            }
+        }
+        out
     }
 
     /// The directory of package `pkg`: the scenario's entry, then a
@@ -59,6 +107,11 @@ impl Search {
     /// `AMENT_PREFIX_PATH`'s `share/PKG`; the first that exists.
     pub fn package(&self, pkg: &str) -> Option<PathBuf> {
         let mut candidates: Vec<PathBuf> = self.packages.get(pkg).cloned().into_iter().collect();
+        if let Some((name, dir)) = &self.own {
+            if name == pkg {
+                candidates.push(dir.clone());
+            }
+        }
         for e in &self.ros_package_path {
             candidates.push(e.join(pkg));
             if e.file_name().is_some_and(|n| n == pkg) {
@@ -106,6 +159,11 @@ impl Search {
                     dir.display()
                 ))
             };
+        }
+        if let Some(pkg) = crate::engine::packages::absent_package(filename) {
+            return Err(format!(
+                "`{filename}` is in package `{pkg}`, which is absent (xacro expanded its `$(find {pkg})` as [model] missing_packages = \"empty\" says): name its directory in [model] packages = {{ {pkg} = \"DIR\" }}"
+            ));
         }
         let path = match filename.strip_prefix("file://") {
             Some(p) => PathBuf::from(p),

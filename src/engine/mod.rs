@@ -13,6 +13,7 @@ pub mod angles;
 pub mod batch;
 pub mod lump;
 pub mod mesh;
+pub mod packages;
 pub mod perturb;
 pub mod reading;
 pub mod real;

@@ -17,6 +17,8 @@ pub enum LimitSource {
     Model,
     /// `[sim] motor_max_torque` (the URDF gives none).
     Default,
+    /// `[sim] motor_max_torque`, which the scenario sets (the URDF gives none).
+    Scenario,
 }
 
 /// One driven joint.
@@ -104,23 +106,55 @@ impl UrdfReading {
             .collect()
     }
 
-    /// A drive's reading and, for a default limit, its warning.
+    /// A drive's reading: the URDF's `effort`, else the default cap
+    /// (see [`UrdfReading::settle_default_limits`]).
     pub fn drive(&mut self, joint: &str, effort: Option<f64>, default: f64) {
         let (torque_limit, source) = match effort {
             Some(e) => (e, LimitSource::Urdf),
-            None => {
-                self.warnings.push(format!(
-                    "joint `{joint}` gives no <limit effort>: its drive is capped at [sim] motor_max_torque = {} N·m",
-                    crate::numfmt::readable(default)
-                ));
-                (default, LimitSource::Default)
-            }
+            None => (default, LimitSource::Default),
         };
         self.drives.push(DriveReading {
             joint: joint.to_string(),
             torque_limit,
             source,
         });
+    }
+
+    /// The drives capped at `[sim] motor_max_torque` because their joints
+    /// give no `<limit effort>`: when the scenario sets that key, the cap is
+    /// its choice ([`LimitSource::Scenario`], no warning); otherwise one
+    /// warning names them all.
+    pub fn settle_default_limits(&mut self, scenario_sets_cap: bool) {
+        let defaulted: Vec<&DriveReading> = self
+            .drives
+            .iter()
+            .filter(|d| d.source == LimitSource::Default)
+            .collect();
+        let Some(first) = defaulted.first() else {
+            return;
+        };
+        if scenario_sets_cap {
+            for d in &mut self.drives {
+                if d.source == LimitSource::Default {
+                    d.source = LimitSource::Scenario;
+                }
+            }
+            return;
+        }
+        let cap = crate::numfmt::readable(first.torque_limit);
+        let names: Vec<String> = defaulted.iter().map(|d| format!("`{}`", d.joint)).collect();
+        let warning = if names.len() == 1 {
+            format!(
+                "joint {} gives no <limit effort>: its drive is capped at [sim] motor_max_torque = {cap} N·m (set it to the motor's torque)",
+                names[0]
+            )
+        } else {
+            format!(
+                "joints {} give no <limit effort>: their drives are capped at [sim] motor_max_torque = {cap} N·m (set it to the motors' torque)",
+                names.join(", ")
+            )
+        };
+        self.warnings.push(warning);
     }
 
     /// Lines for a terminal (`plan`), indented by two spaces.
@@ -156,6 +190,7 @@ impl UrdfReading {
                 LimitSource::Urdf => "URDF <limit effort>",
                 LimitSource::Model => "[model]",
                 LimitSource::Default => "default: [sim] motor_max_torque",
+                LimitSource::Scenario => "[sim] motor_max_torque",
             };
             out.push(format!(
                 "  drive {}: {} N·m ({src})",

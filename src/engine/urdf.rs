@@ -10,14 +10,17 @@ use urdf_rs::{Geometry, JointType, Robot};
 
 pub use crate::engine::world::{Drive, RobotHandles, SimWorld, WorldOptions};
 
-/// Where a scenario's robot description finds what it names: mesh
-/// packages (`[model] packages`) and xacro arguments (`[model] xacro_args`).
+/// Where a scenario's robot description finds what it names: packages
+/// (`[model] packages`), xacro arguments (`[model] xacro_args`) and what
+/// an absent package expands to (`[model] missing_packages`).
 #[derive(Debug, Clone, Default, PartialEq, serde::Serialize)]
 pub struct Source {
     /// Package directories by name (resolved against the scenario's directory).
     pub packages: std::collections::BTreeMap<String, std::path::PathBuf>,
     /// `name:=value` arguments for xacro.
     pub xacro_args: std::collections::BTreeMap<String, String>,
+    /// What xacro does with includes of packages that are not found.
+    pub missing_packages: crate::engine::packages::MissingPackages,
 }
 
 /// Read and validate a URDF file. Errors are one-line, user-facing strings.

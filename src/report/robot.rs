@@ -76,6 +76,7 @@ pub(super) fn section(summary: &Value) -> String {
             let from = match d["source"].as_str() {
                 Some("urdf") => "URDF &lt;limit effort&gt;",
                 Some("model") => "[model]",
+                Some("scenario") => "[sim] motor_max_torque",
                 _ => "default: [sim] motor_max_torque",
             };
             let _ = write!(

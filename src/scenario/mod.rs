@@ -283,21 +283,25 @@ pub fn name_problem(name: &str) -> Option<String> {
     None
 }
 
-/// `[model] packages` and `xacro_args`: where every model's robot
+/// `[model] packages`, `xacro_args` and `missing_packages`: where every model's robot
 /// description finds what it names. Read by the scenario layer (taken out
 /// of `[model]` before the model's own keys), shown with each model's keys.
 #[derive(Debug, Clone, Default, PartialEq, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct UrdfSourceConfig {
-    /// ROS packages that `package://PKG/...` mesh URIs in the URDF name: package
-    /// name → directory, relative to the scenario file (searched before
-    /// `ROS_PACKAGE_PATH` and `AMENT_PREFIX_PATH`).
+    /// ROS packages that `package://PKG/...` mesh URIs and xacro's `$(find PKG)`
+    /// name: package name → directory, relative to the scenario file (searched
+    /// before the package.xml above the URDF, `ROS_PACKAGE_PATH` and
+    /// `AMENT_PREFIX_PATH`).
     #[serde(default)]
     pub packages: BTreeMap<String, PathBuf>,
     /// Arguments for xacro (`name:=value`), when the URDF holds xacro markup
     /// (the `xacro` command expands it: `pip install xacro`).
     #[serde(default)]
     pub xacro_args: BTreeMap<String, String>,
+    /// What xacro makes of `$(find PKG)` for a package found nowhere.
+    #[serde(default)]
+    pub missing_packages: crate::engine::packages::MissingPackages,
 }
 
 /// The keys of [`UrdfSourceConfig`], taken out of a `[model]` table.
@@ -307,7 +311,7 @@ fn take_urdf_source(model: &mut Spanned<DeValue<'_>>) -> Result<UrdfSourceConfig
         return Ok(UrdfSourceConfig::default());
     };
     let mut own = DeTable::new();
-    for k in ["packages", "xacro_args"] {
+    for k in ["packages", "xacro_args", "missing_packages"] {
         if let Some((key, v)) = t.remove_entry(k) {
             own.insert(key, v);
         }
@@ -787,6 +791,7 @@ impl Scenario {
                     .map(|(k, d)| (k.clone(), base.join(d)))
                     .collect(),
                 xacro_args: urdf_source.xacro_args,
+                missing_packages: urdf_source.missing_packages,
             },
             start,
             goal,

@@ -17,6 +17,7 @@
 //! build and not `Sync`); the run builds its own.
 
 pub mod urdf;
+pub mod wheels;
 pub mod xacro;
 
 use crate::compare::metric_spec;
@@ -151,6 +152,10 @@ impl Prepared {
         let mut reading = probe.reading();
         drop(probe);
         reading.bodies = bodies(&robot, system.as_ref());
+        reading.settle_default_limits(scenario.has_key("sim.motor_max_torque"));
+        if let Some(w) = wheels::undriven(&robot, &reading, &system.urdf_names()) {
+            reading.warnings.push(w);
+        }
         reading.warnings.splice(0..0, load_warnings.iter().cloned());
         // The step budget, before anything integrates: what settling alone
         // and the planner's own integration imply, then the whole run.

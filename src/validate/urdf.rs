@@ -73,20 +73,23 @@ pub fn load_from(path: &Path, source: &Source) -> Result<Loaded, Vec<Error>> {
     // Lines point into the file only when the file is what was parsed.
     let mut lines = true;
     use crate::validate::xacro::Markup;
+    let search = crate::engine::mesh::Search::for_urdf(source.packages.clone(), path);
     let why = match crate::validate::xacro::markup(&text) {
         Some(Markup::Needed(why)) => Some(why),
         // Plain URDF under the namespace: expanded only where xacro is at hand.
-        Some(Markup::Namespace) if crate::validate::xacro::available() => {
-            Some("the xacro namespace")
-        }
+        Some(Markup::Namespace) if crate::validate::xacro::available() => Some("the xacro namespace"),
         _ => None,
     };
     if let Some(why) = why {
-        text = crate::validate::xacro::expand(path, why, &source.xacro_args)
-            .map_err(|m| one(None, m))?;
+        let expanded = crate::validate::xacro::expand(path, why, source, &search)
+            .map_err(|e| one(None, e.to_string()))?;
+        text = expanded.text;
         notes.push(format!(
             "expanded with xacro ({why}); lines in messages are those of the expansion"
         ));
+        if !expanded.absent.is_empty() {
+            warnings.push(crate::validate::xacro::absent_warning(&expanded.absent, path));
+        }
         lines = false;
     }
     let line_of = |e: &SetupError| lines.then(|| line_of_error(&text, e)).flatten();
@@ -124,7 +127,7 @@ pub fn load_from(path: &Path, source: &Source) -> Result<Loaded, Vec<Error>> {
         }
     }
     let dir = path.parent().unwrap_or(Path::new("."));
-    for (place, m, fatal) in resolve_meshes(&mut robot, dir, source) {
+    for (place, m, fatal) in resolve_meshes(&mut robot, dir, &search) {
         let line = lines.then(|| locate(&text, &place)).flatten();
         if fatal {
             push(line, m);
@@ -149,10 +152,9 @@ pub fn load_from(path: &Path, source: &Source) -> Result<Loaded, Vec<Error>> {
 fn resolve_meshes(
     robot: &mut Robot,
     urdf_dir: &Path,
-    source: &Source,
+    search: &crate::engine::mesh::Search,
 ) -> Vec<(Place, String, bool)> {
     use crate::engine::mesh;
-    let search = mesh::Search::from_env(source.packages.clone());
     let mut out = Vec::new();
     for l in &mut robot.links {
         let name = l.name.clone();

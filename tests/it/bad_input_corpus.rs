@@ -35,14 +35,23 @@ fn long_number(text: &str) -> Option<&str> {
 }
 
 /// Run the binary in `dir`, killing it after `limit`. Returns (exit code, stdout, stderr).
-fn run_limited(dir: &Path, args: &[String], limit: Duration) -> (Option<i32>, String, String) {
+fn run_limited(
+    dir: &Path,
+    args: &[String],
+    limit: Duration,
+    path: Option<&std::ffi::OsStr>,
+) -> (Option<i32>, String, String) {
     let out = dir.join(".stdout");
     let err = dir.join(".stderr");
     // ANHOLONOMY_CORPUS_BIN runs another build (an older one, to compare
     // its messages; docs/src/development.md).
     let bin = std::env::var_os("ANHOLONOMY_CORPUS_BIN")
         .unwrap_or_else(|| env!("CARGO_BIN_EXE_anholonomy").into());
-    let mut child = Command::new(bin)
+    let mut cmd = Command::new(bin);
+    if let Some(p) = path {
+        cmd.env("PATH", p);
+    }
+    let mut child = cmd
         .args(args)
         .current_dir(dir)
         .stdin(Stdio::null())
@@ -96,6 +105,7 @@ fn setup(case: &Case) -> tempfile::TempDir {
                     .set_len(*n)
                     .unwrap();
             }
+            Special::XacroOnPath => {}
         }
     }
     for (name, bytes) in &case.files {
@@ -161,7 +171,12 @@ fn check_command(cmd: &str) {
             _ => continue,
         };
         let dir = setup(case);
-        let (code, stdout, stderr) = run_limited(dir.path(), &args, LIMIT);
+        let xacro = case
+            .special
+            .iter()
+            .any(|s| matches!(s, Special::XacroOnPath))
+            .then(python::path_with_xacro);
+        let (code, stdout, stderr) = run_limited(dir.path(), &args, LIMIT, xacro.as_deref());
         invocations += 1;
         if let Some(dump) = std::env::var_os("ANHOLONOMY_CORPUS_DUMP") {
             // One line per invocation: case, command, stderr with the
@@ -270,7 +285,7 @@ fn corpus_bases_are_valid() {
     let args: Vec<String> = std::iter::once("list".to_string())
         .chain(bases.iter().map(|(f, _)| f.to_string()))
         .collect();
-    let (code, stdout, stderr) = run_limited(dir.path(), &args, LIMIT);
+    let (code, stdout, stderr) = run_limited(dir.path(), &args, LIMIT, None);
     assert_eq!(code, Some(0), "{stderr}");
     assert_eq!(stdout.lines().count(), bases.len() + 1, "{stdout}");
 }

@@ -49,5 +49,7 @@ mod sphere;
 mod sweep;
 mod thread_cpu;
 mod urdf_names;
+mod urdf_warnings;
 mod ux;
 mod verdict;
+mod xacro_packages;

@@ -359,3 +359,161 @@ fn bags_are_what_make_bags_writes() {
     }
     assert!(compared >= 20, "{compared} files");
 }
+
+/// Writes one recording with rosbags in sqlite3 storage (the Iron+ layout,
+/// with message definitions), converts it to MCAP with rosbags' own
+/// converter, and copies it into ROS 2 Humble's sqlite3 layout (schema 3:
+/// no `message_definitions` table, as `ros2 bag record` on Humble leaves
+/// it). Commands: `N` seeded random Twists at 20 Hz with receive-time
+/// jitter, and a second topic that is not the commands.
+const SQLITE_AND_MCAP: &str = r#"
+import random, shutil, sqlite3, subprocess, sys
+from pathlib import Path
+from rosbags.rosbag2 import StoragePlugin, Writer
+from rosbags.typesys import Stores, get_typestore
+
+out, seed, n = Path(sys.argv[1]), int(sys.argv[2]), int(sys.argv[3])
+st = get_typestore(Stores.ROS2_HUMBLE)
+T = st.types
+TW, F64 = "geometry_msgs/msg/Twist", "std_msgs/msg/Float64"
+V3 = T["geometry_msgs/msg/Vector3"]
+rng = random.Random(seed)
+ns = 1_700_000_000 * 10**9
+with Writer(out / "rec_sqlite3", version=9, storage_plugin=StoragePlugin.SQLITE3) as w:
+    cmd = w.add_connection("/cmd_vel", TW, typestore=st)
+    other = w.add_connection("/battery", F64, typestore=st)
+    for k in range(n):
+        ns += 50_000_000 + rng.randint(-3_000_000, 3_000_000)
+        v, om = rng.uniform(-0.3, 0.3), rng.uniform(-1.0, 1.0)
+        msg = T[TW](linear=V3(x=v, y=0.0, z=0.0), angular=V3(x=0.0, y=0.0, z=om))
+        w.write(cmd, ns, bytes(st.serialize_cdr(msg, TW)))
+        if k % 10 == 0:
+            w.write(other, ns + 1, bytes(st.serialize_cdr(T[F64](data=12.0), F64)))
+subprocess.run(
+    [sys.executable, "-m", "rosbags.convert", "--src", str(out / "rec_sqlite3"),
+     "--dst", str(out / "rec_mcap"), "--dst-storage", "mcap"],
+    check=True,
+)
+src = out / "rec_sqlite3"
+humble = out / "rec_humble"
+humble.mkdir()
+old = sqlite3.connect(src / "rec_sqlite3.db3")
+new = sqlite3.connect(humble / "rec_humble_0.db3")
+new.executescript("""
+CREATE TABLE schema(schema_version INTEGER PRIMARY KEY, ros_distro TEXT NOT NULL);
+INSERT INTO schema VALUES (3, 'humble');
+CREATE TABLE metadata(id INTEGER PRIMARY KEY, metadata_version INTEGER NOT NULL, metadata TEXT NOT NULL);
+CREATE TABLE topics(id INTEGER PRIMARY KEY, name TEXT NOT NULL, type TEXT NOT NULL,
+  serialization_format TEXT NOT NULL, offered_qos_profiles TEXT NOT NULL);
+CREATE TABLE messages(id INTEGER PRIMARY KEY, topic_id INTEGER NOT NULL,
+  timestamp INTEGER NOT NULL, data BLOB NOT NULL);
+CREATE INDEX timestamp_idx ON messages (timestamp ASC);
+""")
+new.executemany("INSERT INTO topics VALUES (?, ?, ?, ?, ?)",
+    old.execute("SELECT id, name, type, serialization_format, offered_qos_profiles FROM topics"))
+new.executemany("INSERT INTO messages VALUES (?, ?, ?, ?)",
+    old.execute("SELECT id, topic_id, timestamp, data FROM messages"))
+new.commit()
+meta = (src / "metadata.yaml").read_text()
+(humble / "metadata.yaml").write_text(
+    meta.replace("rec_sqlite3.db3", "rec_humble_0.db3").replace("version: 9", "version: 5"))
+"#;
+
+/// A rosbag2 bag in sqlite3 storage replays with exactly the commands of
+/// the same bag converted to MCAP (by rosbags' converter), and so does its
+/// copy in Humble's layout, which stores no message definitions (the
+/// common command types are built in): identical metrics, bit for bit, in
+/// the ideal run and in physics.
+#[test]
+fn a_sqlite3_bag_replays_the_commands_of_its_mcap_conversion() {
+    let python = python::python_with("rosbags");
+    let dir = tempfile::tempdir().unwrap();
+    let script = dir.path().join("write.py");
+    std::fs::write(&script, SQLITE_AND_MCAP).unwrap();
+    let n = 120;
+    for seed in [3u64, 8] {
+        let bags = dir.path().join(format!("seed{seed}"));
+        std::fs::create_dir_all(&bags).unwrap();
+        let out = std::process::Command::new(&python)
+            .arg(&script)
+            .arg(&bags)
+            .args([seed.to_string(), n.to_string()])
+            .output()
+            .unwrap();
+        assert!(
+            out.status.success(),
+            "write.py: {}",
+            String::from_utf8_lossy(&out.stderr)
+        );
+        let meta = std::fs::read_to_string(bags.join("rec_mcap/metadata.yaml")).unwrap();
+        assert!(meta.contains("storage_identifier: mcap"), "{meta}");
+        let outcomes: Vec<RunOutcome> = ["rec_sqlite3", "rec_mcap", "rec_humble"]
+            .iter()
+            .map(|b| {
+                let path = bags.join(b);
+                let sc = scenario(
+                    &bags,
+                    b,
+                    &diff_drive(),
+                    [0.1, -0.2, 15.0],
+                    &format!("path = \"{}\"", path.display()),
+                );
+                let prep = Prepared::new(Scenario::load(&sc).unwrap_or_else(|e| panic!("{e}")))
+                    .unwrap_or_else(|e| panic!("{b}: {e}"));
+                let details = prep.planned.details.to_string();
+                assert!(
+                    details.contains(&format!("\"messages\":{n}")),
+                    "{b}: {details}"
+                );
+                assert!(details.contains("\"topic\":\"/cmd_vel\""), "{b}: {details}");
+                run(&prep, &opts()).unwrap()
+            })
+            .collect();
+        let (sq, mc, hu) = (&outcomes[0], &outcomes[1], &outcomes[2]);
+        assert!(sq.metrics.len() > 10);
+        for (what, other) in [("MCAP conversion", mc), ("Humble layout", hu)] {
+            let differ: Vec<_> = sq
+                .metrics
+                .iter()
+                .filter(|(k, v)| {
+                    let w = other.metric(k).unwrap();
+                    !(v.to_bits() == w.to_bits() || (v.is_nan() && w.is_nan()))
+                })
+                .collect();
+            assert!(
+                differ.is_empty(),
+                "seed {seed}, sqlite3 vs {what}: {differ:?}"
+            );
+        }
+        // The commands moved the robot (the comparison is not of two stills).
+        assert!(sq.metric("ideal_goal_position").unwrap() > 0.05);
+    }
+}
+
+/// The committed sqlite3 bag (make_bags.py: twist_steps' commands in
+/// sqlite3 storage), as a directory and as its one `.db3` file, plans what
+/// the MCAP bag plans.
+#[test]
+fn the_committed_sqlite3_bag_plans_what_its_mcap_twin_plans() {
+    let dir = tempfile::tempdir().unwrap();
+    let start = [0.3, 0.1, -40.0];
+    let end = |name: &str, path: PathBuf| {
+        let sc = scenario(
+            dir.path(),
+            name,
+            &diff_drive(),
+            start,
+            &format!("path = \"{}\"\ntopic = \"/cmd_vel\"", path.display()),
+        );
+        ideal_end(&sc)
+    };
+    let (s0, mcap) = end("mcap", bag("twist_steps"));
+    assert_close("closed form", mcap, closed_form(s0, &STEPS), 1e-9);
+    for (name, path) in [
+        ("sqlite3_dir", bag("sqlite3")),
+        ("sqlite3_file", bag("sqlite3/sqlite3.db3")),
+    ] {
+        let (_, got) = end(name, path);
+        assert_eq!(got.map(f64::to_bits), mcap.map(f64::to_bits), "{name}");
+    }
+}

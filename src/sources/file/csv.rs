@@ -11,6 +11,17 @@ use crate::sources::file::{At, Reader, Samples};
 /// The optional label column.
 const LABEL: &str = "label";
 
+/// A hint for a field that is not a number: numpy 2 writes its scalars as
+/// `np.float64(0.2)` when they are formatted with `repr` (or in a list).
+fn not_a_number_hint(field: &str) -> &'static str {
+    let numpy = ["np.", "numpy."].iter().any(|p| field.starts_with(p)) && field.ends_with(')');
+    if numpy {
+        " (numpy's repr of a scalar: write plain numbers, `float(x)` for each value or `array.tolist()` before writing)"
+    } else {
+        ""
+    }
+}
+
 /// What a header column holds.
 #[derive(Clone, Copy)]
 enum Col {
@@ -52,8 +63,9 @@ pub fn read(mut r: Reader<'_>) -> Result<Samples, PlanError> {
             return Err(r.error(
                 &at_header(format!("column `{name}`")),
                 format!(
-                    "unknown column (expected t, {} and optionally label)",
-                    names.join(", ")
+                    "unknown column (expected t, {} and optionally label){}",
+                    names.join(", "),
+                    crate::sources::file::unknown_input_hint(name, &names)
                 ),
             ));
         };
@@ -115,7 +127,10 @@ pub fn read(mut r: Reader<'_>) -> Result<Samples, PlanError> {
                 Col::T | Col::Input(_) => {
                     let v: f64 = f.parse().map_err(|_| {
                         let shown = if f.is_empty() { "an empty field" } else { f };
-                        r.error(&at(k), format!("`{shown}` is not a number"))
+                        r.error(
+                            &at(k),
+                            format!("`{shown}` is not a number{}", not_a_number_hint(f)),
+                        )
                     })?;
                     match c {
                         Col::T => {

@@ -63,7 +63,11 @@ pub fn read(mut r: Reader<'_>) -> Result<Samples, PlanError> {
                     line: line_of_key(&text, key),
                     what: format!("key `u.{key}`"),
                 },
-                format!("unknown input (the model's inputs: {})", names.join(", ")),
+                format!(
+                    "unknown input (the model's inputs: {}){}",
+                    names.join(", "),
+                    crate::sources::file::unknown_input_hint(key, &names)
+                ),
             ));
         }
     }

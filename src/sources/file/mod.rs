@@ -119,6 +119,8 @@ pub enum Format {
     Mcap,
     /// A ROS 2 bag directory (`metadata.yaml` and its files).
     Bag,
+    /// One file of a ROS 2 bag in sqlite3 storage (`.db3`).
+    Db3,
 }
 
 impl FilePlanParams {
@@ -151,15 +153,21 @@ impl FilePlanParams {
             Some("csv") => Format::Csv,
             Some("json") => Format::Json,
             Some("mcap") => Format::Mcap,
-            Some("db3") => {
+            Some("db3") => Format::Db3,
+            Some("bag") => {
+                let stem = self
+                    .path
+                    .file_stem()
+                    .map(|s| s.to_string_lossy().into_owned())
+                    .unwrap_or_else(|| "bag".into());
                 return Err(SetupError::key(
                     "planner.path",
                     format!(
-                        "{}: a rosbag2 sqlite3 file, which is not read here: {}",
+                        "{}: a ROS 1 bag, which is not read here: convert it to a ROS 2 bag without ROS, `pip install rosbags` then `rosbags-convert --src {} --dst {stem}_ros2`, and set `path = \"{stem}_ros2\"`",
                         self.path.display(),
-                        ros::metadata::CONVERT
+                        self.path.display(),
                     ),
-                ))
+                ));
             }
             // A bag directory is named without an extension: one that is
             // not there is a missing file, not an unknown format.
@@ -173,14 +181,14 @@ impl FilePlanParams {
                 return Err(SetupError::key(
                     "planner.path",
                     format!(
-                        "{}: unknown plan file format{} (use a .csv, .json or .mcap file, or a ROS 2 bag's directory)",
+                        "{}: unknown plan file format{} (use a .csv, .json, .mcap or .db3 file, or a ROS 2 bag's directory)",
                         self.path.display(),
                         other.map(|e| format!(" `.{e}`")).unwrap_or_default()
                     ),
                 ))
             }
         };
-        let mcap = matches!(format, Format::Mcap | Format::Bag);
+        let mcap = matches!(format, Format::Mcap | Format::Bag | Format::Db3);
         if self.topic.is_some() && !mcap {
             return Err(SetupError::key(
                 "planner.topic",
@@ -407,6 +415,16 @@ impl<'a> Reader<'a> {
     }
 }
 
+/// A hint for a column (or JSON input) named `name` that is not one of
+/// the model's `inputs`: a steering angle for a car steered by rate.
+pub fn unknown_input_hint(name: &str, inputs: &[String]) -> &'static str {
+    if name == "steer" && inputs.iter().any(|i| i == "steer_rate") {
+        "; `steer` is a steering angle: steer the car by angle with `[model] steering = \"angle\"`"
+    } else {
+        ""
+    }
+}
+
 /// Read and check the plan file of `params` for a model with `input_names`.
 pub fn read(params: &FilePlanParams, input_names: &[&str]) -> Result<Samples, PlanError> {
     Ok(read_detailed(params, input_names)?.0)
@@ -465,8 +483,13 @@ fn read_detailed(
         }
         Format::Bag => {
             let dir = params.bag_dir().unwrap_or(file);
-            let files = ros::metadata::bag_files(&dir)?;
-            let (s, info) = ros::read(&dir, &files, input_names, &keys)?;
+            let (storage, files) = ros::metadata::bag_files(&dir)?;
+            let (s, info) = ros::read(&dir, storage, &files, input_names, &keys)?;
+            Ok((s, Some(info)))
+        }
+        Format::Db3 => {
+            let files = std::slice::from_ref(&file);
+            let (s, info) = ros::read(&file, ros::Storage::Sqlite3, files, input_names, &keys)?;
             Ok((s, Some(info)))
         }
     }

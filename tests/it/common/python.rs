@@ -123,3 +123,23 @@ fn make_venv(dir: &PathBuf) {
         );
     }
 }
+
+/// `PATH` without any directory that holds a `xacro`.
+pub fn path_without_xacro() -> std::ffi::OsString {
+    let path = std::env::var_os("PATH").unwrap_or_default();
+    let kept: Vec<PathBuf> = std::env::split_paths(&path)
+        .filter(|d| !d.join("xacro").exists())
+        .collect();
+    std::env::join_paths(kept).unwrap()
+}
+
+/// `PATH` with a `xacro` command on it: `PATH` itself when it has one,
+/// else with the test venv's `bin/` first.
+pub fn path_with_xacro() -> std::ffi::OsString {
+    let path = std::env::var_os("PATH").unwrap_or_default();
+    let mut dirs: Vec<PathBuf> = std::env::split_paths(&path).collect();
+    if !dirs.iter().any(|d| d.join("xacro").is_file()) {
+        dirs.insert(0, venv_bin());
+    }
+    std::env::join_paths(dirs).unwrap()
+}

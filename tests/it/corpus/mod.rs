@@ -20,6 +20,8 @@ pub enum Special {
     Dir(&'static str),
     /// A sparse file of this many bytes.
     Sized(&'static str, u64),
+    /// The `xacro` command on `PATH` (the test venv's when `PATH` has none).
+    XacroOnPath,
 }
 
 #[derive(Clone, Debug)]
@@ -152,6 +154,7 @@ pub mod faults;
 mod files;
 mod held_out;
 mod own_plan;
+mod published;
 mod ros_bags;
 mod runaway;
 mod studies;
@@ -166,6 +169,7 @@ pub fn corpus() -> Vec<Case> {
     files::cases(&mut c);
     own_plan::cases(&mut c);
     ros_bags::cases(&mut c);
+    published::cases(&mut c);
     runaway::cases(&mut c);
     held_out::cases(&mut c);
     c.0

@@ -4,7 +4,7 @@
 
 use super::*;
 
-fn file_scenario(d: &str, plan: &str) -> String {
+pub fn file_scenario(d: &str, plan: &str) -> String {
     edit(
         d,
         "kind = \"stokes_disk\"",

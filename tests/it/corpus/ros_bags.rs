@@ -237,21 +237,6 @@ pub fn cases(c: &mut Corpus) {
         None,
         "topic `/cmd_vel` (geometry_msgs/msg/Twist): no messages",
     );
-    bag_case(
-        c,
-        "bag in sqlite3 storage",
-        "sqlite3",
-        "sqlite3",
-        "",
-        "",
-        "sqlite3/metadata.yaml",
-        Some(line_of(
-            &std::fs::read_to_string(root().join("tests/data/ros_bags/sqlite3/metadata.yaml"))
-                .unwrap(),
-            "storage_identifier",
-        )),
-        "a sqlite3 (.db3) bag, which is not read here: convert it to MCAP with `ros2 bag convert",
-    );
     // A bag directory without its metadata, a cut MCAP file.
     let mut twist = bag("twist_steps");
     twist.retain(|(n, _)| n.ends_with(".mcap"));
@@ -298,12 +283,6 @@ pub fn cases(c: &mut Corpus) {
             .files
             .extend(bag("twist_steps"));
     };
-    c.sc(
-        "bag sqlite3 file",
-        bag_scenario("sqlite3/sqlite3.db3", "", ""),
-        Some("path ="),
-        Some("planner.path"),
-    );
     with_bag(
         c,
         "bag map of an unknown input",

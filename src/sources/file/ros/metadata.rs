@@ -1,7 +1,8 @@
 //! A rosbag2 bag directory: its `metadata.yaml` names the storage (`mcap`
-//! here; `sqlite3` bags are refused with the command that converts them)
+//! or `sqlite3`; others are refused with the command that converts them)
 //! and the files that hold the messages, in order.
 
+use crate::sources::file::ros::Storage;
 use crate::planner::PlanError;
 use std::path::{Path, PathBuf};
 use yaml_rust2::{Yaml, YamlLoader};
@@ -17,8 +18,9 @@ pub fn metadata_path(dir: &Path) -> PathBuf {
     dir.join("metadata.yaml")
 }
 
-/// The storage files of the bag in `dir`, in order (each an `.mcap`).
-pub fn bag_files(dir: &Path) -> Result<Vec<PathBuf>, PlanError> {
+/// The storage of the bag in `dir` and its files, in order (each an
+/// `.mcap`, or each a `.db3`).
+pub fn bag_files(dir: &Path) -> Result<(Storage, Vec<PathBuf>), PlanError> {
     let meta = metadata_path(dir);
     if !meta.is_file() {
         let mcaps = mcap_files_in(dir);
@@ -75,21 +77,16 @@ pub fn bag_files(dir: &Path) -> Result<Vec<PathBuf>, PlanError> {
             ))
         }
     };
-    match storage {
-        "mcap" => {}
-        "sqlite3" => {
-            return Err(err(
-                line("storage_identifier"),
-                format!("a sqlite3 (.db3) bag, which is not read here: {CONVERT}"),
-            ))
-        }
+    let (storage, ext) = match storage {
+        "mcap" => (Storage::Mcap, "mcap"),
+        "sqlite3" => (Storage::Sqlite3, "db3"),
         other => {
             return Err(err(
                 line("storage_identifier"),
-                format!("storage `{other}` is not read here (only mcap): {CONVERT}"),
+                format!("storage `{other}` is not read here (mcap and sqlite3 are): {CONVERT}"),
             ))
         }
-    }
+    };
     if let Yaml::String(mode) = &info["compression_mode"] {
         if !mode.is_empty() && !mode.eq_ignore_ascii_case("none") {
             return Err(err(
@@ -121,13 +118,16 @@ pub fn bag_files(dir: &Path) -> Result<Vec<PathBuf>, PlanError> {
             ));
         };
         let path = dir.join(name);
-        let ext = path
+        let got = path
             .extension()
             .map(|e| e.to_string_lossy().to_ascii_lowercase());
-        if ext.as_deref() != Some("mcap") {
+        if got.as_deref() != Some(ext) {
             return Err(err(
                 line(name),
-                format!("`{name}` is not an .mcap file: {CONVERT}"),
+                format!(
+                    "`{name}` is not a .{ext} file, as a bag of {} storage holds: {CONVERT}",
+                    if ext == "db3" { "sqlite3" } else { "mcap" }
+                ),
             ));
         }
         if !path.is_file() {
@@ -138,7 +138,7 @@ pub fn bag_files(dir: &Path) -> Result<Vec<PathBuf>, PlanError> {
         }
         out.push(path);
     }
-    Ok(out)
+    Ok((storage, out))
 }
 
 /// The `.mcap` files directly in `dir`, sorted.

@@ -1,6 +1,8 @@
-//! ROS 2 bags (rosbag2, MCAP storage) as plan files: one command topic's
-//! messages, decoded through the definition the bag stores with the topic
-//! ([`msg`]), become samples: `t` from the log time (or the header stamp),
+//! ROS 2 bags (rosbag2, MCAP or sqlite3 storage) as plan files: one
+//! command topic's messages, decoded through the definition the bag stores
+//! with the topic ([`msg`]; a sqlite3 bag of ROS 2 Humble or older stores
+//! none, and the common command types are built in, [`sqlite`]), become
+//! samples: `t` from the log time (or the header stamp),
 //! starting at 0 at the first message; the inputs from message fields,
 //! by default for the common command types ([`DEFAULT_MAPS`]) or as the
 //! scenario's `[planner.map]` says. The plan ends one median message period
@@ -11,6 +13,7 @@
 
 pub mod metadata;
 pub mod msg;
+pub mod sqlite;
 
 use crate::planner::PlanError;
 use crate::sources::file::{At, Reader, Samples, MCAP_MAX_BYTES};
@@ -102,9 +105,22 @@ pub struct ChannelInfo {
     pub count: usize,
 }
 
+/// How a bag's files store their messages.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub enum Storage {
+    /// MCAP files (`.mcap`), each channel with its schema.
+    #[default]
+    Mcap,
+    /// SQLite databases (`.db3`): `topics`, `messages` and, from ROS 2 Iron
+    /// on, `message_definitions` tables.
+    Sqlite3,
+}
+
 /// The channels of a bag's files.
 #[derive(Debug, Clone, Default)]
 pub struct Inventory {
+    /// How the files store messages.
+    pub storage: Storage,
     /// The files, in order.
     pub files: Vec<PathBuf>,
     /// Every channel of every file.
@@ -130,6 +146,7 @@ impl Inventory {
     pub fn scan(files: &[PathBuf]) -> Result<Inventory, PlanError> {
         use mcap::records::Record;
         let mut out = Inventory {
+            storage: Storage::Mcap,
             files: files.to_vec(),
             channels: Vec::new(),
         };
@@ -316,15 +333,20 @@ pub struct BagInfo {
     pub paths: Vec<(String, String)>,
 }
 
-/// Read the command topic of the bag made of `files` (`bag`: the path the
-/// scenario gave, for bag-wide messages) for a model with `inputs`.
+/// Read the command topic of the bag made of `files` in `storage` (`bag`:
+/// the path the scenario gave, for bag-wide messages) for a model with
+/// `inputs`.
 pub fn read(
     bag: &Path,
+    storage: Storage,
     files: &[PathBuf],
     inputs: &[&str],
     keys: &BagKeys<'_>,
 ) -> Result<(Samples, BagInfo), PlanError> {
-    let inv = Inventory::scan(files)?;
+    let inv = match storage {
+        Storage::Mcap => Inventory::scan(files)?,
+        Storage::Sqlite3 => sqlite::scan(files)?,
+    };
     read_with(bag, &inv, inputs, keys)
 }
 
@@ -364,197 +386,284 @@ pub fn read_with(
     }
     // Samples on the topic's first file, whose errors name that file.
     let first_file = inv.files[chans[0].file].clone();
-    let mut prepared: HashMap<(usize, u16), Rc<Prepared>> = HashMap::new();
-    // (ns, values, message index)
-    let mut raw: Vec<(i64, Vec<f64>, usize)> = Vec::new();
-    let mut k = 0usize;
-    let mut type_name = String::new();
-    let mut paths_used: Vec<(String, String)> = Vec::new();
+    let mut dec = Decoder {
+        topic: &topic,
+        inputs,
+        keys,
+        prepared: HashMap::new(),
+        raw: Vec::new(),
+        k: 0,
+        type_name: String::new(),
+        paths_used: Vec::new(),
+    };
     for (fi, file) in inv.files.iter().enumerate() {
-        if !chans.iter().any(|c| c.file == fi) {
+        let ids: Vec<u16> = chans
+            .iter()
+            .filter(|c| c.file == fi)
+            .map(|c| c.id)
+            .collect();
+        if ids.is_empty() {
             continue;
         }
-        let bytes = read_bytes(file)?;
-        let at_msg = |k: usize, m: String| {
+        match inv.storage {
+            Storage::Mcap => mcap_messages(file, fi, &mut dec)?,
+            Storage::Sqlite3 => sqlite::messages(file, fi, &ids, &mut dec)?,
+        }
+    }
+    dec.finish(&first_file)
+}
+
+/// The stored definition of a channel's messages: type name, encoding
+/// (`ros2msg`) and text.
+pub type SchemaRef<'a> = (&'a str, &'a str, &'a [u8]);
+
+/// Decodes the chosen topic's messages, from whichever storage, into
+/// samples: the same types, field paths and timing for every storage.
+pub struct Decoder<'a> {
+    topic: &'a str,
+    inputs: &'a [&'a str],
+    keys: &'a BagKeys<'a>,
+    prepared: HashMap<(usize, u16), Rc<Prepared>>,
+    /// (ns, values, message index)
+    raw: Vec<(i64, Vec<f64>, usize)>,
+    k: usize,
+    type_name: String,
+    paths_used: Vec<(String, String)>,
+}
+
+impl Decoder<'_> {
+    /// The topic being read.
+    pub fn topic(&self) -> &str {
+        self.topic
+    }
+
+    /// One message of the topic from `file` (index `fi`), on its channel
+    /// `channel`, whose stored definition `schema` gives (asked once per
+    /// channel), logged at `log_time` ns.
+    pub fn message<'s>(
+        &mut self,
+        file: &Path,
+        fi: usize,
+        channel: u16,
+        schema: impl FnOnce() -> Option<SchemaRef<'s>>,
+        log_time: u64,
+        data: &[u8],
+    ) -> Result<(), PlanError> {
+        let topic = self.topic;
+        let k = self.k;
+        let at_msg = |m: String| {
             PlanError::file(
-                file.clone(),
+                file.to_path_buf(),
                 None,
                 format!("topic `{topic}` message {k}: {m}"),
             )
         };
-        let stream = mcap::MessageStream::new(&bytes).map_err(|e| {
-            PlanError::file(file.clone(), None, format!("not a readable MCAP file: {e}"))
-        })?;
-        for m in stream {
-            let m = m.map_err(|e| {
-                PlanError::file(file.clone(), None, format!("not a readable MCAP file: {e}"))
-            })?;
-            if m.channel.topic != topic {
-                continue;
+        let key = (fi, channel);
+        let p = match self.prepared.get(&key) {
+            Some(p) => p.clone(),
+            None => {
+                let p = Rc::new(prepare(schema(), self.inputs, self.keys).map_err(at_msg)?);
+                if self.type_name.is_empty() {
+                    self.type_name = p.def.name().to_string();
+                    self.paths_used = self
+                        .inputs
+                        .iter()
+                        .zip(&p.paths)
+                        .map(|(i, p)| (i.to_string(), p.text.clone()))
+                        .collect();
+                }
+                self.prepared.insert(key, p.clone());
+                p
             }
-            let key = (fi, m.channel.id);
-            let p = match prepared.get(&key) {
-                Some(p) => p.clone(),
-                None => {
-                    let p = Rc::new(prepare(&m.channel, inputs, keys).map_err(|e| at_msg(k, e))?);
-                    if type_name.is_empty() {
-                        type_name = p.def.name().to_string();
-                        paths_used = inputs
-                            .iter()
-                            .zip(&p.paths)
-                            .map(|(i, p)| (i.to_string(), p.text.clone()))
-                            .collect();
-                    }
-                    prepared.insert(key, p.clone());
-                    p
-                }
-            };
-            let v = p.def.decode(&m.data).map_err(|e| at_msg(k, e))?;
-            let mut u = Vec::with_capacity(inputs.len());
-            for (i, path) in p.paths.iter().enumerate() {
-                let x = msg::number_at(&v, path).map_err(|e| {
-                    at_msg(k, format!("input `{}` = `{}`: {e}", inputs[i], path.text))
-                })?;
-                if !x.is_finite() {
-                    return Err(at_msg(
-                        k,
-                        format!(
-                            "field `{}` (input `{}`): {x} is not a finite number",
-                            path.text, inputs[i]
-                        ),
-                    ));
-                }
-                u.push(x);
+        };
+        let inputs = self.inputs;
+        let v = p.def.decode(data).map_err(at_msg)?;
+        let mut u = Vec::with_capacity(inputs.len());
+        for (i, path) in p.paths.iter().enumerate() {
+            let x = msg::number_at(&v, path)
+                .map_err(|e| at_msg(format!("input `{}` = `{}`: {e}", inputs[i], path.text)))?;
+            if !x.is_finite() {
+                return Err(at_msg(format!(
+                    "field `{}` (input `{}`): {x} is not a finite number",
+                    path.text, inputs[i]
+                )));
             }
-            let ns = match &p.stamp {
-                None => i64::try_from(m.log_time).map_err(|_| {
-                    at_msg(k, format!("log time {} ns is out of range", m.log_time))
-                })?,
-                Some([sec, nsec]) => {
-                    let s = msg::integer_at(&v, sec);
-                    let n = msg::integer_at(&v, nsec);
-                    match (s, n) {
-                        (Some(s), Some(n)) => s * 1_000_000_000 + n,
-                        _ => {
-                            return Err(at_msg(
-                                k,
-                                "no integer `header.stamp.sec` and `header.stamp.nanosec`".into(),
-                            ))
-                        }
-                    }
-                }
-            };
-            if let Some(&(prev, ..)) = raw.last() {
-                if ns < prev {
-                    let t0 = raw[0].0;
-                    let secs = |x: i64| crate::numfmt::readable((x - t0) as f64 * 1e-9);
-                    return Err(at_msg(
-                        k,
-                        format!(
-                            "time goes backwards: its {} time is {} s after the first message, before the previous message's {} s",
-                            keys.time.name(),
-                            secs(ns),
-                            secs(prev)
-                        ),
-                    ));
-                }
-                if ns == prev {
-                    // Two commands at one instant: the later one is in force.
-                    let last = raw.last_mut().expect("a previous message");
-                    *last = (ns, u, k);
-                    k += 1;
-                    continue;
-                }
-            }
-            raw.push((ns, u, k));
-            k += 1;
+            u.push(x);
         }
+        let ns = match &p.stamp {
+            None => i64::try_from(log_time)
+                .map_err(|_| at_msg(format!("log time {log_time} ns is out of range")))?,
+            Some([sec, nsec]) => {
+                let s = msg::integer_at(&v, sec);
+                let n = msg::integer_at(&v, nsec);
+                match (s, n) {
+                    (Some(s), Some(n)) => s * 1_000_000_000 + n,
+                    _ => {
+                        return Err(at_msg(
+                            "no integer `header.stamp.sec` and `header.stamp.nanosec`".into(),
+                        ))
+                    }
+                }
+            }
+        };
+        let raw = &mut self.raw;
+        if let Some(&(prev, ..)) = raw.last() {
+            if ns < prev {
+                let t0 = raw[0].0;
+                let secs = |x: i64| crate::numfmt::readable((x - t0) as f64 * 1e-9);
+                return Err(at_msg(format!(
+                    "time goes backwards: its {} time is {} s after the first message, before the previous message's {} s",
+                    self.keys.time.name(),
+                    secs(ns),
+                    secs(prev)
+                )));
+            }
+            if ns == prev {
+                // Two commands at one instant: the later one is in force.
+                let last = raw.last_mut().expect("a previous message");
+                *last = (ns, u, k);
+                self.k += 1;
+                return Ok(());
+            }
+        }
+        raw.push((ns, u, k));
+        self.k += 1;
+        Ok(())
     }
-    let t0 = raw[0].0;
-    let secs = |ns: i64| (ns - t0) as f64 / 1e9;
-    let end = match keys.duration {
-        Some(d) => {
-            raw.retain(|s| secs(s.0) < d);
-            d
-        }
-        None if raw.len() < 2 => {
+
+    /// The samples (errors about the whole topic name `first_file`).
+    fn finish(self, first_file: &Path) -> Result<(Samples, BagInfo), PlanError> {
+        let Decoder {
+            topic,
+            inputs,
+            keys,
+            mut raw,
+            k,
+            type_name,
+            paths_used,
+            ..
+        } = self;
+        if raw.is_empty() {
             return Err(PlanError::file(
-                first_file.clone(),
+                first_file.to_path_buf(),
                 None,
-                format!(
-                    "topic `{topic}`: {} distinct message time{}: no period to end the plan on; set the plan's length with `duration`",
-                    raw.len(),
-                    if raw.len() == 1 { "" } else { "s" }
-                ),
-            ))
+                format!("topic `{topic}`: no messages were read"),
+            ));
         }
-        None => {
-            let mut gaps: Vec<i64> = raw.windows(2).map(|w| w[1].0 - w[0].0).collect();
-            gaps.sort_unstable();
-            let n = gaps.len();
-            let median = if n % 2 == 1 {
-                gaps[n / 2]
-            } else {
-                gaps[n / 2 - 1] + (gaps[n / 2] - gaps[n / 2 - 1]) / 2
+        let t0 = raw[0].0;
+        let secs = |ns: i64| (ns - t0) as f64 / 1e9;
+        let end = match keys.duration {
+            Some(d) => {
+                raw.retain(|s| secs(s.0) < d);
+                d
+            }
+            None if raw.len() < 2 => {
+                return Err(PlanError::file(
+                    first_file.to_path_buf(),
+                    None,
+                    format!(
+                        "topic `{topic}`: {} distinct message time{}: no period to end the plan on; set the plan's length with `duration`",
+                        raw.len(),
+                        if raw.len() == 1 { "" } else { "s" }
+                    ),
+                ))
+            }
+            None => {
+                let mut gaps: Vec<i64> = raw.windows(2).map(|w| w[1].0 - w[0].0).collect();
+                gaps.sort_unstable();
+                let n = gaps.len();
+                let median = if n % 2 == 1 {
+                    gaps[n / 2]
+                } else {
+                    gaps[n / 2 - 1] + (gaps[n / 2] - gaps[n / 2 - 1]) / 2
+                };
+                secs(raw[raw.len() - 1].0 + median)
+            }
+        };
+        let mut r = Reader::new(first_file, inputs);
+        for (ns, u, k) in &raw {
+            let at = At {
+                line: None,
+                what: format!("topic `{topic}` message {k}"),
             };
-            secs(raw[raw.len() - 1].0 + median)
+            r.push(secs(*ns), &at, u, &|_| at.clone(), Some(topic))?;
         }
-    };
-    let mut r = Reader::new(&first_file, inputs);
-    for (ns, u, k) in &raw {
         let at = At {
             line: None,
-            what: format!("topic `{topic}` message {k}"),
+            what: format!("topic `{topic}`, the plan's end"),
         };
-        r.push(secs(*ns), &at, u, &|_| at.clone(), Some(&topic))?;
+        r.push(
+            end,
+            &at,
+            &vec![0.0; inputs.len()],
+            &|_| at.clone(),
+            Some(topic),
+        )?;
+        Ok((
+            r.finish()?,
+            BagInfo {
+                topic: topic.to_string(),
+                type_name,
+                messages: k,
+                paths: paths_used,
+            },
+        ))
     }
-    let at = At {
-        line: None,
-        what: format!("topic `{topic}`, the plan's end"),
-    };
-    r.push(
-        end,
-        &at,
-        &vec![0.0; inputs.len()],
-        &|_| at.clone(),
-        Some(&topic),
-    )?;
-    Ok((
-        r.finish()?,
-        BagInfo {
-            topic,
-            type_name,
-            messages: k,
-            paths: paths_used,
-        },
-    ))
 }
 
-/// The definition and paths for messages on `channel`.
+/// The messages of the decoder's topic in the MCAP file `file` (index `fi`).
+fn mcap_messages(file: &Path, fi: usize, dec: &mut Decoder<'_>) -> Result<(), PlanError> {
+    let bytes = read_bytes(file)?;
+    let bad = |e: mcap::McapError| {
+        PlanError::file(
+            file.to_path_buf(),
+            None,
+            format!("not a readable MCAP file: {e}"),
+        )
+    };
+    for m in mcap::MessageStream::new(&bytes).map_err(bad)? {
+        let m = m.map_err(bad)?;
+        if m.channel.topic != dec.topic() {
+            continue;
+        }
+        let schema = m.channel.schema.as_ref();
+        dec.message(
+            file,
+            fi,
+            m.channel.id,
+            || schema.map(|s| (s.name.as_str(), s.encoding.as_str(), &s.data[..])),
+            m.log_time,
+            &m.data,
+        )?;
+    }
+    Ok(())
+}
+
+/// The definition and paths for messages whose stored definition is
+/// `schema` (type name, encoding, text).
 fn prepare(
-    channel: &mcap::Channel<'_>,
+    schema: Option<SchemaRef<'_>>,
     inputs: &[&str],
     keys: &BagKeys<'_>,
 ) -> Result<Prepared, String> {
-    let Some(schema) = channel.schema.as_ref() else {
+    let Some((name, encoding, data)) = schema else {
         return Err(
             "the bag stores no message definition for this topic (its channel has no schema): it cannot be decoded; record it again where the message package is installed"
                 .into(),
         );
     };
-    let ty = schema.name.clone();
-    if schema.data.is_empty() {
+    let ty = name.to_string();
+    if data.is_empty() {
         return Err(format!(
             "the bag stores no definition of {ty} (an empty schema: the recorder did not have the message package); record it again where the package is installed"
         ));
     }
-    if schema.encoding != "ros2msg" {
+    if encoding != "ros2msg" {
         return Err(format!(
-            "the definition of {ty} is stored as `{}`; only `ros2msg` (.msg) definitions are read",
-            schema.encoding
+            "the definition of {ty} is stored as `{encoding}`; only `ros2msg` (.msg) definitions are read"
         ));
     }
-    let text = std::str::from_utf8(&schema.data)
+    let text = std::str::from_utf8(data)
         .map_err(|_| format!("the definition of {ty} is not UTF-8 text"))?;
     let def = Definition::parse(&ty, text)
         .map_err(|e| format!("the bag's definition of {ty} is not usable: {e}"))?;
