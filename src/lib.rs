@@ -35,6 +35,7 @@ pub mod baseline;
 pub mod cancel;
 pub mod compare;
 pub mod error;
+pub mod fit;
 pub mod gate;
 pub mod init;
 pub mod input;
@@ -53,6 +54,7 @@ pub mod progress;
 #[cfg(test)]
 mod prop_config;
 pub mod record;
+pub mod recording;
 pub mod reference;
 pub mod report;
 pub mod runner;

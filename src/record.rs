@@ -243,6 +243,8 @@ pub struct RunRecord<'a> {
     /// [`crate::runner::tracking_meaningful`]); a feedback policy's sim run reacts to its own
     /// state, so its distance to the ideal run is not a tracking error.
     pub tracking_meaningful: bool,
+    /// A recorded run (`[compare] reference`), lined up with the plan: the third path.
+    pub real: Option<&'a crate::recording::align::Track>,
 }
 
 impl RunRecord<'_> {

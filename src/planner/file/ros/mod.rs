@@ -11,6 +11,7 @@
 
 pub mod metadata;
 pub mod msg;
+pub mod select;
 
 use super::{At, Reader, Samples, MCAP_MAX_BYTES};
 use crate::planner::PlanError;
@@ -83,6 +84,9 @@ pub struct BagKeys<'a> {
     pub map: &'a BTreeMap<String, String>,
     /// `duration`, if set.
     pub duration: Option<f64>,
+    /// Numbers read in one element of an array (a tf message's transform),
+    /// not the message itself; `None` for commands.
+    pub select: Option<select::Select<'a>>,
 }
 
 /// A channel of one of the bag's files.
@@ -314,6 +318,9 @@ pub struct BagInfo {
     pub messages: usize,
     /// Each input's field path.
     pub paths: Vec<(String, String)>,
+    /// The bag time of t = 0 (the first message's log or header time), ns:
+    /// how two topics of one bag line up.
+    pub first_ns: i64,
 }
 
 /// Read the command topic of the bag made of `files` (`bag`: the path the
@@ -409,10 +416,21 @@ pub fn read_with(
                     p
                 }
             };
-            let v = p.def.decode(&m.data).map_err(|e| at_msg(k, e))?;
+            let decoded = p.def.decode(&m.data).map_err(|e| at_msg(k, e))?;
+            let v = match &keys.select {
+                None => &decoded,
+                Some(s) => match s.element(&decoded) {
+                    Some(e) => e,
+                    // Another frame's message: not this topic's samples.
+                    None => {
+                        k += 1;
+                        continue;
+                    }
+                },
+            };
             let mut u = Vec::with_capacity(inputs.len());
             for (i, path) in p.paths.iter().enumerate() {
-                let x = msg::number_at(&v, path).map_err(|e| {
+                let x = msg::number_at(v, path).map_err(|e| {
                     at_msg(k, format!("input `{}` = `{}`: {e}", inputs[i], path.text))
                 })?;
                 if !x.is_finite() {
@@ -431,8 +449,8 @@ pub fn read_with(
                     at_msg(k, format!("log time {} ns is out of range", m.log_time))
                 })?,
                 Some([sec, nsec]) => {
-                    let s = msg::integer_at(&v, sec);
-                    let n = msg::integer_at(&v, nsec);
+                    let s = msg::integer_at(v, sec);
+                    let n = msg::integer_at(v, nsec);
                     match (s, n) {
                         (Some(s), Some(n)) => s * 1_000_000_000 + n,
                         _ => {
@@ -470,7 +488,14 @@ pub fn read_with(
             k += 1;
         }
     }
-    let t0 = raw[0].0;
+    let Some(&(t0, ..)) = raw.first() else {
+        let what = keys.select.map(|s| s.describe()).unwrap_or_default();
+        return Err(PlanError::file(
+            first_file.clone(),
+            None,
+            format!("topic `{topic}`: no message{what}"),
+        ));
+    };
     let secs = |ns: i64| (ns - t0) as f64 / 1e9;
     let end = match keys.duration {
         Some(d) => {
@@ -526,6 +551,7 @@ pub fn read_with(
             type_name,
             messages: k,
             paths: paths_used,
+            first_ns: t0,
         },
     ))
 }
@@ -567,7 +593,11 @@ fn prepare(
         } else {
             format!("the default for {ty}")
         };
-        def.resolve_number(&p)
+        let whole = match &keys.select {
+            Some(s) => s.whole(&p)?,
+            None => p.clone(),
+        };
+        def.resolve_number(&whole)
             .map_err(|e| format!("input `{input}` = `{text}` ({from}): {e}"))?;
         paths.push(p);
     }
@@ -576,7 +606,13 @@ fn prepare(
         BagTime::Header => {
             let sec = FieldPath::parse("header.stamp.sec").expect("a path");
             let nsec = FieldPath::parse("header.stamp.nanosec").expect("a path");
-            if def.resolve_number(&sec).is_err() || def.resolve_number(&nsec).is_err() {
+            let whole = |p: &FieldPath| match &keys.select {
+                Some(s) => s.whole(p),
+                None => Ok(p.clone()),
+            };
+            if def.resolve_number(&whole(&sec)?).is_err()
+                || def.resolve_number(&whole(&nsec)?).is_err()
+            {
                 return Err(format!(
                     "time = \"header\", but {ty} has no `header.stamp` (not a stamped type): drop `time` to use the log time"
                 ));
