@@ -229,7 +229,8 @@ pub fn minimize(obj: &Objective<'_>, start: &[f64], budget: usize) -> Outcome {
     let first = obj.batch(&simplex);
     let scale = first.iter().cloned().fold(f64::INFINITY, f64::min).max(0.0);
     let tol = 1e-5 * scale + 1e-12;
-    let left = budget.saturating_sub(obj.evaluations()).max(n + 2);
+    // An iteration evaluates one or two points (a shrink n).
+    let left = (budget.saturating_sub(obj.evaluations()) / 2).max(n + 2);
     let nm = match NelderMead::new(simplex.clone()).with_sd_tolerance(tol) {
         Ok(nm) => nm,
         Err(_) => NelderMead::new(simplex),

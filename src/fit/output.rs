@@ -60,7 +60,10 @@ pub fn toml(r: &Report) -> String {
         tables.push(("compare".into(), lines));
     }
     let mut out = String::new();
-    for (t, lines) in tables {
+    for (i, (t, lines)) in tables.into_iter().enumerate() {
+        if i > 0 {
+            out.push('\n');
+        }
         if !t.is_empty() {
             let _ = writeln!(out, "[{t}]");
         }
@@ -178,7 +181,11 @@ pub fn text(r: &Report) -> String {
             rounded(p.value, p)
         );
     }
-    let _ = writeln!(o, "\nPaste into {}:\n", r.file.display());
+    let _ = writeln!(
+        o,
+        "\nSet in {} (into its tables of these names):\n",
+        r.file.display()
+    );
     o.push_str(&toml(r));
     o
 }
