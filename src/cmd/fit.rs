@@ -32,9 +32,11 @@ pub struct FitArgs {
     #[arg(long, value_name = "S|LO..HI", allow_hyphen_values = true)]
     pub time_offset: Option<String>,
     /// A recording's frame: `start` (moved so that its pose at the first
-    /// command is the scenario's start) or `recorded` (its coordinates are
-    /// the scenario's) [default: the scenario's `[compare] frame`, else start].
-    #[arg(long, value_name = "start|recorded")]
+    /// command is the scenario's start), `recorded` (its coordinates are
+    /// the scenario's) or `fit` (laid over the run by the best rotation and
+    /// shift, for a noisy start) [default: the scenario's `[compare] frame`,
+    /// else start].
+    #[arg(long, value_name = "start|recorded|fit")]
     pub frame: Option<String>,
     /// The length L, m, at which a heading error counts as a position
     /// error in the residual sqrt(mean(|dp|^2 + (L dtheta)^2)) [default: the
@@ -135,7 +137,7 @@ fn against(a: &FitArgs, prep: &anholonomy::validate::Prepared) -> Result<Against
     };
     let frame = match &a.frame {
         Some(f) => Frame::parse(f)
-            .ok_or_else(|| bad("--frame", format!("`{f}`: one of start, recorded")))?,
+            .ok_or_else(|| bad("--frame", format!("`{f}`: one of start, recorded, fit")))?,
         None => base_frame,
     };
     Ok(Against::Recording {

@@ -30,6 +30,10 @@ pub enum Frame {
     Start,
     /// As recorded: its coordinates are the scenario's.
     Recorded,
+    /// Laid over each run it is compared with by the rotation and shift
+    /// that fit best (least squares over the positions): steadier than one
+    /// noisy sample at time 0, but it also hides a constant heading error.
+    Fit,
 }
 
 impl Frame {
@@ -38,6 +42,7 @@ impl Frame {
         match self {
             Frame::Start => "start",
             Frame::Recorded => "recorded",
+            Frame::Fit => "fit",
         }
     }
 
@@ -46,6 +51,7 @@ impl Frame {
         match s {
             "start" => Some(Frame::Start),
             "recorded" => Some(Frame::Recorded),
+            "fit" => Some(Frame::Fit),
             _ => None,
         }
     }
@@ -60,6 +66,8 @@ pub struct Track {
     pub t: Vec<f64>,
     /// (x, y, yaw) per sample.
     pub pose: Vec<[f64; 3]>,
+    /// Laid over each run by a best rigid fit ([`Frame::Fit`]).
+    pub fit_frame: bool,
 }
 
 /// How to line a recording up.
@@ -117,7 +125,7 @@ pub fn align(
     }
     let pose0 = pose_at(&t, &rec.pose, 0.0);
     let (c, s, shift) = match a.frame {
-        Frame::Recorded => (1.0, 0.0, [0.0, 0.0, 0.0]),
+        Frame::Recorded | Frame::Fit => (1.0, 0.0, [0.0, 0.0, 0.0]),
         Frame::Start => {
             let d = start[2] - pose0[2];
             let (s, c) = d.sin_cos();
@@ -141,6 +149,7 @@ pub fn align(
         source: rec.source.clone(),
         t: inside.iter().map(|&i| t[i]).collect(),
         pose,
+        fit_frame: a.frame == Frame::Fit,
     })
 }
 
@@ -203,6 +212,7 @@ impl PoseIndex {
             source: source.into(),
             t: run.t.clone(),
             pose: run.q.iter().map(|q| self.pose(q.as_slice())).collect(),
+            fit_frame: false,
         }
     }
 }
@@ -222,9 +232,19 @@ pub struct Errors {
 /// from `track`.
 pub fn errors(track: &Track, run: &Trajectory, idx: &PoseIndex) -> Errors {
     let mut e = Errors::default();
-    for (t, p) in track.t.iter().zip(&track.pose) {
-        let q = sample(run, *t);
-        let r = idx.pose(q.as_slice());
+    let runs: Vec<[f64; 3]> = track
+        .t
+        .iter()
+        .map(|t| idx.pose(sample(run, *t).as_slice()))
+        .collect();
+    let laid;
+    let poses = if track.fit_frame {
+        laid = rigid_fit(&track.pose, &runs);
+        &laid
+    } else {
+        &track.pose
+    };
+    for ((t, p), r) in track.t.iter().zip(poses).zip(&runs) {
         e.t.push(*t);
         e.position.push((r[0] - p[0]).hypot(r[1] - p[1]));
         if idx.heading.is_some() {
@@ -232,6 +252,28 @@ pub fn errors(track: &Track, run: &Trajectory, idx: &PoseIndex) -> Errors {
         }
     }
     e
+}
+
+/// `from` moved by the rotation about z and the shift that bring its
+/// positions closest to `to`'s in least squares (2D Procrustes).
+pub fn rigid_fit(from: &[[f64; 3]], to: &[[f64; 3]]) -> Vec<[f64; 3]> {
+    let n = from.len().max(1) as f64;
+    let mean = |v: &[[f64; 3]], i: usize| v.iter().map(|p| p[i]).sum::<f64>() / n;
+    let (fx, fy, tx, ty) = (mean(from, 0), mean(from, 1), mean(to, 0), mean(to, 1));
+    let (mut sc, mut ss) = (0.0, 0.0);
+    for (a, b) in from.iter().zip(to) {
+        let (ax, ay, bx, by) = (a[0] - fx, a[1] - fy, b[0] - tx, b[1] - ty);
+        sc += ax * bx + ay * by;
+        ss += ax * by - ay * bx;
+    }
+    let phi = ss.atan2(sc);
+    let (s, c) = phi.sin_cos();
+    from.iter()
+        .map(|p| {
+            let (x, y) = (p[0] - fx, p[1] - fy);
+            [c * x - s * y + tx, s * x + c * y + ty, p[2] + phi]
+        })
+        .collect()
 }
 
 /// Root mean square (0 for no values).
@@ -308,6 +350,21 @@ mod tests {
     }
 
     #[test]
+    fn a_fitted_frame_undoes_a_rigid_motion() {
+        let to = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 2.0, 1.0]];
+        let (s, c) = 0.7f64.sin_cos();
+        let from: Vec<[f64; 3]> = to
+            .iter()
+            .map(|p| [c * p[0] - s * p[1] + 3.0, s * p[0] + c * p[1] - 1.0, p[2] + 0.7])
+            .collect();
+        for (a, b) in rigid_fit(&from, &to).iter().zip(&to) {
+            for i in 0..3 {
+                assert!((a[i] - b[i]).abs() < 1e-12, "{a:?} {b:?}");
+            }
+        }
+    }
+
+    #[test]
     fn no_overlap_is_refused() {
         let r = rec(&[0.0, 1.0], &[[0.0; 3], [0.0; 3]]);
         let a = Alignment {
@@ -333,6 +390,7 @@ mod tests {
             source: "r".into(),
             t: vec![0.0, 1.0],
             pose: vec![[0.0, 0.3, 0.0], [1.0, 0.0, 0.1]],
+            fit_frame: false,
         };
         let idx = PoseIndex {
             position: [0, 1],

@@ -126,7 +126,18 @@ pub fn compute(
     idx: &PoseIndex,
 ) -> Vec<(String, f64)> {
     let max = |v: &[f64]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-    let last = track.pose[track.pose.len() - 1];
+    // A fitted frame: the recording as laid over the physics run.
+    let laid = if track.fit_frame {
+        let runs: Vec<[f64; 3]> = track
+            .t
+            .iter()
+            .map(|t| idx.pose(crate::compare::sample(sim, *t).as_slice()))
+            .collect();
+        super::align::rigid_fit(&track.pose, &runs)
+    } else {
+        track.pose.clone()
+    };
+    let last = laid[laid.len() - 1];
     let g = idx.pose(goal.as_slice());
     let mut out = vec![
         (

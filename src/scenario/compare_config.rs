@@ -23,7 +23,9 @@ pub struct CompareConfig {
     pub time_offset: f64,
     /// `"start"`: the recording is moved rigidly so that its pose at plan
     /// time 0 is the scenario's `start`; `"recorded"`: its coordinates are
-    /// the scenario's.
+    /// the scenario's; `"fit"`: laid over each run by the rotation and
+    /// shift that fit best (steadier than one noisy sample, but it hides a
+    /// constant heading error).
     #[serde(default)]
     pub frame: Frame,
 }
