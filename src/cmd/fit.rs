@@ -99,7 +99,8 @@ fn parse_offset(s: &str) -> Result<Offset, Vec<Error>> {
 fn against(a: &FitArgs, prep: &anholonomy::validate::Prepared) -> Result<Against, Vec<Error>> {
     let sc = &prep.scenario;
     let cfg = sc.compare.as_ref();
-    let here = Path::new(".");
+    // Paths on the command line as typed (relative to the working directory).
+    let here = Path::new("");
     let (source, base_offset, base_frame) = match (&a.against, cfg) {
         (Some(s), _) if s == "sim" => (None, 0.0, Frame::Start),
         (Some(s), _) => (
@@ -109,7 +110,7 @@ fn against(a: &FitArgs, prep: &anholonomy::validate::Prepared) -> Result<Against
         ),
         (None, Some(c)) => (
             Some(
-                Source::parse(&c.reference, sc.path.parent().unwrap_or(here))
+                Source::parse(&c.reference, sc.path.parent().unwrap_or(Path::new(".")))
                     .map_err(|e| vec![sc.error_at("compare.reference", e)])?,
             ),
             c.time_offset,

@@ -356,6 +356,16 @@ pub fn fit(
             ),
         ));
     };
+    if matches!(against, Against::Recording { .. }) {
+        let root = |a: &ParamArg| a.key.split(['.', '[']).next().unwrap_or("").to_string();
+        let roots: Vec<String> = args.iter().map(root).collect();
+        if roots.iter().any(|r| r == "model") && roots.iter().any(|r| r == "sim") {
+            return Err(Error::input(
+                "--param",
+                "against a recording, fit the twin (`model.*` keys: the ideal run is compared with it) or the physics (`sim.*` keys: the physics run is), not both in one call",
+            ));
+        }
+    }
     let params = params::resolve(prep, args)?;
     let (length, length_from) = match (s.length, size::robot_size(&prep.robot)) {
         (Some(l), _) => (l, "--length".to_string()),
@@ -384,13 +394,8 @@ pub fn fit(
         } => {
             let pair = if all(Moves::Model) {
                 Pair::IdealReal
-            } else if all(Moves::Sim) {
-                Pair::SimReal
             } else {
-                return Err(Error::input(
-                    "--param",
-                    "against a recording, fit the twin (`model.*` keys: the ideal run is compared with it) or the physics (`sim.*` keys: the physics run is), not both in one call",
-                ));
+                Pair::SimReal
             };
             let plan_params = match &sc.planner {
                 PlannerConfig::File(p) => Some(p),

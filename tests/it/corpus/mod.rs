@@ -149,6 +149,7 @@ pub fn no_line(file: &str) -> Shape {
 
 mod dilf;
 pub mod faults;
+pub mod fit;
 mod files;
 mod held_out;
 mod own_plan;
@@ -164,6 +165,7 @@ pub fn corpus() -> Vec<Case> {
     studies::cases(&mut c);
     dilf::cases(&mut c);
     files::cases(&mut c);
+    fit::cases(&mut c);
     own_plan::cases(&mut c);
     ros_bags::cases(&mut c);
     runaway::cases(&mut c);
