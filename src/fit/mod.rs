@@ -322,15 +322,14 @@ impl Setup<'_> {
     }
 }
 
-/// Fit `args` of a prepared scenario against `against`; `progress` sees
-/// every evaluation.
-pub fn fit(
+/// What `fit` refuses before anything runs: a sweep, a feedback law, a
+/// model without a planar pose, twin and physics keys against one
+/// recording. The model's planar pose.
+fn preconditions(
     prep: &Prepared,
     args: &[ParamArg],
     against: &Against,
-    s: &Settings,
-    progress: &(dyn Fn(&Progress) + Sync),
-) -> Result<Report, Error> {
+) -> Result<PoseIndex, Error> {
     let sc = &prep.scenario;
     if sc.sweep.is_some() {
         return Err(sc.error_at(
@@ -366,19 +365,33 @@ pub fn fit(
             ));
         }
     }
-    let params = params::resolve(prep, args)?;
-    let (length, length_from) = match (s.length, size::robot_size(&prep.robot)) {
-        (Some(l), _) => (l, "--length".to_string()),
-        (None, Some((l, from))) => (l, from.to_string()),
-        (None, None) => (1.0, "a robot of one link: 1 m (set --length)".to_string()),
-    };
-    let (start, _) = prep.start_goal();
-    let start = idx.pose(start.as_slice());
-    let end = crate::integrate::step_count(prep.planned.duration + sc.sim.settle, sc.sim.dt) as f64
-        * sc.sim.dt;
+    Ok(idx)
+}
+
+/// What a fit compares with, made ready: the pair of runs, a recording
+/// (lined up once when its offset is given), and how to say it.
+struct Reference {
+    pair: Pair,
+    recording: Option<(Recording, f64, Frame)>,
+    fixed_track: Option<Track>,
+    text: String,
+    alignment: String,
+    compare: Option<(String, Frame)>,
+    /// A fitted time offset's range.
+    offset: Option<(f64, f64)>,
+}
+
+fn reference(
+    prep: &Prepared,
+    params: &[Param],
+    against: &Against,
+    start: [f64; 3],
+    end: f64,
+) -> Result<Reference, Error> {
+    let sc = &prep.scenario;
     let all = |m: Moves| params.iter().all(|p| p.moves == m);
     let mut offset_param = None;
-    let (pair, recording, fixed_track, reference, alignment, compare) = match against {
+    let (pair, recording, fixed_track, text, alignment, compare) = match against {
         Against::Sim => (
             Pair::IdealSim,
             None,
@@ -446,6 +459,105 @@ pub fn fit(
             )
         }
     };
+    Ok(Reference {
+        pair,
+        recording,
+        fixed_track,
+        text,
+        alignment,
+        compare,
+        offset: offset_param,
+    })
+}
+
+/// Each parameter's sensitivity and interval from the residual at the fit
+/// (`r0`) and at the two probes along its axis (`probes`, `values`: two per
+/// parameter, in the unit box).
+fn results(
+    best: &[f64],
+    r0: f64,
+    probes: &[Vec<f64>],
+    values: &[f64],
+    ranges: &[(f64, f64)],
+    params: &[Param],
+    nominal_offset: Option<f64>,
+) -> Vec<ParamResult> {
+    let x_best: Vec<f64> = best
+        .iter()
+        .zip(ranges)
+        .map(|(u, (lo, hi))| lo + u * (hi - lo))
+        .collect();
+    let mut results = Vec::new();
+    for (d, (lo, hi)) in ranges.iter().enumerate() {
+        let w = hi - lo;
+        let mut pts = vec![(best[d], r0 * r0)];
+        for k in 0..2 {
+            pts.push((probes[2 * d + k][d], values[2 * d + k].powi(2)));
+        }
+        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
+        pts.dedup_by(|a, b| a.0 == b.0);
+        let curvature = if pts.len() == 3 {
+            let [(xa, ya), (xb, yb), (xc, yc)] = [pts[0], pts[1], pts[2]];
+            let a_u = ((yc - yb) / (xc - xb) - (yb - ya) / (xb - xa)) / (xc - xa);
+            Some(a_u / (w * w))
+        } else {
+            None
+        };
+        let sensitivity = curvature
+            .filter(|a| *a > 0.0 && a.is_finite())
+            .map(f64::sqrt);
+        let value = x_best[d];
+        let interval = sensitivity.map(|sq| {
+            let half = r0 * (((1.0 + INTERVAL_RISE).powi(2) - 1.0).sqrt()) / sq;
+            [(value - half).max(*lo), (value + half).min(*hi)]
+        });
+        let (key, moves, nominal) = match params.get(d) {
+            Some(p) => (p.key.clone(), Some(p.moves), p.nominal),
+            None => ("time_offset".to_string(), None, nominal_offset),
+        };
+        results.push(ParamResult {
+            key,
+            moves,
+            range: [*lo, *hi],
+            nominal,
+            value,
+            sensitivity,
+            interval,
+        });
+    }
+    results
+}
+
+/// Fit `args` of a prepared scenario against `against`; `progress` sees
+/// every evaluation.
+pub fn fit(
+    prep: &Prepared,
+    args: &[ParamArg],
+    against: &Against,
+    s: &Settings,
+    progress: &(dyn Fn(&Progress) + Sync),
+) -> Result<Report, Error> {
+    let sc = &prep.scenario;
+    let idx = preconditions(prep, args, against)?;
+    let params = params::resolve(prep, args)?;
+    let (length, length_from) = match (s.length, size::robot_size(&prep.robot)) {
+        (Some(l), _) => (l, "--length".to_string()),
+        (None, Some((l, from))) => (l, from.to_string()),
+        (None, None) => (1.0, "a robot of one link: 1 m (set --length)".to_string()),
+    };
+    let (start, _) = prep.start_goal();
+    let start = idx.pose(start.as_slice());
+    let end = crate::integrate::step_count(prep.planned.duration + sc.sim.settle, sc.sim.dt) as f64
+        * sc.sim.dt;
+    let Reference {
+        pair,
+        recording,
+        fixed_track,
+        text: reference,
+        alignment,
+        compare,
+        offset: offset_param,
+    } = self::reference(prep, &params, against, start, end)?;
     let moved_sim = params.iter().any(|p| physics_reads(sc, &p.key));
     let moved_ideal = params
         .iter()
@@ -538,44 +650,15 @@ pub fn fit(
     let x_best = to_x(&found.best);
     let after = setup.evaluate(&x_best)?;
     let r0 = after.residual;
-    let mut results = Vec::new();
-    for (d, (lo, hi)) in ranges.iter().enumerate() {
-        let w = hi - lo;
-        let mut pts = vec![(found.best[d], r0 * r0)];
-        for k in 0..2 {
-            pts.push((probes[2 * d + k][d], values[2 * d + k].powi(2)));
-        }
-        pts.sort_by(|a, b| a.0.total_cmp(&b.0));
-        pts.dedup_by(|a, b| a.0 == b.0);
-        let curvature = if pts.len() == 3 {
-            let [(xa, ya), (xb, yb), (xc, yc)] = [pts[0], pts[1], pts[2]];
-            let a_u = ((yc - yb) / (xc - xb) - (yb - ya) / (xb - xa)) / (xc - xa);
-            Some(a_u / (w * w))
-        } else {
-            None
-        };
-        let sensitivity = curvature
-            .filter(|a| *a > 0.0 && a.is_finite())
-            .map(f64::sqrt);
-        let value = x_best[d];
-        let interval = sensitivity.map(|sq| {
-            let half = r0 * (((1.0 + INTERVAL_RISE).powi(2) - 1.0).sqrt()) / sq;
-            [(value - half).max(*lo), (value + half).min(*hi)]
-        });
-        let (key, moves, nominal) = match params.get(d) {
-            Some(p) => (p.key.clone(), Some(p.moves), p.nominal),
-            None => ("time_offset".to_string(), None, nominal_offset),
-        };
-        results.push(ParamResult {
-            key,
-            moves,
-            range: [*lo, *hi],
-            nominal,
-            value,
-            sensitivity,
-            interval,
-        });
-    }
+    let results = results(
+        &found.best,
+        r0,
+        &probes,
+        &values,
+        &ranges,
+        &params,
+        nominal_offset,
+    );
     let first_failure = setup
         .first_failure
         .lock()

@@ -355,7 +355,13 @@ mod tests {
         let (s, c) = 0.7f64.sin_cos();
         let from: Vec<[f64; 3]> = to
             .iter()
-            .map(|p| [c * p[0] - s * p[1] + 3.0, s * p[0] + c * p[1] - 1.0, p[2] + 0.7])
+            .map(|p| {
+                [
+                    c * p[0] - s * p[1] + 3.0,
+                    s * p[0] + c * p[1] - 1.0,
+                    p[2] + 0.7,
+                ]
+            })
             .collect();
         for (a, b) in rigid_fit(&from, &to).iter().zip(&to) {
             for i in 0..3 {

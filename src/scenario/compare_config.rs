@@ -21,11 +21,7 @@ pub struct CompareConfig {
     /// (plan time 0 is the first command) and this shifts it further.
     #[serde(default)]
     pub time_offset: f64,
-    /// `"start"`: the recording is moved rigidly so that its pose at plan
-    /// time 0 is the scenario's `start`; `"recorded"`: its coordinates are
-    /// the scenario's; `"fit"`: laid over each run by the rotation and
-    /// shift that fit best (steadier than one noisy sample, but it hides a
-    /// constant heading error).
+    /// How the recording's coordinates are laid over the scenario's.
     #[serde(default)]
     pub frame: Frame,
 }

@@ -177,7 +177,7 @@ fn check_command(cmd: &str) {
 /// nothing on stdout (but for `list`), no log directory.
 fn check_case(case: &Case, args: &[String], cmd: &str, problems: &mut Vec<String>) {
     let dir = setup(case);
-    let (code, stdout, stderr) = run_limited(dir.path(), &args, LIMIT);
+    let (code, stdout, stderr) = run_limited(dir.path(), args, LIMIT);
     if let Some(dump) = std::env::var_os("ANHOLONOMY_CORPUS_DUMP") {
         // One line per invocation: case, command, stderr with the
         // temporary directory's name taken out.

@@ -71,7 +71,13 @@ settle = 0.5
 /// the last row the plan's end.
 fn random_plan(rng: &mut ChaCha8Rng) -> Vec<(f64, f64, f64)> {
     let mut rows: Vec<(f64, f64, f64)> = (0..6)
-        .map(|k| (k as f64, rng.random_range(0.1..0.5), rng.random_range(-1.0..1.0)))
+        .map(|k| {
+            (
+                k as f64,
+                rng.random_range(0.1..0.5),
+                rng.random_range(-1.0..1.0),
+            )
+        })
         .collect();
     rows.push((6.0, 0.0, 0.0));
     rows
@@ -146,7 +152,10 @@ fn write_recording(
 
 fn fit_json(dir: &Path, args: &[&str], threads: Option<usize>) -> Value {
     let mut cmd = std::process::Command::new(env!("CARGO_BIN_EXE_anholonomy"));
-    cmd.arg("fit").args(args).args(["--json", "--quiet"]).current_dir(dir);
+    cmd.arg("fit")
+        .args(args)
+        .args(["--json", "--quiet"])
+        .current_dir(dir);
     if let Some(n) = threads {
         cmd.env("RAYON_NUM_THREADS", n.to_string());
     }
@@ -160,16 +169,24 @@ fn fit_json(dir: &Path, args: &[&str], threads: Option<usize>) -> Value {
 }
 
 fn param(v: &Value, k: &str) -> f64 {
-    v["params"][k].as_f64().unwrap_or_else(|| panic!("{k} in {v}"))
+    v["params"][k]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{k} in {v}"))
 }
 
 /// The fit within `tol` of the truth, inside its interval.
 fn recovered(v: &Value, key: &str, truth: f64, tol: f64) {
     let got = param(v, key);
-    assert!((got - truth).abs() < tol, "{key}: fitted {got}, truth {truth}");
+    assert!(
+        (got - truth).abs() < tol,
+        "{key}: fitted {got}, truth {truth}"
+    );
     let i = &v["intervals"][key];
     let (lo, hi) = (i[0].as_f64().unwrap(), i[1].as_f64().unwrap());
-    assert!(lo < got && got < hi, "{key}: {got} outside its interval {lo}..{hi}");
+    assert!(
+        lo < got && got < hi,
+        "{key}: {got} outside its interval {lo}..{hi}"
+    );
 }
 
 /// The truth inside the reported interval too (noise alone in the data:
@@ -177,7 +194,10 @@ fn recovered(v: &Value, key: &str, truth: f64, tol: f64) {
 fn inside(v: &Value, key: &str, truth: f64) {
     let i = &v["intervals"][key];
     let (lo, hi) = (i[0].as_f64().unwrap(), i[1].as_f64().unwrap());
-    assert!(lo <= truth && truth <= hi, "{key}: truth {truth} outside the interval {lo}..{hi}");
+    assert!(
+        lo <= truth && truth <= hi,
+        "{key}: truth {truth} outside the interval {lo}..{hi}"
+    );
 }
 
 const KEYS: [&str; 4] = [
@@ -199,7 +219,13 @@ fn recovers_known_parameters_from_a_noisy_recording() {
         let sc = scenario(dir.path(), None);
         // One noisy sample at time 0 would place the whole recording: lay
         // it over the run by a least-squares fit instead.
-        let mut args = vec![sc.to_str().unwrap(), "--against", "rec.csv", "--frame", "fit"];
+        let mut args = vec![
+            sc.to_str().unwrap(),
+            "--against",
+            "rec.csv",
+            "--frame",
+            "fit",
+        ];
         args.extend(KEYS);
         let v = fit_json(dir.path(), &args, None);
         recovered(&v, "model.params.kv", kv, 0.01);
@@ -223,15 +249,32 @@ fn recovers_parameters_and_the_time_offset_of_a_recording_on_its_own_clock() {
     write_plan(dir.path(), &rows);
     let (kv, kw) = (1.06, 0.78);
     // The recorder's clock reads 1000.0 s one second before the first command.
-    write_recording(dir.path(), &rows, (kv, kw), 1001.0 + 0.37, 0.002, &[], &mut rng);
+    write_recording(
+        dir.path(),
+        &rows,
+        (kv, kw),
+        1001.0 + 0.37,
+        0.002,
+        &[],
+        &mut rng,
+    );
     let sc = scenario(dir.path(), None);
-    let mut args = vec![sc.to_str().unwrap(), "--against", "rec.csv", "--time-offset", "1000..1004"];
+    let mut args = vec![
+        sc.to_str().unwrap(),
+        "--against",
+        "rec.csv",
+        "--time-offset",
+        "1000..1004",
+    ];
     args.extend(KEYS);
     let v = fit_json(dir.path(), &args, None);
     recovered(&v, "time_offset", 1001.37, 0.02);
     recovered(&v, "model.params.kv", kv, 0.01);
     recovered(&v, "model.params.kw", kw, 0.01);
-    assert!(v["toml"].as_str().unwrap().contains("[compare]\nreference = \"rec.csv\"\ntime_offset = 1001.3"));
+    assert!(v["toml"]
+        .as_str()
+        .unwrap()
+        .contains("[compare]\nreference = \"rec.csv\"\ntime_offset = 1001.3"));
     // The same answer on one thread and on two.
     let one = fit_json(dir.path(), &args, Some(1));
     let two = fit_json(dir.path(), &args, Some(2));
@@ -312,7 +355,13 @@ fn recovers_parameters_from_bag_topics_written_by_rosbags() {
     let (kv, kw) = (1.04, 0.82);
     std::fs::write(dir.path().join("make_bag.py"), BAG_SCRIPT).unwrap();
     let st = std::process::Command::new(python::python_with("rosbags"))
-        .args(["make_bag.py", "robot_bag", &kv.to_string(), &kw.to_string(), "plan.csv"])
+        .args([
+            "make_bag.py",
+            "robot_bag",
+            &kv.to_string(),
+            &kw.to_string(),
+            "plan.csv",
+        ])
         .current_dir(dir.path())
         .status()
         .unwrap();
@@ -320,9 +369,16 @@ fn recovers_parameters_from_bag_topics_written_by_rosbags() {
     // The plan from the bag's /cmd_vel: the recording shares its clock.
     let text = std::fs::read_to_string(scenario(dir.path(), None))
         .unwrap()
-        .replace("path = \"plan.csv\"", "path = \"robot_bag\"\ntopic = \"/cmd_vel\"");
+        .replace(
+            "path = \"plan.csv\"",
+            "path = \"robot_bag\"\ntopic = \"/cmd_vel\"",
+        );
     std::fs::write(dir.path().join("bag.toml"), text).unwrap();
-    for reference in ["robot_bag:/odom", "robot_bag:/pose", "robot_bag/robot_bag.mcap:/tf:base_link"] {
+    for reference in [
+        "robot_bag:/odom",
+        "robot_bag:/pose",
+        "robot_bag/robot_bag.mcap:/tf:base_link",
+    ] {
         let mut args = vec!["bag.toml", "--against", reference];
         args.extend(KEYS);
         let v = fit_json(dir.path(), &args, None);
@@ -331,7 +387,10 @@ fn recovers_parameters_from_bag_topics_written_by_rosbags() {
         recovered(&v, "model.params.kv", kv, 0.002);
         recovered(&v, "model.params.kw", kw, 0.002);
         assert!(
-            v["alignment"].as_str().unwrap().contains("on the bag's clock"),
+            v["alignment"]
+                .as_str()
+                .unwrap()
+                .contains("on the bag's clock"),
             "{}",
             v["alignment"]
         );
@@ -347,7 +406,11 @@ fn recovers_parameters_from_bag_topics_written_by_rosbags() {
     let m = |k: &str| o.metric(k).unwrap_or_else(|| panic!("{k}"));
     // The twin with the true values follows the recording (RK4 at 10 ms
     // against exact arcs, 20 Hz samples).
-    assert!(m("real_ideal_position_max") < 1e-3, "{}", m("real_ideal_position_max"));
+    assert!(
+        m("real_ideal_position_max") < 1e-3,
+        "{}",
+        m("real_ideal_position_max")
+    );
     assert!(m("real_ideal_heading_deg_max") < 0.05);
     assert!(m("real_sim_position_rms") > 0.0 && m("real_goal_position") >= 0.0);
     let series = std::fs::read_to_string(dir.path().join("logs/synthetic/series.json")).unwrap();
@@ -376,7 +439,11 @@ fn the_skid_steer_twin_passes_its_arc_and_a_plan_it_was_not_fitted_on() {
     // The fit finds eta again from the unicycle's value.
     let v = fit_json(
         &ex,
-        &["skid_steer_declared.toml", "--param", "model.params.eta=0.5..1"],
+        &[
+            "skid_steer_declared.toml",
+            "--param",
+            "model.params.eta=0.5..1",
+        ],
         None,
     );
     recovered(&v, "model.params.eta", 0.722, 0.003);

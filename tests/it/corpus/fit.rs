@@ -7,13 +7,23 @@ use super::ros_bags::{bag, bag_scenario};
 use super::*;
 
 /// A scenario planning from committed bag `twist_steps`, with `tables`.
-fn with_bag(name: &str, tables: &str, extra: &[(&str, &str)], expect: Vec<Shape>, args: &[&str]) -> Case {
+fn with_bag(
+    name: &str,
+    tables: &str,
+    extra: &[(&str, &str)],
+    expect: Vec<Shape>,
+    args: &[&str],
+) -> Case {
     let mut files = vec![(
         "case.toml".to_string(),
         bag_scenario("twist_steps", "", tables).into_bytes(),
     )];
     files.extend(bag("twist_steps"));
-    files.extend(extra.iter().map(|(f, t)| (f.to_string(), t.as_bytes().to_vec())));
+    files.extend(
+        extra
+            .iter()
+            .map(|(f, t)| (f.to_string(), t.as_bytes().to_vec())),
+    );
     let mut a = vec!["case.toml".to_string()];
     a.extend(args.iter().map(|s| s.to_string()));
     Case {
@@ -51,21 +61,33 @@ fn compare_cases() -> Vec<Case> {
             "compare: absent topic",
             &t("twist_steps:/odom"),
             &[],
-            vec![shape("twist_steps", None, "no topic `/odom` in the bag (topics: /cmd_vel")],
+            vec![shape(
+                "twist_steps",
+                None,
+                "no topic `/odom` in the bag (topics: /cmd_vel",
+            )],
             &[],
         ),
         with_bag(
             "compare: a topic that is not a pose",
             &t("twist_steps:/cmd_vel"),
             &[],
-            vec![shape("twist_steps", None, "topic `/cmd_vel` holds geometry_msgs/msg/Twist, not a pose")],
+            vec![shape(
+                "twist_steps",
+                None,
+                "topic `/cmd_vel` holds geometry_msgs/msg/Twist, not a pose",
+            )],
             &[],
         ),
         with_bag(
             "compare: recording that does not overlap the plan",
             &t("rec.csv"),
             &[("rec.csv", ROWS_LATE)],
-            vec![shape("case.toml", line(&t("rec.csv"), "reference ="), "key `compare.reference`: rec.csv: the recording does not overlap the plan")],
+            vec![shape(
+                "case.toml",
+                line(&t("rec.csv"), "reference ="),
+                "key `compare.reference`: rec.csv: the recording does not overlap the plan",
+            )],
             &[],
         ),
         with_bag(
@@ -79,7 +101,11 @@ fn compare_cases() -> Vec<Case> {
             "compare: not a recording",
             &t("rec.json"),
             &[],
-            vec![shape("case.toml", line(&t("rec.json"), "reference ="), "key `compare.reference`: `rec.json`: neither a bag and a topic nor a CSV file")],
+            vec![shape(
+                "case.toml",
+                line(&t("rec.json"), "reference ="),
+                "key `compare.reference`: `rec.json`: neither a bag and a topic nor a CSV file",
+            )],
             &[],
         ),
     ];
@@ -88,7 +114,11 @@ fn compare_cases() -> Vec<Case> {
         "compare: time offset not finite",
         &tables,
         &[("rec.csv", GOOD)],
-        vec![shape("case.toml", line(&tables, "time_offset"), "key `compare.time_offset`")],
+        vec![shape(
+            "case.toml",
+            line(&tables, "time_offset"),
+            "key `compare.time_offset`",
+        )],
         &[],
     ));
     out
@@ -183,7 +213,8 @@ pub fn fit_cases() -> Vec<Case> {
         c.files.push(("bad.csv".into(), NO_T.as_bytes().to_vec()));
     }
     for mut c in compare_cases() {
-        c.args.extend(["--param".to_string(), "sim.friction=0.3..1".to_string()]);
+        c.args
+            .extend(["--param".to_string(), "sim.friction=0.3..1".to_string()]);
         c.name = format!("fit, {}", c.name);
         out.push(c);
     }

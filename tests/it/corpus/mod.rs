@@ -149,8 +149,8 @@ pub fn no_line(file: &str) -> Shape {
 
 mod dilf;
 pub mod faults;
-pub mod fit;
 mod files;
+pub mod fit;
 mod held_out;
 mod own_plan;
 mod ros_bags;
