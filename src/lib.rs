@@ -37,6 +37,7 @@ pub mod cancel;
 pub mod compare;
 pub mod engine;
 pub mod error;
+pub mod fit;
 pub mod gate;
 pub mod init;
 pub mod input;
@@ -54,6 +55,7 @@ pub mod progress;
 #[cfg(test)]
 mod prop_config;
 pub mod record;
+pub mod recording;
 pub mod reference;
 pub mod report;
 pub mod robots;

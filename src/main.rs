@@ -72,6 +72,7 @@ fn main() -> ExitCode {
         } => cmd::inspect::keys_cmd(name.as_deref(), *markdown, out.as_deref()),
         Cmd::Merge { paths, out } => cmd::logs::merge_cmd(paths, out.as_deref()),
         Cmd::Margin(a) => cmd::margin::margin_cmd(a),
+        Cmd::Fit(a) => cmd::fit::fit_cmd(a),
         Cmd::Init(a) => cmd::inspect::init_cmd(&a.dir, a.from.as_deref()),
         Cmd::Models(a) => match &a.cmd {
             None => cmd::inspect::models_cmd(),

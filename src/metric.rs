@@ -333,6 +333,83 @@ pub const HARNESS: &[Metric] = &[
     ),
 ];
 
+/// The metrics of a recorded run (`[compare] reference`), computed by
+/// `crate::recording::metrics`; those in degrees need the model's heading.
+/// Each is judged at the end: a prefix of the physics run is not compared
+/// with the whole recording.
+pub const REAL: &[Metric] = &[
+    m(
+        "real_goal_position",
+        Unit::Meter,
+        Lower,
+        EndOnly,
+        "Distance from the recording's last sample to the goal position.",
+    ),
+    m(
+        "real_goal_heading_deg",
+        Unit::Degree,
+        Lower,
+        EndOnly,
+        "Heading error of the recording's last sample from the goal.",
+    ),
+    m(
+        "real_sim_position_rms",
+        Unit::Meter,
+        Lower,
+        EndOnly,
+        "RMS distance between the recording and the physics run.",
+    ),
+    m(
+        "real_sim_position_max",
+        Unit::Meter,
+        Lower,
+        EndOnly,
+        "Largest distance between the recording and the physics run.",
+    ),
+    m(
+        "real_sim_heading_deg_rms",
+        Unit::Degree,
+        Lower,
+        EndOnly,
+        "RMS heading difference between the recording and the physics run.",
+    ),
+    m(
+        "real_sim_heading_deg_max",
+        Unit::Degree,
+        Lower,
+        EndOnly,
+        "Largest heading difference between the recording and the physics run.",
+    ),
+    m(
+        "real_ideal_position_rms",
+        Unit::Meter,
+        Lower,
+        EndOnly,
+        "RMS distance between the recording and the ideal run.",
+    ),
+    m(
+        "real_ideal_position_max",
+        Unit::Meter,
+        Lower,
+        EndOnly,
+        "Largest distance between the recording and the ideal run.",
+    ),
+    m(
+        "real_ideal_heading_deg_rms",
+        Unit::Degree,
+        Lower,
+        EndOnly,
+        "RMS heading difference between the recording and the ideal run.",
+    ),
+    m(
+        "real_ideal_heading_deg_max",
+        Unit::Degree,
+        Lower,
+        EndOnly,
+        "Largest heading difference between the recording and the ideal run.",
+    ),
+];
+
 /// Whether `name` is an instance of `pattern` (module docs' placeholders).
 pub fn matches(pattern: &str, name: &str) -> bool {
     captures(pattern, name).is_some()

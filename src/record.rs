@@ -4,6 +4,19 @@
 use crate::integrate::Trajectory;
 use serde::Serialize;
 
+/// A recording in plan time and the scenario's frame, inside the runs' span.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Track {
+    /// What it was read from.
+    pub source: String,
+    /// Plan time of each sample, s.
+    pub t: Vec<f64>,
+    /// (x, y, yaw) per sample.
+    pub pose: Vec<[f64; 3]>,
+    /// Laid over each run by a best rigid fit (`recording::align::Frame::Fit`).
+    pub fit_frame: bool,
+}
+
 /// A rigid transform in f64: translation and unit quaternion (x, y, z, w).
 #[derive(Debug, Clone, Copy, PartialEq, Serialize)]
 pub struct Pose {
@@ -259,6 +272,8 @@ pub struct RunRecord<'a> {
     /// [`crate::runner::tracking_meaningful`]); a feedback policy's sim run reacts to its own
     /// state, so its distance to the ideal run is not a tracking error.
     pub tracking_meaningful: bool,
+    /// A recorded run (`[compare] reference`), lined up with the plan: the third path.
+    pub real: Option<&'a Track>,
 }
 
 impl RunRecord<'_> {

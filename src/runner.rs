@@ -534,6 +534,14 @@ pub fn finish(
     let early = early.unwrap_or_else(|| prep.system.analysis_of_ideal(&goal, &ideal));
     let (extra, series) = prep.system.analysis_with(&goal, &ideal, early, &sim, &cmp);
     metrics.extend(extra);
+    if let (Some(track), Some(idx)) = (
+        &prep.reference,
+        crate::recording::align::PoseIndex::of(model),
+    ) {
+        metrics.extend(crate::recording::metrics::compute(
+            track, &ideal, &sim.traj, &goal, &idx,
+        ));
+    }
     let failures = crate::gate::breaches(&sc.thresholds, &sc.minimums, &metrics)
         .iter()
         .map(ToString::to_string)
@@ -653,6 +661,7 @@ fn write_logs(
         metrics: &outcome.metrics,
         command: &command,
         tracking_meaningful: outcome.tracking_meaningful,
+        real: prep.reference.as_deref(),
     };
     // The writers are independent (each file from the same record): on two
     // cores a single run's logs take the longer writer's time, not the sum.

@@ -111,7 +111,28 @@ pub(crate) enum Cmd {
     /// the gate that broke first beyond it, runs used) and writes the nominal
     /// run's logs plus LOGS/<scenario>/margins.json (every level, plotted
     /// by `report`). Exit 0, 2 bad input (nothing run), 3 runtime failure.
-    Margin(crate::cmd::margin::MarginArgs),
+    Margin(super::margin::MarginArgs),
+    /// Fit the twin (`model.*` keys) or the physics (`sim.*` keys) to a
+    /// reference: the scenario's own physics run, or a recording.
+    ///
+    /// The plan's commands are replayed for each trial: the ideal run with
+    /// the trial's `model.*` values, the physics run with its `sim.*`
+    /// values. Against `sim` (the default), the ideal run is compared with
+    /// the physics run; against a recording (`--against BAG:TOPIC`, a tf
+    /// frame `BAG:/tf:FRAME`, or a CSV `t,x,y,theta`), the ideal run when
+    /// every key is a `model.*` key, the physics run when every key is a
+    /// `sim.*` key. The residual is the RMS over the reference's samples of
+    /// the pose error, a heading error counted as its arc at `--length`:
+    /// sqrt(mean(|dp|^2 + (L dtheta)^2)). A parallel scan of the ranges, then
+    /// Nelder-Mead (argmin), then three evaluations per parameter around the
+    /// fit give its sensitivity and interval. Prints the values, the
+    /// residual before and after, and the TOML to paste (or `--json`). The
+    /// same answer on any number of threads.
+    ///
+    /// Exit status: 0, 2 bad input (an unknown or unvariable key, an empty or
+    /// inverted range, a missing topic, a recording that does not overlap the
+    /// plan, a CSV without `t`: nothing fitted), 3 runtime failure.
+    Fit(super::fit::FitArgs),
     /// Write a starter repository into DIR that works with this binary
     /// alone: a `diff_drive` scenario on a plan file and one driven by a
     /// Python feedback law (standard library only), the URDF, baselines made

@@ -3,6 +3,7 @@
 //! call; nothing here is needed by the Python package.
 
 pub mod cli;
+pub mod fit;
 pub mod inspect;
 pub mod logs;
 pub mod margin;

@@ -17,7 +17,7 @@
 //! | `/tracking/error` | json / jsonschema `anholonomy.TrackingError` | comparison grid sample | sim − ideal per coordinate, plus `position` |
 //! | `/tf` | protobuf `foxglove.FrameTransforms` | sim sample | `world` → each link frame |
 //! | `/scene` | protobuf `foxglove.SceneUpdate` | once, t = 0 | URDF visuals, one entity per link, frame-locked to the link frame, lifetime 0 (forever) |
-//! | `/scene/paths` | protobuf `foxglove.SceneUpdate` | once, t = 0 | ideal path (green) and simulated path (orange) line strips at z = 0, goal marker (red sphere, arrow for the goal heading); only when the model has a planar position |
+//! | `/scene/paths` | protobuf `foxglove.SceneUpdate` | once, t = 0 | ideal path (green) and simulated path (orange) line strips at z = 0, a recorded run's (`[compare] reference`, grey), goal marker (red sphere, arrow for the goal heading); only when the model has a planar position |
 //! | `/analysis/<name>` | json / jsonschema `anholonomy.Series` | series sample | a system's own series (e.g. `V/ideal`, the planner's potential along the ideal run): `values.value` |
 //!
 //! JSON messages all have the form
@@ -31,7 +31,7 @@
 //!
 //! Link frame ids are the URDF link names (a link called `world` becomes
 //! `world_link`); scene entity ids are the link names, plus `ideal_path`,
-//! `sim_path` and `goal` on `/scene/paths` (the first robot's; a second
+//! `sim_path`, `real_path` and `goal` on `/scene/paths` (the first robot's; a second
 //! robot's are `ideal_path_2`, `sim_path_2`, `goal_2`, and so on).
 //!
 //! # Metadata
@@ -63,7 +63,7 @@ mod events;
 use crate::log::atomic::write_atomically;
 use crate::log::scene::{
     coord_name, goal_points, link_frame, marker_scale, planar_paths, robot_suffix, GOAL_RGBA,
-    IDEAL_RGBA, SIM_RGBA,
+    IDEAL_RGBA, REAL_RGBA, SIM_RGBA,
 };
 use crate::log::{validate, LogError};
 use crate::record::{Pose, RunRecord, Shape};
@@ -603,6 +603,13 @@ fn paths_scene(rec: &RunRecord<'_>) -> Option<SceneUpdate> {
         entities.push(SceneEntity {
             lines: vec![line(&sim, SIM_RGBA)],
             ..entity(&format!("sim_path{sfx}"))
+        });
+    }
+    if let Some(real) = rec.real {
+        let points: Vec<[f64; 2]> = real.pose.iter().map(|p| [p[0], p[1]]).collect();
+        entities.push(SceneEntity {
+            lines: vec![line(&points, REAL_RGBA)],
+            ..entity("real_path")
         });
     }
     for o in rec.overlays {

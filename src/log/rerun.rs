@@ -6,7 +6,8 @@
 //!   `robot/<link>/visual_<k>`: static URDF visual (`Boxes3D`, `Cylinders3D`,
 //!   `Ellipsoids3D` for spheres, `Capsules3D`) with its origin as a static
 //!   `Transform3D`.
-//! * `paths/ideal` (green) and `paths/sim` (orange): static `LineStrips3D` of
+//! * `paths/ideal` (green), `paths/sim` (orange) and a recorded run's
+//!   `paths/real` (grey, `[compare] reference`): static `LineStrips3D` of
 //!   the planar path at z = 0, with a moving `Points3D` marker `paths/<run>/now`;
 //!   `paths/goal` (+ `paths/goal/heading` arrow). Only for models with a planar
 //!   position. With several robots these are the first robot's; the others'
@@ -55,7 +56,7 @@ use rr::{EntityPath, EntityPathPart, RecordingStream, TimeColumn};
 use crate::log::atomic::write_atomically;
 use crate::log::scene::{
     coord_name, goal_points, marker_scale, planar_paths, robot_suffix, segment_name, GOAL_RGBA,
-    IDEAL_RGBA, SIM_RGBA,
+    IDEAL_RGBA, REAL_RGBA, SIM_RGBA,
 };
 use crate::log::{validate, LogError};
 use crate::record::{Pose, RunRecord, Shape};
@@ -470,6 +471,33 @@ fn log_paths(stream: &RecordingStream, rec: &RunRecord<'_>, robot: f64) -> Resul
                 )?;
             }
         }
+    }
+    if let Some(real) = rec.real {
+        // The recording above both runs, between their widths.
+        let strip: Vec<[f32; 3]> = real
+            .pose
+            .iter()
+            .map(|p| [p[0] as f32, p[1] as f32, 2.0 * lift])
+            .collect();
+        stream.log_static(
+            ep(&["paths", "real"]),
+            &rr::LineStrips3D::new([strip.clone()])
+                .with_colors([rgba(REAL_RGBA)])
+                .with_radii([Radius::new_ui_points(2.5)])
+                .with_labels(["real"])
+                .with_show_labels(false),
+        )?;
+        let now = ep(&["paths", "real", "now"]);
+        stream.log_static(
+            now.clone(),
+            &rr::Points3D::update_fields()
+                .with_colors([rgba(REAL_RGBA)])
+                .with_radii([Radius::new_scene_units(0.4 * s)]),
+        )?;
+        let cols = rr::Points3D::update_fields()
+            .with_positions(strip)
+            .columns_of_unit_batches()?;
+        stream.send_columns(now, [time_col(&real.t)], cols)?;
     }
     // A post over each goal, taller than the robot, labelled on top: a robot
     // that reaches its goal covers a marker on the ground.

@@ -9,6 +9,8 @@ use crate::record::RunRecord;
 pub(crate) const IDEAL_RGBA: [f32; 4] = [0.18, 0.80, 0.25, 1.0];
 /// Simulated path colour (orange), RGBA.
 pub(crate) const SIM_RGBA: [f32; 4] = [1.0, 0.55, 0.0, 1.0];
+/// Recorded path colour (grey), RGBA.
+pub(crate) const REAL_RGBA: [f32; 4] = [0.55, 0.55, 0.58, 1.0];
 /// Goal marker colour (red), RGBA.
 pub(crate) const GOAL_RGBA: [f32; 4] = [0.90, 0.10, 0.15, 1.0];
 

@@ -94,6 +94,9 @@ pub struct SeriesFile {
     pub path_ideal: Vec<[f32; 2]>,
     /// Simulated planar path.
     pub path_sim: Vec<[f32; 2]>,
+    /// A recorded run's planar path (`[compare] reference`), lined up with the plan.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub path_real: Vec<[f32; 2]>,
     /// The other robots' planar position indices and paths (models with
     /// several robots; `position`, `path_ideal` and `path_sim` are the
     /// first robot's).
@@ -274,6 +277,18 @@ impl SeriesFile {
                 .collect(),
             path_ideal: rec.position().map(|p| path(ideal, p)).unwrap_or_default(),
             path_sim: rec.position().map(|p| path(sim, p)).unwrap_or_default(),
+            path_real: rec
+                .real
+                .map(|r| {
+                    let stride = r.pose.len().div_ceil(PATH_POINTS).max(1);
+                    r.pose
+                        .iter()
+                        .step_by(stride)
+                        .chain(r.pose.last())
+                        .map(|p| [p[0] as f32, p[1] as f32])
+                        .collect()
+                })
+                .unwrap_or_default(),
             other_robots: rec
                 .robot_positions
                 .iter()

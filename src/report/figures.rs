@@ -189,6 +189,14 @@ pub(super) fn single_figures(summary: &Value, sf: &SeriesFile) -> Result<String,
                 color: plots::RED,
             });
         }
+        if !sf.path_real.is_empty() {
+            paths.push(Path2 {
+                name: "recorded",
+                points: pp(&sf.path_real),
+                color: plots::REAL,
+                width: 2,
+            });
+        }
         b.push_str("<h2>Planar path</h2><div class=\"grid\">");
         b.push_str(&plots::path_chart(&paths, &markers)?);
         b.push_str("</div>");

@@ -14,6 +14,8 @@ pub const RED: RGBColor = RGBColor(210, 30, 40);
 pub const BLUE: RGBColor = RGBColor(31, 100, 200);
 /// Start marker (grey).
 pub const GREY: RGBColor = RGBColor(90, 90, 90);
+/// A recorded run's path (`[compare] reference`).
+pub const REAL: RGBColor = RGBColor(140, 140, 148);
 
 const PALETTE: [RGBColor; 8] = [
     RGBColor(31, 119, 180),

@@ -284,6 +284,7 @@ fn metric_rows() -> impl Iterator<Item = &'static Metric> {
         mobile_manipulator::METRICS,
         car::METRICS,
         crate::metric::HARNESS,
+        crate::metric::REAL,
     ]
     .into_iter()
     .flatten()

@@ -11,6 +11,7 @@
 //! ([`build_system`]) and hands each system its own typed configuration.
 //! Nothing below (systems, planners, models) imports this module.
 
+mod compare_config;
 mod config;
 pub mod doc;
 pub mod keypath;
@@ -19,6 +20,7 @@ pub mod regression;
 pub mod schema;
 mod sweep_config;
 
+pub use compare_config::CompareConfig;
 pub(crate) use config::model_system;
 pub use config::{build_system, planners_for, ModelConfig, PlannerConfig, OUTSIDE, PAIRS};
 pub use keypath::KeyPath;
@@ -180,6 +182,8 @@ struct ScenarioFile {
     /// Least robustness margins `check` gates (searched after the nominal run).
     #[serde(default)]
     margins: MarginsConfig,
+    /// A recording of the robot on this plan: a third run, with `real_*` metrics.
+    compare: Option<CompareConfig>,
 }
 
 /// The verdict a scenario expects (`expect = "fails"`).
@@ -238,6 +242,8 @@ pub struct Scenario {
     pub regression: crate::scenario::regression::RegressionConfig,
     /// Margins `check` gates (`[margins]`) and how they are searched.
     pub margins: MarginsConfig,
+    /// A recorded run to compare with (`[compare]`).
+    pub compare: Option<CompareConfig>,
     /// Where each key is written, for errors found after parsing.
     #[serde(skip)]
     keys: Arc<KeyIndex>,
@@ -766,6 +772,24 @@ impl Scenario {
             }
         }
         file.regression.validate().map_err(typed)?;
+        if let Some(c) = &file.compare {
+            if file.sweep.is_some() {
+                return Err(keys.error_at(
+                    path,
+                    "compare",
+                    "a recording is of one run; a sweep's variants are not it (drop [sweep] or [compare])",
+                ));
+            }
+            if !c.time_offset.is_finite() {
+                return Err(keys.error_at(
+                    path,
+                    "compare.time_offset",
+                    "must be a finite number of seconds",
+                ));
+            }
+            crate::recording::Source::parse(&c.reference, base)
+                .map_err(|e| keys.error_at(path, "compare.reference", e))?;
+        }
         // Margins are coarse (a search to a resolution): their own default tolerance.
         let mut regression = file.regression;
         for (d, _) in file.margins.gates() {
@@ -804,6 +828,7 @@ impl Scenario {
             sweep: file.sweep,
             regression,
             margins: file.margins,
+            compare: file.compare,
             keys: Arc::new(keys),
             text: text.into(),
             edits: edits.into(),

@@ -16,6 +16,7 @@
 //! planned twice. The physics probe is dropped (a Rapier world is cheap to
 //! build and not `Sync`); the run builds its own.
 
+pub mod reference;
 pub mod urdf;
 pub mod wheels;
 pub mod xacro;
@@ -58,6 +59,8 @@ pub struct Prepared {
     pub reading: UrdfReading,
     /// The warnings of loading the URDF alone (sweep variants reuse them).
     urdf_warnings: Vec<String>,
+    /// `[compare] reference`: the recording, lined up with the plan.
+    pub reference: Option<std::sync::Arc<crate::record::Track>>,
 }
 
 impl Prepared {
@@ -86,7 +89,8 @@ impl Prepared {
     ) -> Result<Prepared, Error> {
         let system = build_system(&scenario.model, &scenario.planner)
             .map_err(|e| scenario.setup_error(&e))?;
-        let known = metric_names(system.as_ref());
+        let mut known = metric_names(system.as_ref());
+        known.extend(reference::metric_names(&scenario, system.as_ref()));
         let gates = scenario.thresholds.keys().map(|k| ("thresholds", k));
         for (table, k) in gates.chain(scenario.minimums.keys().map(|k| ("minimums", k))) {
             if !known.contains(k) {
@@ -186,6 +190,7 @@ impl Prepared {
             }
         }
         check_perturbable(&scenario, system.as_ref(), &planned)?;
+        let recorded = reference::load(&scenario, system.as_ref(), &planned)?;
         check_perturbation_times(&scenario, &planned, &budget)?;
         let prep = Prepared {
             scenario,
@@ -196,6 +201,7 @@ impl Prepared {
             max_steps,
             reading,
             urdf_warnings: load_warnings,
+            reference: recorded,
         };
         if let Some(sw) = &prep.scenario.sweep {
             // Variants differ only in friction, masses and σ: when variant 0
@@ -249,7 +255,12 @@ impl Prepared {
 
     /// Every metric a run of this scenario reports.
     pub fn metric_names(&self) -> Vec<String> {
-        metric_names(self.system.as_ref())
+        let mut names = metric_names(self.system.as_ref());
+        names.extend(reference::metric_names(
+            &self.scenario,
+            self.system.as_ref(),
+        ));
+        names
     }
 
     /// Run the planner again (validation already planned: see

@@ -77,7 +77,9 @@ pub fn load_from(path: &Path, source: &Source) -> Result<Loaded, Vec<Error>> {
     let why = match crate::validate::xacro::markup(&text) {
         Some(Markup::Needed(why)) => Some(why),
         // Plain URDF under the namespace: expanded only where xacro is at hand.
-        Some(Markup::Namespace) if crate::validate::xacro::available() => Some("the xacro namespace"),
+        Some(Markup::Namespace) if crate::validate::xacro::available() => {
+            Some("the xacro namespace")
+        }
         _ => None,
     };
     if let Some(why) = why {
@@ -88,7 +90,10 @@ pub fn load_from(path: &Path, source: &Source) -> Result<Loaded, Vec<Error>> {
             "expanded with xacro ({why}); lines in messages are those of the expansion"
         ));
         if !expanded.absent.is_empty() {
-            warnings.push(crate::validate::xacro::absent_warning(&expanded.absent, path));
+            warnings.push(crate::validate::xacro::absent_warning(
+                &expanded.absent,
+                path,
+            ));
         }
         lines = false;
     }

@@ -170,69 +170,8 @@ fn check_command(cmd: &str) {
             }
             _ => continue,
         };
-        let dir = setup(case);
-        let xacro = case
-            .special
-            .iter()
-            .any(|s| matches!(s, Special::XacroOnPath))
-            .then(python::path_with_xacro);
-        let (code, stdout, stderr) = run_limited(dir.path(), &args, LIMIT, xacro.as_deref());
+        check_case(case, &args, cmd, &mut problems);
         invocations += 1;
-        if let Some(dump) = std::env::var_os("ANHOLONOMY_CORPUS_DUMP") {
-            // One line per invocation: case, command, stderr with the
-            // temporary directory's name taken out.
-            use std::io::Write as _;
-            let tmp = dir.path().to_string_lossy().into_owned();
-            let line = format!(
-                "{}\t{}\t{}\n",
-                case.name,
-                args.join(" ").replace(&tmp, "DIR"),
-                stderr.trim_end().replace(&tmp, "DIR").replace('\n', "\\n")
-            );
-            let mut f = std::fs::OpenOptions::new()
-                .create(true)
-                .append(true)
-                .open(dump)
-                .unwrap();
-            f.write_all(line.as_bytes()).unwrap();
-        }
-        let mut bad = |what: String| {
-            problems.push(format!(
-                "[{}] `{}`: {what}\n  stderr: {stderr}",
-                case.name,
-                args.join(" ")
-            ))
-        };
-        if code != Some(2) {
-            bad(format!("exit {code:?}, expected 2"));
-        }
-        if stderr.contains("panicked") || stderr.contains("RUST_BACKTRACE") {
-            bad("panic".into());
-        }
-        if let Some(n) = long_number(&stderr) {
-            bad(format!("a number in {} digits", n.len()));
-        }
-        let lines: Vec<&str> = stderr.lines().collect();
-        if lines.len() != case.expect.len() {
-            bad(format!(
-                "{} stderr lines, expected {}",
-                lines.len(),
-                case.expect.len()
-            ));
-        } else {
-            for (l, s) in lines.iter().zip(&case.expect) {
-                if let Some(m) = shape_mismatch(l, s) {
-                    bad(format!("{m} (expected {s:?})"));
-                }
-            }
-        }
-        if cmd != "list" && !stdout.is_empty() {
-            bad(format!("stdout not empty: {stdout}"));
-        }
-        let written: Vec<PathBuf> = files_below(&dir.path().join("logs"));
-        if dir.path().join("logs").exists() {
-            bad(format!("log directory created: {written:?}"));
-        }
     }
     assert!(
         problems.is_empty(),
@@ -241,6 +180,74 @@ fn check_command(cmd: &str) {
         problems.join("\n")
     );
     eprintln!("{cmd}: {invocations} invocations, all exit 2 with the expected error lines");
+}
+
+/// Run one case (`args` to the binary) and add what breaks the contract to
+/// `problems`: exit 2, the expected error lines, no panic, no long number,
+/// nothing on stdout (but for `list`), no log directory.
+fn check_case(case: &Case, args: &[String], cmd: &str, problems: &mut Vec<String>) {
+    let dir = setup(case);
+    let xacro = case
+        .special
+        .iter()
+        .any(|s| matches!(s, Special::XacroOnPath))
+        .then(python::path_with_xacro);
+    let (code, stdout, stderr) = run_limited(dir.path(), args, LIMIT, xacro.as_deref());
+    if let Some(dump) = std::env::var_os("ANHOLONOMY_CORPUS_DUMP") {
+        // One line per invocation: case, command, stderr with the
+        // temporary directory's name taken out.
+        use std::io::Write as _;
+        let tmp = dir.path().to_string_lossy().into_owned();
+        let line = format!(
+            "{}\t{}\t{}\n",
+            case.name,
+            args.join(" ").replace(&tmp, "DIR"),
+            stderr.trim_end().replace(&tmp, "DIR").replace('\n', "\\n")
+        );
+        let mut f = std::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(dump)
+            .unwrap();
+        f.write_all(line.as_bytes()).unwrap();
+    }
+    let mut bad = |what: String| {
+        problems.push(format!(
+            "[{}] `{}`: {what}\n  stderr: {stderr}",
+            case.name,
+            args.join(" ")
+        ))
+    };
+    if code != Some(2) {
+        bad(format!("exit {code:?}, expected 2"));
+    }
+    if stderr.contains("panicked") || stderr.contains("RUST_BACKTRACE") {
+        bad("panic".into());
+    }
+    if let Some(n) = long_number(&stderr) {
+        bad(format!("a number in {} digits", n.len()));
+    }
+    let lines: Vec<&str> = stderr.lines().collect();
+    if lines.len() != case.expect.len() {
+        bad(format!(
+            "{} stderr lines, expected {}",
+            lines.len(),
+            case.expect.len()
+        ));
+    } else {
+        for (l, s) in lines.iter().zip(&case.expect) {
+            if let Some(m) = shape_mismatch(l, s) {
+                bad(format!("{m} (expected {s:?})"));
+            }
+        }
+    }
+    if cmd != "list" && !stdout.is_empty() {
+        bad(format!("stdout not empty: {stdout}"));
+    }
+    let written: Vec<PathBuf> = files_below(&dir.path().join("logs"));
+    if dir.path().join("logs").exists() {
+        bad(format!("log directory created: {written:?}"));
+    }
 }
 
 #[test]
@@ -261,6 +268,28 @@ fn corpus_through_plan() {
 #[test]
 fn corpus_through_list() {
     check_command("list");
+}
+
+/// `fit`'s own bad input (keys, ranges, recordings named on its command
+/// line), and the scenario corpus's `[compare]` cases through `fit`.
+#[test]
+fn corpus_through_fit() {
+    let mut problems = Vec::new();
+    let cases = crate::corpus::fit::fit_cases();
+    assert!(cases.len() >= 10, "{} cases", cases.len());
+    for case in &cases {
+        let mut args = vec!["fit".to_string()];
+        args.extend(case.args.iter().cloned());
+        args.push("--quiet".into());
+        check_case(case, &args, "fit", &mut problems);
+    }
+    assert!(
+        problems.is_empty(),
+        "{} of {} `fit` invocations broke the contract:\n{}",
+        problems.len(),
+        cases.len(),
+        problems.join("\n")
+    );
 }
 
 /// The corpus really is bad input only because of its edits: the unedited

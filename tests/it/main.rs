@@ -23,6 +23,7 @@ mod disk_pipeline;
 mod doc_snippets;
 mod external_law;
 mod file_plan;
+mod fit;
 mod init;
 mod install;
 mod junit;

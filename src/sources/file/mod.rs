@@ -242,6 +242,7 @@ impl FilePlanParams {
             time: self.time.unwrap_or_default(),
             map: &self.map,
             duration: self.duration,
+            select: None,
         }
     }
 

@@ -162,6 +162,7 @@ impl Fixture {
             series: &[],
             command: &serde_json::Value::Null,
             tracking_meaningful: true,
+            real: None,
         }
     }
 }

@@ -152,6 +152,7 @@ pub fn no_line(file: &str) -> Shape {
 mod dilf;
 pub mod faults;
 mod files;
+pub mod fit;
 mod held_out;
 mod own_plan;
 mod published;
@@ -167,6 +168,7 @@ pub fn corpus() -> Vec<Case> {
     studies::cases(&mut c);
     dilf::cases(&mut c);
     files::cases(&mut c);
+    fit::cases(&mut c);
     own_plan::cases(&mut c);
     ros_bags::cases(&mut c);
     published::cases(&mut c);

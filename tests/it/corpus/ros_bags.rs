@@ -31,7 +31,7 @@ dt = 0.001
 }
 
 /// The files of committed bag `name`, as `name/...`.
-fn bag(name: &str) -> Vec<(String, Vec<u8>)> {
+pub(super) fn bag(name: &str) -> Vec<(String, Vec<u8>)> {
     let dir = root().join("tests/data/ros_bags").join(name);
     let mut out: Vec<(String, Vec<u8>)> = std::fs::read_dir(&dir)
         .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))

@@ -2,8 +2,8 @@
 //! or `sqlite3`; others are refused with the command that converts them)
 //! and the files that hold the messages, in order.
 
-use crate::sources::file::ros::Storage;
 use crate::planner::PlanError;
+use crate::sources::file::ros::Storage;
 use std::path::{Path, PathBuf};
 use yaml_rust2::{Yaml, YamlLoader};
 

@@ -13,6 +13,7 @@
 
 pub mod metadata;
 pub mod msg;
+pub mod select;
 pub mod sqlite;
 
 use crate::planner::PlanError;
@@ -86,6 +87,9 @@ pub struct BagKeys<'a> {
     pub map: &'a BTreeMap<String, String>,
     /// `duration`, if set.
     pub duration: Option<f64>,
+    /// Numbers read in one element of an array (a tf message's transform),
+    /// not the message itself; `None` for commands.
+    pub select: Option<select::Select<'a>>,
 }
 
 /// A channel of one of the bag's files.
@@ -331,6 +335,9 @@ pub struct BagInfo {
     pub messages: usize,
     /// Each input's field path.
     pub paths: Vec<(String, String)>,
+    /// The bag time of t = 0 (the first message's log or header time), ns:
+    /// how two topics of one bag line up.
+    pub first_ns: i64,
 }
 
 /// Read the command topic of the bag made of `files` in `storage` (`bag`:
@@ -477,10 +484,21 @@ impl Decoder<'_> {
             }
         };
         let inputs = self.inputs;
-        let v = p.def.decode(data).map_err(at_msg)?;
+        let decoded = p.def.decode(data).map_err(at_msg)?;
+        let v = match &self.keys.select {
+            None => &decoded,
+            Some(s) => match s.element(&decoded) {
+                Some(e) => e,
+                // Another frame's message: not this topic's samples.
+                None => {
+                    self.k += 1;
+                    return Ok(());
+                }
+            },
+        };
         let mut u = Vec::with_capacity(inputs.len());
         for (i, path) in p.paths.iter().enumerate() {
-            let x = msg::number_at(&v, path)
+            let x = msg::number_at(v, path)
                 .map_err(|e| at_msg(format!("input `{}` = `{}`: {e}", inputs[i], path.text)))?;
             if !x.is_finite() {
                 return Err(at_msg(format!(
@@ -494,8 +512,8 @@ impl Decoder<'_> {
             None => i64::try_from(log_time)
                 .map_err(|_| at_msg(format!("log time {log_time} ns is out of range")))?,
             Some([sec, nsec]) => {
-                let s = msg::integer_at(&v, sec);
-                let n = msg::integer_at(&v, nsec);
+                let s = msg::integer_at(v, sec);
+                let n = msg::integer_at(v, nsec);
                 match (s, n) {
                     (Some(s), Some(n)) => s * 1_000_000_000 + n,
                     _ => {
@@ -543,14 +561,14 @@ impl Decoder<'_> {
             paths_used,
             ..
         } = self;
-        if raw.is_empty() {
+        let Some(&(t0, ..)) = raw.first() else {
+            let what = keys.select.map(|s| s.describe()).unwrap_or_default();
             return Err(PlanError::file(
                 first_file.to_path_buf(),
                 None,
-                format!("topic `{topic}`: no messages were read"),
+                format!("topic `{topic}`: no message{what}"),
             ));
-        }
-        let t0 = raw[0].0;
+        };
         let secs = |ns: i64| (ns - t0) as f64 / 1e9;
         let end = match keys.duration {
             Some(d) => {
@@ -606,6 +624,7 @@ impl Decoder<'_> {
                 type_name,
                 messages: k,
                 paths: paths_used,
+                first_ns: t0,
             },
         ))
     }
@@ -676,7 +695,11 @@ fn prepare(
         } else {
             format!("the default for {ty}")
         };
-        def.resolve_number(&p)
+        let whole = match &keys.select {
+            Some(s) => s.whole(&p)?,
+            None => p.clone(),
+        };
+        def.resolve_number(&whole)
             .map_err(|e| format!("input `{input}` = `{text}` ({from}): {e}"))?;
         paths.push(p);
     }
@@ -685,7 +708,13 @@ fn prepare(
         BagTime::Header => {
             let sec = FieldPath::parse("header.stamp.sec").expect("a path");
             let nsec = FieldPath::parse("header.stamp.nanosec").expect("a path");
-            if def.resolve_number(&sec).is_err() || def.resolve_number(&nsec).is_err() {
+            let whole = |p: &FieldPath| match &keys.select {
+                Some(s) => s.whole(p),
+                None => Ok(p.clone()),
+            };
+            if def.resolve_number(&whole(&sec)?).is_err()
+                || def.resolve_number(&whole(&nsec)?).is_err()
+            {
                 return Err(format!(
                     "time = \"header\", but {ty} has no `header.stamp` (not a stamped type): drop `time` to use the log time"
                 ));

@@ -8,8 +8,8 @@
 //! A Humble bag stores no definitions: the common command types are built
 //! in ([`BUILT_IN`], the definitions rosbag2 writes for them).
 
-use crate::sources::file::ros::{ChannelInfo, Decoder, Inventory, Storage};
 use crate::planner::PlanError;
+use crate::sources::file::ros::{ChannelInfo, Decoder, Inventory, Storage};
 use rusqlite::{Connection, OpenFlags};
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
