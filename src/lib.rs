@@ -34,6 +34,7 @@
 pub mod baseline;
 pub mod cancel;
 pub mod compare;
+pub mod echo;
 pub mod error;
 pub mod gate;
 pub mod init;

@@ -58,7 +58,7 @@ pub fn plan_cmd(file: &std::path::Path, as_json: bool, max_steps: u64) -> Result
         }
         say!("  details: {}", plan.details);
         say!("  ideal final state: {}", display_state(prep.model(), &fin));
-        say!("read from {}:", prep.scenario.urdf.display());
+        say!("read from {}:", anholonomy::echo::path(&prep.scenario.urdf));
         for line in prep.reading.lines() {
             say!("{line}");
         }
@@ -170,7 +170,11 @@ pub fn keys_cmd(name: Option<&str>, markdown: bool, out: Option<&Path>) -> Resul
                 }]
             })?;
         }
-        say!("wrote {} pages to {}", pages.len(), dir.display());
+        say!(
+            "wrote {} pages to {}",
+            pages.len(),
+            anholonomy::echo::path(dir)
+        );
         return Ok(0);
     }
     let Some(name) = name else {

@@ -412,7 +412,7 @@ pub fn margin_cmd(a: &MarginArgs) -> Result<u8, Vec<Error>> {
         }
         anholonomy::say!(
             "report: {} ({} scenarios)",
-            a.logs.join("index.html").display(),
+            anholonomy::echo::path(&a.logs.join("index.html")),
             w.scenarios
         );
     }

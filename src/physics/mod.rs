@@ -13,8 +13,8 @@ pub mod robots;
 // The engine (worlds, URDF loading, the replay) and the robots (each
 // model's Rapier counterpart), under their old paths too.
 pub use engine::{
-    angles, batch, lump, mesh, obstacles, perturb, reading, real, replay, required, settings, urdf,
-    world,
+    angles, batch, lump, mesh, mesh_limits, obstacles, perturb, reading, real, replay, required,
+    settings, urdf, urdf_text, world,
 };
 pub use robots::{
     beam, car, declared, diff_drive, disk, mobile_manipulator, rover, space_robot, sphere, wheeled,
@@ -31,12 +31,31 @@ use crate::record::Pose;
 
 pub use replay::{replay, Replay, ReplayError, ReplayObserver, ReplayOptions};
 
+/// A command a [`PhysicsSystem`] could not carry out.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fault {
+    /// What failed, naming the scenario key (`key `model.drive.j` (`v / r`)
+    /// gives inf`).
+    pub what: String,
+    /// The state and input it failed at, as the scenario writes them.
+    pub from: String,
+}
+
 /// A simulated robot that accepts model inputs and reports model coordinates.
 pub trait PhysicsSystem {
     /// Current model coordinates (angles unwrapped continuously).
     fn state(&self) -> State;
     /// Set the actuators for the next step.
     fn apply(&mut self, u: &Input);
+    /// A command this system could not carry out (a declared drive
+    /// expression that is NaN or infinite), from the last [`apply`] on:
+    /// the replay stops there. `None` (the default): every command is
+    /// carried out.
+    ///
+    /// [`apply`]: PhysicsSystem::apply
+    fn fault(&self) -> Option<Fault> {
+        None
+    }
     /// Advance one physics step and update the read-back.
     fn step(&mut self);
     /// World pose of each URDF link, in URDF order.

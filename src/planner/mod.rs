@@ -42,7 +42,7 @@ pub enum PlanError {
 
 /// What is wrong where in a file a planner reads.
 #[derive(Debug, Error, Clone, PartialEq)]
-#[error("{}{}: {message}", .path.display(), .line.map(|l| format!(":{l}")).unwrap_or_default())]
+#[error("{}{}: {message}", crate::echo::path(.path), .line.map(|l| format!(":{l}")).unwrap_or_default())]
 pub struct FileProblem {
     /// The file at fault.
     pub path: std::path::PathBuf,

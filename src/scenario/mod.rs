@@ -271,7 +271,7 @@ pub fn name_problem(name: &str) -> Option<String> {
     if let Some(c) = name.chars().find(|c| {
         c.is_control() || matches!(c, '/' | '\\' | ':' | '*' | '?' | '"' | '<' | '>' | '|')
     }) {
-        return Some(format!("contains {c:?}"));
+        return Some(format!("contains {}", crate::echo::code(&c.to_string())));
     }
     if name.starts_with('.') || name.starts_with(char::is_whitespace) {
         return Some("starts with a dot or a space".into());
@@ -516,7 +516,11 @@ impl Scenario {
                 keypath::Found::Unreachable(why) => {
                     return Err(err(format!("no such number in the file: {why}")))
                 }
-                keypath::Found::Absent => {}
+                keypath::Found::Absent => {
+                    if let Some(why) = keypath::undeclared(root.get_ref(), &kp) {
+                        return Err(err(why));
+                    }
+                }
             }
             for x in dist.probes() {
                 let probe = [(kp.clone(), x)];
@@ -648,7 +652,7 @@ impl Scenario {
                     return Err(keys.error_at(
                         path,
                         "name",
-                        format!("{n:?} {p}: it is the log directory name"),
+                        format!("{} {p}: it is the log directory name", crate::echo::code(n)),
                     ));
                 }
                 n.clone()
@@ -662,7 +666,10 @@ impl Scenario {
                     return Err(keys.error_at(
                         path,
                         "name",
-                        format!("not set, and the file name {stem:?} {p}: it would be the log directory name"),
+                        format!(
+                            "not set, and the file name {} {p}: it would be the log directory name",
+                            crate::echo::code(&stem)
+                        ),
                     ));
                 }
                 stem
@@ -702,7 +709,7 @@ impl Scenario {
             return Err(keys.error_at(
                 path,
                 "model.urdf",
-                format!("file not found: {}", urdf.display()),
+                format!("file not found: {}", crate::echo::path(&urdf)),
             ));
         }
         let to_si = |key: &str, v: &[f64]| -> Result<Vec<f64>, Error> {

@@ -7,6 +7,7 @@
 
 use super::diff_drive::no_planner;
 use super::System;
+use crate::echo::code;
 use crate::error::SetupError;
 use crate::model::declared::{Declared, Expr};
 use crate::model::{KinematicModel, State};
@@ -96,20 +97,21 @@ pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, SetupError> {
                 return Err(SetupError::key(
                     format!("model.{key}"),
                     format!(
-                        "`{n}` is not a name (letters, digits and _, not starting with a digit)"
+                        "{} is not a name (letters, digits and _, not starting with a digit)",
+                        code(n)
                     ),
                 ));
             }
             if crate::model::declared::reserved(n) {
                 return Err(SetupError::key(
                     format!("model.{key}"),
-                    format!("`{n}` is a function of the expression language"),
+                    format!("{} is a function of the expression language", code(n)),
                 ));
             }
             if let Some(other) = seen.insert(n, key) {
                 return Err(SetupError::key(
                     format!("model.{key}"),
-                    format!("`{n}` is also one of `model.{other}`"),
+                    format!("{} is also one of `model.{other}`", code(n)),
                 ));
             }
         }
@@ -129,7 +131,11 @@ pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, SetupError> {
             None => {
                 return Err(SetupError::key(
                     "model.angles",
-                    format!("`{a}` is not a state (states: {})", cfg.states.join(", ")),
+                    format!(
+                        "{} is not a state (states: {})",
+                        code(a),
+                        cfg.states.join(", ")
+                    ),
                 ))
             }
         }
@@ -145,7 +151,11 @@ pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, SetupError> {
         if let Some(k) = map.keys().find(|k| !cfg.states.contains(k)) {
             return Err(SetupError::key(
                 format!("model.{table}.{k}"),
-                format!("`{k}` is not a state (states: {})", cfg.states.join(", ")),
+                format!(
+                    "{} is not a state (states: {})",
+                    code(k),
+                    cfg.states.join(", ")
+                ),
             ));
         }
     }
@@ -153,7 +163,7 @@ pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, SetupError> {
         if !cfg.inputs.contains(k) {
             return Err(SetupError::key(
                 format!("model.limits.{k}"),
-                format!("`{k}` is not an input"),
+                format!("{} is not an input", code(k)),
             ));
         }
     }

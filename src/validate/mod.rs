@@ -610,7 +610,7 @@ pub fn prepare_each(paths: &[PathBuf], call: &Call<'_>) -> (Vec<Prepared>, Vec<E
                 format!(
                     "`{}` is also the name of {}: both would write the same log directory",
                     sc.name,
-                    other.display()
+                    crate::echo::path(&other)
                 ),
             ));
             continue;

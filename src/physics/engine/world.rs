@@ -79,12 +79,7 @@ fn collision_shape(g: &Geometry) -> Option<(SharedShape, RPose)> {
                 crate::physics::mesh::scale_of(scale),
             )
             .ok()?;
-            let points: Vec<Vector> = m
-                .vertices
-                .iter()
-                .map(|v| vector(v[0], v[1], v[2]))
-                .collect();
-            (SharedShape::convex_hull(&points)?, RPose::IDENTITY)
+            (crate::physics::mesh_limits::hull(&m)?, RPose::IDENTITY)
         }
     })
 }

@@ -156,7 +156,7 @@ impl FilePlanParams {
                     "planner.path",
                     format!(
                         "{}: a rosbag2 sqlite3 file, which is not read here: {}",
-                        self.path.display(),
+                        crate::echo::path(&self.path),
                         ros::metadata::CONVERT
                     ),
                 ))
@@ -166,7 +166,7 @@ impl FilePlanParams {
             None if !self.file().exists() => {
                 return Err(SetupError::key(
                     "planner.path",
-                    format!("file not found: {}", self.file().display()),
+                    format!("file not found: {}", crate::echo::path(&self.file())),
                 ))
             }
             other => {
@@ -174,7 +174,7 @@ impl FilePlanParams {
                     "planner.path",
                     format!(
                         "{}: unknown plan file format{} (use a .csv, .json or .mcap file, or a ROS 2 bag's directory)",
-                        self.path.display(),
+                        crate::echo::path(&self.path),
                         other.map(|e| format!(" `.{e}`")).unwrap_or_default()
                     ),
                 ))
@@ -257,7 +257,7 @@ impl FilePlanParams {
         if !f.exists() {
             return Err(SetupError::key(
                 "planner.path",
-                format!("file not found: {}", f.display()),
+                format!("file not found: {}", crate::echo::path(&f)),
             ));
         }
         Ok(())
@@ -453,7 +453,7 @@ fn read_detailed(
                         name: k.into(),
                         reason: format!(
                             "only ROS 2 bags take it; topic `{topic}` of {} is a run log's (JSON)",
-                            params.path.display()
+                            crate::echo::path(&params.path)
                         ),
                     });
                 }

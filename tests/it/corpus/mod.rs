@@ -155,6 +155,7 @@ mod own_plan;
 mod ros_bags;
 mod runaway;
 mod studies;
+mod surfaces;
 mod tables;
 
 /// Every case.
@@ -168,5 +169,6 @@ pub fn corpus() -> Vec<Case> {
     ros_bags::cases(&mut c);
     runaway::cases(&mut c);
     held_out::cases(&mut c);
+    surfaces::cases(&mut c);
     c.0
 }
