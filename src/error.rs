@@ -19,7 +19,8 @@ pub enum Error {
         /// One-line description naming the key.
         message: String,
     },
-    /// The planner refused the task (bad input: exit 2).
+    /// The planner refused the task (bad input: exit 2), or did not
+    /// converge (exit 3).
     #[error("{}{}: key `{}`: planner: {source}", crate::echo::path(.path), .line.map(|l| format!(":{l}")).unwrap_or_default(), crate::echo::bare(.key))]
     Plan {
         /// Scenario file.
@@ -226,6 +227,11 @@ impl Error {
     /// Exit status: 2 for bad input (including planner refusals), 3 for runtime failures.
     pub fn exit_code(&self) -> i32 {
         match self {
+            // The planner ran and did not reach the goal: not bad input.
+            Error::Plan {
+                source: crate::planner::PlanError::NoConvergence(_),
+                ..
+            } => 3,
             Error::Input { .. } | Error::Plan { .. } => 2,
             Error::Several(v) => v.iter().map(Error::exit_code).max().unwrap_or(2),
             Error::Physics { .. } | Error::Law { .. } | Error::Log { .. } | Error::Write { .. } => {

@@ -7,7 +7,8 @@ use nalgebra::DMatrix;
 use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
-pub use super::expr::{reserved, Expr, ExprError, FUNCTIONS};
+pub use super::expr::{reserved, Expr, ExprError, Kink, FUNCTIONS};
+use num_dual::Dual64;
 
 /// A `&'static` copy of `names`, made once per distinct list: the model
 /// trait hands out static names, and sweeps build a declared system per
@@ -96,6 +97,66 @@ impl Declared {
         out.extend_from_slice(q);
         out.extend_from_slice(u);
         out.extend_from_slice(&self.params);
+    }
+
+    /// q' = f(q, u) with A = ∂f/∂q and B = ∂f/∂u (row-major, n × n and
+    /// n × m) by forward-mode automatic differentiation of each compiled
+    /// equation ([`Expr::eval_dual`]): one pass per state or input the
+    /// equation reads. q' is [`KinematicModel::velocity`]'s to the bit.
+    /// Returns the first point met where an equation is not
+    /// differentiable: its state's index and the kink.
+    pub fn linearize(
+        &self,
+        q: &[f64],
+        u: &[f64],
+        qdot: &mut [f64],
+        a: &mut [f64],
+        b: &mut [f64],
+    ) -> Option<(usize, Kink)> {
+        let (n, m) = (q.len(), u.len());
+        let mut small = [0.0; 32];
+        let mut small_d = [Dual64::from_re(0.0); 32];
+        let (mut heap, mut heap_d);
+        let total = n + m + self.params.len();
+        let (values, duals): (&mut [f64], &mut [Dual64]) = if total <= small.len() {
+            (&mut small[..total], &mut small_d[..total])
+        } else {
+            heap = vec![0.0; total];
+            heap_d = vec![Dual64::from_re(0.0); total];
+            (&mut heap, &mut heap_d)
+        };
+        values[..n].copy_from_slice(q);
+        values[n..n + m].copy_from_slice(u);
+        values[n + m..].copy_from_slice(&self.params);
+        for (d, v) in duals.iter_mut().zip(values.iter()) {
+            *d = Dual64::from_re(*v);
+        }
+        a.fill(0.0);
+        b.fill(0.0);
+        let mut first = None;
+        for (i, f) in self.f.iter().enumerate() {
+            let moving = f.slots().iter().take_while(|&&j| j < n + m);
+            if moving.clone().next().is_none() {
+                qdot[i] = f.eval(values);
+            }
+            for &j in moving {
+                duals[j].eps = 1.0;
+                let mut kink = None;
+                let d = f.eval_dual(duals, &mut kink);
+                duals[j].eps = 0.0;
+                // A dual pass's value is `eval`'s to the bit.
+                qdot[i] = d.re;
+                if j < n {
+                    a[i * n + j] = d.eps;
+                } else {
+                    b[i * m + j - n] = d.eps;
+                }
+                if let (None, Some(k)) = (&first, kink) {
+                    first = Some((i, k));
+                }
+            }
+        }
+        first
     }
 
     /// The equations as written, one per state.
@@ -213,6 +274,100 @@ mod tests {
         assert!(e.contains("`sin` takes 1 argument, got 2"), "{e}");
         let e = Expr::parse("atan2(x)", &names).unwrap_err().to_string();
         assert!(e.contains("`atan2` takes 2 arguments, got 1"), "{e}");
+    }
+
+    fn model(eqs: &[&str]) -> Declared {
+        let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+        let (states, inputs) = (s(&["x", "y", "th"]), s(&["v", "w"]));
+        let params = s(&["k"]);
+        let names = Declared::slot_names(&states, &inputs, &params);
+        let f = eqs
+            .iter()
+            .map(|t| Expr::parse(t, &names).unwrap())
+            .collect();
+        Declared::new(&states, &inputs, &[2], vec![0.7], f)
+    }
+
+    /// A and B by forward-mode AD against central differences of f, on
+    /// every function of the language, at random points.
+    #[test]
+    fn forward_mode_jacobians_match_central_differences() {
+        use rand::{Rng, SeedableRng};
+        let m = model(&[
+            "v * cos(th) + atan2(y, x) * w - sqrt(x^2 + 1) + abs(v - 2) * min(x, y)",
+            "exp(-x) * sinh(w) + ln(2 + y) * cosh(v) + tanh(th) * max(v, w) / k",
+            "tan(th / 4) + asin(y / 3) * acos(x / 3) + atan(w) * sign(v) + (x + 2)^(y + 1) + y^2",
+        ]);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let (mut qdot, mut a, mut b) = (vec![0.0; 3], vec![0.0; 9], vec![0.0; 6]);
+        for _ in 0..200 {
+            let q: Vec<f64> = (0..3).map(|_| rng.random_range(-1.0..1.0)).collect();
+            let u: Vec<f64> = (0..2).map(|_| rng.random_range(-1.0..1.0)).collect();
+            assert_eq!(m.linearize(&q, &u, &mut qdot, &mut a, &mut b), None);
+            let f = |q: &[f64], u: &[f64]| {
+                m.velocity(
+                    0.0,
+                    &State::from_column_slice(q),
+                    &Input::from_column_slice(u),
+                )
+            };
+            assert_eq!(qdot.as_slice(), f(&q, &u).as_slice());
+            let h = 1e-6;
+            for j in 0..5 {
+                let (mut qp, mut qm, mut up, mut um) = (q.clone(), q.clone(), u.clone(), u.clone());
+                if j < 3 {
+                    qp[j] += h;
+                    qm[j] -= h;
+                } else {
+                    up[j - 3] += h;
+                    um[j - 3] -= h;
+                }
+                let fd = (f(&qp, &up) - f(&qm, &um)) / (2.0 * h);
+                for i in 0..3 {
+                    let ad = if j < 3 {
+                        a[i * 3 + j]
+                    } else {
+                        b[i * 2 + j - 3]
+                    };
+                    assert!(
+                        (ad - fd[i]).abs() < 1e-6 * (1.0 + fd[i].abs()),
+                        "∂f{i}/∂x{j} at {q:?} {u:?}: AD {ad}, differences {}",
+                        fd[i]
+                    );
+                }
+            }
+        }
+    }
+
+    /// Kinks where they are, and not where the functions are smooth.
+    #[test]
+    fn kinks_are_found_where_an_equation_is_not_differentiable() {
+        let (mut qdot, mut a, mut b) = (vec![0.0; 3], vec![0.0; 9], vec![0.0; 6]);
+        let at = |eq: &str, q: [f64; 3], u: [f64; 2]| {
+            let m = model(&[eq, "0", "0"]);
+            let (mut qdot, mut a, mut b) = (vec![0.0; 3], vec![0.0; 9], vec![0.0; 6]);
+            m.linearize(&q, &u, &mut qdot, &mut a, &mut b)
+                .map(|(i, k)| (i, k.fun.map(|f| f.name())))
+        };
+        let rest = [0.0, 0.0];
+        assert_eq!(at("abs(v)", [0.0; 3], rest), Some((0, Some("abs"))));
+        assert_eq!(at("sign(v) * w", [0.0; 3], rest), Some((0, Some("sign"))));
+        assert_eq!(
+            at("min(x, y)", [0.3, 0.3, 0.0], rest),
+            Some((0, Some("min")))
+        );
+        assert_eq!(at("max(v, w)", [0.0; 3], rest), Some((0, Some("max"))));
+        assert_eq!(at("atan2(y, x)", [0.0; 3], rest), Some((0, Some("atan2"))));
+        assert_eq!(at("sqrt(x)", [0.0; 3], rest), Some((0, Some("sqrt"))));
+        // Smooth there: away from the kink, a constant argument, x^2 at x < 0.
+        assert_eq!(at("abs(v)", [0.0; 3], [0.2, 0.0]), None);
+        assert_eq!(at("abs(k) * v", [0.0; 3], rest), None);
+        assert_eq!(at("min(x, x) + x^2", [-0.5, 0.0, 0.0], rest), None);
+        // A kink still gives finite one-sided derivatives (an iteration
+        // passing through goes on).
+        let m = model(&["abs(v)", "0", "0"]);
+        m.linearize(&[0.0; 3], &rest, &mut qdot, &mut a, &mut b);
+        assert!(a.iter().chain(&b).all(|x| x.is_finite()));
     }
 
     #[test]

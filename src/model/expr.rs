@@ -15,6 +15,7 @@
 
 use crate::echo;
 use evalexpr::{Node, Operator, Value};
+use num_dual::{Dual64, DualNum};
 use thiserror::Error;
 
 /// Most characters in one expression.
@@ -170,6 +171,110 @@ impl Fun {
     }
 }
 
+/// How near a kink (|x| of `abs(x)`, |a − b| of `min(a, b)`) a point is at
+/// it: the planner's linearisation there would be one side's, by round-off.
+pub const KINK: f64 = 1e-9;
+
+/// A one-argument function on a dual number; a kink (or a derivative that
+/// is not finite) where `a` moves is noted. Where `a` does not move, the
+/// derivative is 0 (not 0 · ∞). At a kink the derivative is one side's
+/// (`abs` and `sign` take `sign(x)` and 0), so an iteration that passes
+/// through one goes on; only where it starts is a kink refused.
+fn dual_one(f: Fun, a: Dual64, note: &mut impl FnMut(Kink)) -> Dual64 {
+    let value = f.one(a.re);
+    if a.eps == 0.0 {
+        return Dual64::from_re(value);
+    }
+    let kink = Kink {
+        fun: Some(f),
+        args: [a.re, 0.0],
+    };
+    if matches!(f, Fun::Abs | Fun::Sign) && a.re.abs() <= KINK {
+        note(kink);
+    }
+    let d = match f {
+        Fun::Abs => return Dual64::new(value, sign(a.re) * a.eps),
+        Fun::Sign => return Dual64::from_re(value),
+        Fun::Sin => a.sin(),
+        Fun::Cos => a.cos(),
+        Fun::Tan => a.tan(),
+        Fun::Asin => a.asin(),
+        Fun::Acos => a.acos(),
+        Fun::Atan => a.atan(),
+        Fun::Sqrt => a.sqrt(),
+        Fun::Exp => a.exp(),
+        Fun::Ln => a.ln(),
+        Fun::Sinh => a.sinh(),
+        Fun::Cosh => a.cosh(),
+        Fun::Tanh => a.tanh(),
+        Fun::Atan2 | Fun::Min | Fun::Max => Dual64::new(f64::NAN, f64::NAN),
+    };
+    if !d.eps.is_finite() && value.is_finite() {
+        note(kink);
+    }
+    Dual64::new(value, d.eps)
+}
+
+/// A two-argument function on dual numbers (see [`dual_one`]).
+fn dual_two(f: Fun, a: Dual64, b: Dual64, note: &mut impl FnMut(Kink)) -> Dual64 {
+    let value = f.two(a.re, b.re);
+    if a.eps == 0.0 && b.eps == 0.0 {
+        return Dual64::from_re(value);
+    }
+    let kink = Kink {
+        fun: Some(f),
+        args: [a.re, b.re],
+    };
+    let near = (a.re - b.re).abs() <= KINK * (1.0 + a.re.abs() + b.re.abs());
+    if matches!(f, Fun::Min | Fun::Max) && near && a.eps != b.eps {
+        note(kink);
+    }
+    let eps = match f {
+        Fun::Min => {
+            if a.re <= b.re {
+                a.eps
+            } else {
+                b.eps
+            }
+        }
+        Fun::Max => {
+            if a.re >= b.re {
+                a.eps
+            } else {
+                b.eps
+            }
+        }
+        Fun::Atan2 if a.re.abs() <= KINK && b.re.abs() <= KINK => {
+            note(kink);
+            0.0
+        }
+        Fun::Atan2 => a.atan2(b).eps,
+        _ => f64::NAN,
+    };
+    Dual64::new(value, eps)
+}
+
+/// a ^ b on dual numbers: the value is `f64::powf`'s; the exponent's part
+/// of the derivative (a^b ln a · b') only where the exponent moves, so a
+/// negative base with a constant exponent (`x^2`) is differentiable.
+fn dual_pow(a: Dual64, b: Dual64, note: &mut impl FnMut(Kink)) -> Dual64 {
+    let value = a.re.powf(b.re);
+    let mut eps = 0.0;
+    if a.eps != 0.0 {
+        eps += b.re * a.re.powf(b.re - 1.0) * a.eps;
+    }
+    if b.eps != 0.0 {
+        eps += value * a.re.ln() * b.eps;
+    }
+    if !eps.is_finite() && value.is_finite() {
+        note(Kink {
+            fun: None,
+            args: [a.re, b.re],
+        });
+    }
+    Dual64::new(value, eps)
+}
+
 /// −1, 0 or 1.
 pub fn sign(a: f64) -> f64 {
     if a > 0.0 {
@@ -308,6 +413,19 @@ pub struct Expr {
     ops: Vec<Op>,
     depth: usize,
     text: String,
+    /// The slots it reads, increasing.
+    slots: Vec<usize>,
+}
+
+/// A point where an expression is not differentiable: `abs` or `sign` at
+/// 0, `min` or `max` of two equal values, `atan2(0, 0)`, or a derivative
+/// that is not finite (`sqrt` at 0).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Kink {
+    /// The function (`None`: an operator, `^` or `/`).
+    pub fun: Option<Fun>,
+    /// Its arguments there.
+    pub args: [f64; 2],
 }
 
 /// The arguments of a call: a tuple's items, or one node.
@@ -486,11 +604,77 @@ impl Expr {
             text: text.into(),
             why,
         })?;
+        let mut slots: Vec<usize> = ops
+            .iter()
+            .filter_map(|op| match op {
+                Op::Slot(i) => Some(*i),
+                _ => None,
+            })
+            .collect();
+        slots.sort_unstable();
+        slots.dedup();
         Ok(Expr {
             ops,
             depth,
             text: text.to_string(),
+            slots,
         })
+    }
+
+    /// The slots it reads, increasing.
+    pub fn slots(&self) -> &[usize] {
+        &self.slots
+    }
+
+    /// Value and derivative at dual slot values (forward-mode automatic
+    /// differentiation of the program, with `num-dual`): the value is
+    /// [`Expr::eval`]'s up to rounding, the derivative is along the
+    /// values' dual parts. The first [`Kink`] met on the way, where the
+    /// derivative is not defined, goes to `kink`.
+    pub fn eval_dual(&self, values: &[Dual64], kink: &mut Option<Kink>) -> Dual64 {
+        let mut small = [Dual64::from_re(0.0); 16];
+        let mut big;
+        let stack: &mut [Dual64] = if self.depth <= small.len() {
+            &mut small
+        } else {
+            big = vec![Dual64::from_re(0.0); self.depth];
+            &mut big
+        };
+        let mut sp = 0;
+        let mut note = |k: Kink| {
+            kink.get_or_insert(k);
+        };
+        for op in &self.ops {
+            match *op {
+                Op::Slot(i) => {
+                    stack[sp] = values[i];
+                    sp += 1;
+                }
+                Op::Const(v) => {
+                    stack[sp] = Dual64::from_re(v);
+                    sp += 1;
+                }
+                Op::Neg => stack[sp - 1] = -stack[sp - 1],
+                Op::F1(f) => stack[sp - 1] = dual_one(f, stack[sp - 1], &mut note),
+                op => {
+                    sp -= 1;
+                    let (a, b) = (stack[sp - 1], stack[sp]);
+                    stack[sp - 1] = match op {
+                        Op::Add => a + b,
+                        Op::Sub => a - b,
+                        Op::Mul => a * b,
+                        // By hand: the value is then `eval`'s to the bit.
+                        Op::Div => {
+                            Dual64::new(a.re / b.re, (a.eps * b.re - b.eps * a.re) / (b.re * b.re))
+                        }
+                        Op::Pow => dual_pow(a, b, &mut note),
+                        Op::F2(f) => dual_two(f, a, b, &mut note),
+                        _ => unreachable!("one-operand instructions are above"),
+                    };
+                }
+            }
+        }
+        stack[0]
     }
 
     /// The value for the slot values `values`.

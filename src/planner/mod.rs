@@ -30,9 +30,20 @@ pub enum PlanError {
     /// The goal cannot be reached under the planner's constraints.
     #[error("goal unreachable: {0}")]
     Unreachable(String),
-    /// An iterative planner stopped without converging.
+    /// An iterative planner stopped without converging (a runtime
+    /// failure: exit 3).
     #[error("planner did not converge: {0}")]
     NoConvergence(String),
+    /// The model's equations cannot be planned with where the planner
+    /// starts (a declared expression that is not differentiable there);
+    /// `key` is the scenario key of the equation.
+    #[error("{reason}")]
+    Model {
+        /// The equation's scenario key (`model.kinematics.theta1`).
+        key: String,
+        /// What is wrong, naming the expression.
+        reason: String,
+    },
     /// A file the planner reads (a plan file) is unusable: bad input in
     /// that file, reported against it (`FILE:LINE: message`), not against
     /// the scenario.

@@ -251,7 +251,9 @@ registry! {
         /// A model declared in the scenario: q' = f(q, u), its drives and read-back.
         "declared" => Declared(DeclaredConfig) {
             required: [],
-            planners: [],
+            planners: [
+                "endogenous" => |m, Endogenous(p)| systems::declared::build_planned(m, Some(p.clone())),
+            ],
             outside: |m| Some(systems::declared::build(m)),
         }
     }

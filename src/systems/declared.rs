@@ -3,7 +3,8 @@
 //! with the URDF joints that drive it and the links it is read back from.
 //! Any nonholonomic robot, without writing Rust: a tractor with trailers, a
 //! skid steer, a differential drive whose reference point is ahead of the
-//! axle. Plans come from outside (files, external laws, Python callables).
+//! axle. Plans come from outside (files, external laws, Python callables)
+//! or from seed 001's endogenous planner ([`crate::systems::declared_plan`]).
 
 use super::diff_drive::no_planner;
 use super::System;
@@ -16,6 +17,7 @@ use crate::physics::perturb::Dimension;
 use crate::physics::required::Named;
 use crate::physics::{PhysicsSettings, PhysicsSystem};
 use crate::plan::{Limits, Plan};
+use crate::planner::endogenous::EndogenousParams;
 use crate::planner::PlanError;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
@@ -23,8 +25,8 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// A kinematic model q' = f(q, u) written in the scenario, and how its URDF
-/// is driven and read back. No built-in planner: plans come from a file, an
-/// external law or a Python callable.
+/// is driven and read back. Plans come from a file, an external law, a
+/// Python callable or seed 001's endogenous planner (`kind = "endogenous"`).
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DeclaredConfig {
@@ -65,7 +67,9 @@ pub struct DeclaredConfig {
 
 /// The declared system.
 pub struct DeclaredSystem {
-    model: Declared,
+    pub(super) model: Declared,
+    /// `[planner] kind = "endogenous"`, when it plans for itself.
+    pub(super) planner: Option<EndogenousParams>,
     rig: Rig,
     max_rate: Vec<f64>,
     /// The state read as the root's yaw, for the 3D goal arrow.
@@ -79,9 +83,18 @@ fn is_name(s: &str) -> bool {
         && c.all(|x| x.is_ascii_alphanumeric() || x == '_')
 }
 
-/// Build the declared system: every name and expression checked, each
-/// error naming its `[model]` key.
+/// Build the declared system for plans from outside: every name and
+/// expression checked, each error naming its `[model]` key.
 pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, SetupError> {
+    build_planned(cfg, None)
+}
+
+/// [`build`], planning with seed 001's endogenous planner when `planner`
+/// is given.
+pub fn build_planned(
+    cfg: &DeclaredConfig,
+    planner: Option<EndogenousParams>,
+) -> Result<Box<dyn System>, SetupError> {
     let params: Vec<String> = cfg.params.keys().cloned().collect();
     let mut seen: BTreeMap<&str, &str> = BTreeMap::new();
     for (key, list) in [
@@ -224,6 +237,7 @@ pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, SetupError> {
             .collect(),
         heading,
         model,
+        planner,
     }))
 }
 
@@ -234,8 +248,11 @@ impl System for DeclaredSystem {
     fn default_max_rate(&self) -> Vec<f64> {
         self.max_rate.clone()
     }
-    fn plan(&self, _start: &State, _goal: &State, _limits: &Limits) -> Result<Plan, PlanError> {
-        Err(no_planner("declared"))
+    fn plan(&self, start: &State, goal: &State, limits: &Limits) -> Result<Plan, PlanError> {
+        match &self.planner {
+            Some(p) => super::declared_plan::plan(&self.model, start, goal, p, limits),
+            None => Err(no_planner("declared")),
+        }
     }
     fn goal_heading(&self, goal: &State) -> Option<f64> {
         self.heading.map(|i| goal[i])

@@ -38,6 +38,7 @@
 
 pub mod car;
 pub mod declared;
+pub mod declared_plan;
 pub mod diff_drive;
 pub mod disk;
 pub mod mobile_manipulator;

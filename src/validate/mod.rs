@@ -456,6 +456,7 @@ fn plan_error_key(sc: &Scenario, e: &PlanError) -> String {
             }
         }
         PlanError::Unreachable(_) => "goal".into(),
+        PlanError::Model { key, .. } => key.clone(),
         PlanError::NoConvergence(_) | PlanError::File(_) => "planner".into(),
     }
 }

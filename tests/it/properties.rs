@@ -99,6 +99,7 @@ fn justified(e: &PlanError) -> Result<(), TestCaseError> {
         PlanError::InvalidParameter { reason, .. } => reason.clone(),
         PlanError::Unreachable(m) | PlanError::NoConvergence(m) => m.clone(),
         PlanError::File(f) => f.message.clone(),
+        PlanError::Model { reason, .. } => reason.clone(),
     };
     prop_assert!(reason.trim().len() > 10, "refusal without a reason: {e:?}");
     Ok(())
@@ -283,7 +284,13 @@ fn endogenous_error(s: [f64; 3], v: [f64; 3], g: [f64; 3]) -> Result<Option<f64>
     };
     let lim = limits(vec![30.0, 30.0]);
     let rad = |d: [f64; 3]| st(&d.map(f64::to_radians));
-    let plan = match endogenous::plan(&m, &rad(s), &rad(g), &params, &lim) {
+    let plan = match anholonomy::systems::space_robot::plan_endogenous(
+        &m,
+        &rad(s),
+        &rad(g),
+        &params,
+        &lim,
+    ) {
         Ok(p) => p,
         Err(e) => return justified(&e).map(|_| None),
     };

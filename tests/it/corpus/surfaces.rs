@@ -10,6 +10,17 @@
 use super::faults::FaultCase;
 use super::*;
 
+/// The trailer planned by the endogenous planner, its URDF made absolute.
+pub fn trailer_planned() -> String {
+    let dir = root().join("examples/trailer");
+    let text = std::fs::read_to_string(dir.join("trailer_endogenous.toml")).unwrap();
+    edit(
+        &text,
+        "urdf = \"trailer.urdf\"",
+        &format!("urdf = \"{}\"", dir.join("trailer.urdf").display()),
+    )
+}
+
 /// The shipped trailer (a declared model), its files made absolute.
 pub fn trailer() -> String {
     let dir = root().join("examples/trailer");
@@ -237,6 +248,20 @@ pub fn cases(c: &mut Corpus) {
         Some("sweep.vary.\"model.params.d11\""),
     );
 
+    // The endogenous planner on a declared model: an equation with a kink
+    // where it starts (|v| at rest).
+    let kink = edit(
+        &trailer_planned(),
+        "theta1 = \"v / d1 * sin(theta0 - theta1)\"",
+        "theta1 = \"v / d1 * sin(theta0 - theta1) + 0.01 * abs(v)\"",
+    );
+    c.sc(
+        "declared model planned through a kink",
+        kink,
+        Some("+ 0.01 * abs(v)"),
+        Some("model.kinematics.theta1"),
+    );
+
     // A robot that starts inside an obstacle.
     let (sc, _) = diff_drive_with_mesh("x.stl");
     let sc = sc.replace("urdf = \"m.urdf\"", &format!("urdf = \"{}\"", model("diff_drive.urdf").display()))
@@ -334,6 +359,22 @@ pub fn faults() -> Vec<FaultCase> {
             ", from x = 0.5",
         ],
     ));
+    // The endogenous planner's iteration cap on a declared model: exit 3
+    // with the error reached and the iterations used.
+    let capped = edit(
+        &trailer_planned(),
+        "segment_time = 20.0",
+        "segment_time = 20.0\nmax_iterations = 5",
+    );
+    let mut c = fault(
+        "declared model planned into the iteration cap",
+        vec![("case.toml".into(), capped.into_bytes())],
+        &run,
+        3,
+        &["key `planner`: planner: planner did not converge: segment 1: iteration cap 5 reached with error 4.7"],
+    );
+    c.one_line = true;
+    out.push(c);
     // `init` onto a symlink loop names `init`.
     let mut c = fault(
         "init onto a symlink loop",
