@@ -86,7 +86,11 @@ fn parse_dimensions(names: &[String]) -> Result<Vec<Dimension>, Vec<Error>> {
                     .unwrap_or_default();
                 errors.push(Error::input(
                     "--dimension",
-                    format!("unknown dimension `{n}`{hint}; known: {}", known.join(", ")),
+                    format!(
+                        "unknown dimension {}{hint}; known: {}",
+                        anholonomy::echo::code(n),
+                        known.join(", ")
+                    ),
                 ));
             }
         }

@@ -396,7 +396,10 @@ fn take_tagged<'i>(
         return Err(keys.error_at(
             path,
             &format!("{name}.kind"),
-            format!("unknown {name} `{kind}` (known: {known})"),
+            format!(
+                "unknown {name} {} (known: {known})",
+                crate::echo::code(&kind)
+            ),
         ));
     }
     Ok((kind, v))
@@ -620,7 +623,11 @@ impl Scenario {
         let model = ModelConfig::parse(&model_kind, model)
             .map_err(serde)?
             .ok_or_else(|| {
-                keys.error_at(path, "model.kind", format!("unknown model `{model_kind}`"))
+                keys.error_at(
+                    path,
+                    "model.kind",
+                    format!("unknown model {}", crate::echo::code(&model_kind)),
+                )
             })?;
         let mut planner = PlannerConfig::parse(&planner_kind, planner)
             .map_err(serde)?
@@ -628,7 +635,7 @@ impl Scenario {
                 keys.error_at(
                     path,
                     "planner.kind",
-                    format!("unknown planner `{planner_kind}`"),
+                    format!("unknown planner {}", crate::echo::code(&planner_kind)),
                 )
             })?;
         // Every number against its documented range (the reference pages

@@ -431,8 +431,9 @@ fn unknown_metric(name: &str, system: &dyn System, more: &[String]) -> String {
         format!("; {}", extra.join(", "))
     };
     format!(
-        "unknown metric `{name}`{hint}; known: ideal_goal_C, sim_goal_C, \
+        "unknown metric {}{hint}; known: ideal_goal_C, sim_goal_C, \
          tracking_C_rms, tracking_C_max, tracking_C_final for C in {}{extra}",
+        crate::echo::code(name),
         coords.join(", ")
     )
 }

@@ -160,6 +160,26 @@ pub fn cases(c: &mut Corpus) {
         Some("model.read.theta1"),
     );
 
+    let t = trailer();
+    let key = format!("thresholds.{long}");
+    c.sc(
+        "threshold named with 10 000 characters",
+        edit(&t, "[thresholds]", &format!("[thresholds]\n{long} = 1.0")),
+        Some(&format!("{long} = 1.0")),
+        // The key as messages cut it (crate::echo::bare).
+        Some(&format!(
+            "{}… ({} characters)",
+            key.chars().take(59).collect::<String>(),
+            key.chars().count()
+        )),
+    );
+    c.sc(
+        "model kind of 10 000 characters",
+        edit(&t, "kind = \"declared\"", &format!("kind = \"{long}\"")),
+        Some(&format!("kind = \"{long}")),
+        Some("model.kind"),
+    );
+
     // URDF geometry: written as in the URDF, not as the parser's structures.
     let (sc, _) = diff_drive_with_mesh("x.stl");
     let dd = sc;
