@@ -3,6 +3,9 @@
 //! `diff_drive`'s, on the same plan (the S curve, 11 s at 1 ms: 11 000 RK4
 //! steps). The goal is at most 1.5× the built-in's time.
 //!
+//! Then seed 001's endogenous planner's time on the built-in space
+//! manipulator and on the same model declared (`endogenous_plan`).
+//!
 //! `cargo bench --bench declared -- --warm-up-time 1 --measurement-time 4`.
 
 use anholonomy::integrate::simulate;
@@ -37,5 +40,31 @@ fn ideal_runs(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, ideal_runs);
+/// Seed 001's endogenous planner on the space manipulator, built in
+/// (analytic A and B) and written as a declared model (A and B by forward-
+/// mode automatic differentiation of the declared equations): the same
+/// task (scenarios/space_manipulator_s3.toml), the same 766 iterations, so
+/// the ratio of the plan times is the ratio per iteration.
+fn endogenous_plans(c: &mut Criterion) {
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let load = |p: &Path| Prepared::new(Scenario::load(p).expect("parse")).expect("prepare");
+    let mut g = c.benchmark_group("endogenous_plan");
+    g.sample_size(20);
+    for (name, path) in [
+        (
+            "builtin_space_manipulator_s3",
+            root.join("scenarios/space_manipulator_s3.toml"),
+        ),
+        (
+            "declared_space_manipulator_s3",
+            root.join("tests/data/declared/space_manipulator_s3.toml"),
+        ),
+    ] {
+        let prep = load(&path);
+        g.bench_function(name, |b| b.iter(|| prep.plan().expect("plan")));
+    }
+    g.finish();
+}
+
+criterion_group!(benches, ideal_runs, endogenous_plans);
 criterion_main!(benches);

@@ -102,7 +102,7 @@ impl Baseline {
     pub fn write(&self, path: &Path) -> Result<(), String> {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
             std::fs::create_dir_all(dir)
-                .map_err(|e| format!("cannot create {}: {e}", dir.display()))?;
+                .map_err(|e| format!("cannot create {}: {e}", crate::echo::path(dir)))?;
         }
         let text = self.to_json();
         crate::log::atomic::write_atomic(path, |w| std::io::Write::write_all(w, text.as_bytes()))
@@ -115,7 +115,7 @@ impl Baseline {
             let hint = if e.kind() == std::io::ErrorKind::NotFound {
                 format!(
                     "no baseline for scenario `{scenario}` (write it with `anholonomy baseline <scenario file> --baseline {}`)",
-                    path.parent().map(|p| p.display().to_string()).unwrap_or_default()
+                    path.parent().map(crate::echo::path).unwrap_or_default()
                 )
             } else {
                 format!("cannot read baseline: {e}")

@@ -16,7 +16,7 @@ pub enum ErrorKind {
 #[derive(Debug, Error)]
 pub enum Error {
     /// The scenario (or a file it names) is unusable: the user must fix the input.
-    #[error("{path}{}: {message}", .line.map(|l| format!(":{l}")).unwrap_or_default())]
+    #[error("{}{}: {message}", crate::echo::path(.path), .line.map(|l| format!(":{l}")).unwrap_or_default())]
     Input {
         /// File at fault.
         path: PathBuf,
@@ -28,8 +28,9 @@ pub enum Error {
         /// One-line description naming the key.
         message: String,
     },
-    /// The planner refused the task (bad input: exit 2).
-    #[error("{path}{}: key `{key}`: planner: {source}", .line.map(|l| format!(":{l}")).unwrap_or_default())]
+    /// The planner refused the task (bad input: exit 2), or did not
+    /// converge (exit 3).
+    #[error("{}{}: key `{}`: planner: {source}", crate::echo::path(.path), .line.map(|l| format!(":{l}")).unwrap_or_default(), crate::echo::bare(.key))]
     Plan {
         /// Scenario file.
         path: PathBuf,
@@ -41,7 +42,7 @@ pub enum Error {
         source: crate::planner::PlanError,
     },
     /// Physics setup or stepping failed.
-    #[error("{path}: physics: {message}")]
+    #[error("{}: physics: {message}", crate::echo::path(.path))]
     Physics {
         /// Scenario file.
         path: PathBuf,
@@ -52,7 +53,7 @@ pub enum Error {
     /// process could not start, died, answered garbage or too late (a
     /// runtime failure: exit 3). `message` is one line, then the tail of the
     /// process's stderr when it wrote any (lines starting with `  | `).
-    #[error("{path}: feedback law ({run} run): {message}")]
+    #[error("{}: feedback law ({run} run): {message}", crate::echo::path(.path))]
     Law {
         /// Scenario file.
         path: PathBuf,
@@ -66,10 +67,21 @@ pub enum Error {
     #[error("{}", .0.iter().map(|e| e.to_string()).collect::<Vec<_>>().join("\nerror: "))]
     Several(Vec<Error>),
     /// Writing logs failed.
-    #[error("{path}: writing logs: {message}")]
+    #[error("{}: writing logs: {message}", crate::echo::path(.path))]
     Log {
         /// Scenario file.
         path: PathBuf,
+        /// Reason.
+        message: String,
+    },
+    /// A command that writes files (`init`, `models export`) could not
+    /// write one.
+    #[error("{}: {command}: {message}", crate::echo::path(.path))]
+    Write {
+        /// The file (or directory) it could not write.
+        path: PathBuf,
+        /// The command, as typed (`init`).
+        command: &'static str,
         /// Reason.
         message: String,
     },
@@ -100,7 +112,7 @@ pub struct SetupError {
 impl std::fmt::Display for SetupError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
         match &self.about {
-            About::Key(k) => write!(f, "key `{k}`: {}", self.detail),
+            About::Key(k) => write!(f, "key `{}`: {}", crate::echo::bare(k), self.detail),
             _ => f.write_str(&self.detail),
         }
     }
@@ -200,7 +212,7 @@ impl Error {
             path: path.into(),
             line,
             key: Some(key.to_string()),
-            message: format!("key `{key}`: {message}"),
+            message: format!("key `{}`: {message}", crate::echo::bare(key)),
         }
     }
 
@@ -225,13 +237,20 @@ impl Error {
     /// several errors, a runtime one if any.
     pub fn kind(&self) -> ErrorKind {
         match self {
+            // The planner ran and did not reach the goal: not bad input.
+            Error::Plan {
+                source: crate::planner::PlanError::NoConvergence(_),
+                ..
+            } => ErrorKind::Runtime,
             Error::Input { .. } | Error::Plan { .. } => ErrorKind::BadInput,
             Error::Several(v) => v
                 .iter()
                 .map(Error::kind)
                 .max()
                 .unwrap_or(ErrorKind::BadInput),
-            Error::Physics { .. } | Error::Law { .. } | Error::Log { .. } => ErrorKind::Runtime,
+            Error::Physics { .. } | Error::Law { .. } | Error::Log { .. } | Error::Write { .. } => {
+                ErrorKind::Runtime
+            }
         }
     }
 }

@@ -188,16 +188,8 @@ fn run_ideal(
             return (out, Some(IdealStop::Cancelled));
         }
         let t = k as f64 * dt;
-        if let Some(i) = q.iter().position(|v| !v.is_finite()) {
-            let name = model.state_names().get(i).copied().unwrap_or("?");
-            return (
-                out,
-                Some(IdealStop::NonFinite(format!(
-                    "ideal run: state `{name}` became {} at t = {} s (its equation gave a non-finite value)",
-                    q[i],
-                    crate::numfmt::readable(t)
-                ))),
-            );
+        if let Some(stop) = non_finite(model, &out, &q, t) {
+            return (out, Some(stop));
         }
         let cmd = match &mut clock {
             Some(clock) => {
@@ -261,6 +253,9 @@ fn run_ideal(
         };
     }
     let t_end = n as f64 * dt;
+    if let Some(stop) = non_finite(model, &out, &q, t_end) {
+        return (out, Some(stop));
+    }
     let last = ctl.command(t_end, &q);
     if let Some(fault) = ctl.fault() {
         return (out, Some(IdealStop::Fault(fault)));
@@ -270,6 +265,47 @@ fn run_ideal(
     out.u.push(last.u);
     out.label.push(last.label);
     (out, None)
+}
+
+/// Why the run stops when the step that ended at `t` made `q` non-finite:
+/// the state, and the equation that is not finite at the step's start
+/// (`out`'s last sample) with that state, input and time; `None` when `q` is
+/// finite.
+fn non_finite(
+    model: &dyn KinematicModel,
+    out: &Trajectory,
+    q: &State,
+    t: f64,
+) -> Option<IdealStop> {
+    let i = q.iter().position(|v| !v.is_finite())?;
+    let names = model.state_names();
+    let name = |j: usize| names.get(j).copied().unwrap_or("?");
+    let readable = crate::numfmt::readable;
+    let mut msg = format!(
+        "ideal run: state `{}` became {} at t = {} s",
+        name(i),
+        q[i],
+        readable(t)
+    );
+    if let (Some(t0), Some(q0), Some(u0)) = (out.t.last(), out.q.last(), out.u.last()) {
+        // The equation at fault: the first that is not finite where the
+        // step began (else a stage inside the step made it so).
+        let f = model.velocity(*t0, q0, u0);
+        let j = f.iter().position(|v| !v.is_finite()).unwrap_or(i);
+        let what = model
+            .equation_source(j)
+            .unwrap_or_else(|| format!("the equation of `{}`", name(j)));
+        msg += &format!(
+            ": {what} gives {} at t = {} s, from {}",
+            f.get(j).copied().filter(|v| !v.is_finite()).map_or_else(
+                || "a non-finite value within the step".to_string(),
+                |v| v.to_string()
+            ),
+            readable(*t0),
+            crate::model::point_text(model, q0.as_slice(), u0.as_slice())
+        );
+    }
+    Some(IdealStop::NonFinite(msg))
 }
 
 #[cfg(test)]

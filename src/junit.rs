@@ -190,10 +190,13 @@ pub fn check_writable(path: &Path, created: Option<&Path>) -> Result<(), Error> 
         }
     }
     if !dir.is_dir() {
-        return Err(bad(format!("directory {} does not exist", dir.display())));
+        return Err(bad(format!(
+            "directory {} does not exist",
+            crate::echo::path(dir)
+        )));
     }
-    let probe =
-        tempfile_in(dir).map_err(|e| bad(format!("cannot write in {}: {e}", dir.display())))?;
+    let probe = tempfile_in(dir)
+        .map_err(|e| bad(format!("cannot write in {}: {e}", crate::echo::path(dir))))?;
     let _ = std::fs::remove_file(probe);
     if path.exists() {
         let meta = std::fs::metadata(path).map_err(|e| bad(e.to_string()))?;
@@ -216,7 +219,8 @@ fn tempfile_in(dir: &Path) -> std::io::Result<std::path::PathBuf> {
 /// Write the report atomically (creating its directory, see [`check_writable`]).
 pub fn write(path: &Path, report: &Report) -> Result<(), String> {
     if let Some(d) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(d).map_err(|e| format!("cannot create {}: {e}", d.display()))?;
+        std::fs::create_dir_all(d)
+            .map_err(|e| format!("cannot create {}: {e}", crate::echo::path(d)))?;
     }
     crate::log::atomic::write_atomic(path, |w| report.serialize(w).map_err(std::io::Error::other))
 }

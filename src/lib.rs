@@ -35,6 +35,7 @@
 pub mod baseline;
 pub mod cancel;
 pub mod compare;
+pub mod echo;
 pub mod engine;
 pub mod error;
 pub mod fit;

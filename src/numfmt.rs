@@ -57,6 +57,12 @@ pub fn shortest(v: f64) -> String {
     }
 }
 
+/// Numbers as a TOML array writes them: `[0.1, 2, 1e-9]`.
+pub fn list(v: &[f64]) -> String {
+    let items: Vec<String> = v.iter().map(|x| shortest(*x)).collect();
+    format!("[{}]", items.join(", "))
+}
+
 /// A value and the bound it breached, each with the fewest significant
 /// digits (at least 3) at which the two print differently, so a message
 /// such as `x = 1.0000002e-9 > 1e-9` shows the breach.

@@ -53,6 +53,11 @@ pub fn to_py(py: Python<'_>, e: &Error) -> PyErr {
         Error::Input {
             path, line, key, ..
         } => input_error(py, text, Some(path), *line, key.clone()),
+        // The planner ran and did not converge: exit 3 in the CLI.
+        Error::Plan {
+            source: anholonomy::planner::PlanError::NoConvergence(_),
+            ..
+        } => runtime_failure(py, text),
         Error::Plan {
             path, line, key, ..
         } => input_error(py, text, Some(path), *line, Some(key.clone())),

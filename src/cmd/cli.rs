@@ -18,7 +18,8 @@ use std::path::PathBuf;
 /// against its baseline (`check`), 2 bad input (scenario, URDF, baseline
 /// file, a goal the planner cannot reach, an unwritable `--junit` path, a log
 /// directory `report` cannot read: one line per error, `error: FILE:LINE:
-/// key ...`, nothing written), 3 runtime failure.
+/// key ...`, nothing written), 3 runtime failure (physics diverged, a
+/// planner that did not converge).
 #[derive(Parser)]
 #[command(name = "anholonomy", version, about, long_about)]
 pub(crate) struct Cli {

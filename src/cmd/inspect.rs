@@ -57,7 +57,7 @@ pub fn plan_cmd(file: &std::path::Path, as_json: bool, max_steps: u64) -> Result
         }
         say!("  details: {}", plan.details);
         say!("  ideal final state: {}", display_state(prep.model(), &fin));
-        say!("read from {}:", prep.scenario.urdf.display());
+        say!("read from {}:", anholonomy::echo::path(&prep.scenario.urdf));
         for line in prep.reading.lines() {
             say!("{line}");
         }
@@ -169,7 +169,11 @@ pub fn keys_cmd(name: Option<&str>, markdown: bool, out: Option<&Path>) -> Resul
                 }]
             })?;
         }
-        say!("wrote {} pages to {}", pages.len(), dir.display());
+        say!(
+            "wrote {} pages to {}",
+            pages.len(),
+            anholonomy::echo::path(dir)
+        );
         return Ok(0);
     }
     let Some(name) = name else {
@@ -212,7 +216,7 @@ pub fn models_cmd() -> Result<u8, Vec<Error>> {
 /// `anholonomy models export DIR [NAME...]`.
 pub fn export_cmd(dir: &Path, names: &[String], force: bool) -> Result<u8, Vec<Error>> {
     for p in anholonomy::init::export_models(dir, names, force)? {
-        say!("wrote {}", p.display());
+        say!("wrote {}", anholonomy::echo::path(&p));
     }
     Ok(0)
 }
@@ -224,9 +228,9 @@ pub fn init_cmd(dir: &Path, from: Option<&str>) -> Result<u8, Vec<Error>> {
     }
     say!(
         "wrote a starter repository in {} (anholonomy {}); try:\n  cd {} && anholonomy check scenarios/ --baseline baselines/ --report",
-        dir.display(),
+        anholonomy::echo::path(dir),
         anholonomy::init::VERSION,
-        dir.display()
+        anholonomy::echo::path(dir)
     );
     Ok(0)
 }

@@ -9,7 +9,7 @@ pub fn report_cmd(logdir: &Path) -> Result<u8, Vec<Error>> {
     let w = anholonomy::report::write_report(logdir, None).map_err(|e| vec![e])?;
     say!(
         "report: {} ({} scenarios, {:.2} s)",
-        logdir.join("index.html").display(),
+        anholonomy::echo::path(&logdir.join("index.html")),
         w.scenarios,
         t0.elapsed().as_secs_f64()
     );
@@ -19,6 +19,6 @@ pub fn report_cmd(logdir: &Path) -> Result<u8, Vec<Error>> {
 pub fn merge_cmd(paths: &[PathBuf], out: Option<&Path>) -> Result<u8, Vec<Error>> {
     let (sum, path) = anholonomy::sweep::merge::merge(paths, out)?;
     crate::emit(&sum.table);
-    say!("merged: {}", path.display());
+    say!("merged: {}", anholonomy::echo::path(&path));
     Ok(0)
 }

@@ -86,7 +86,11 @@ fn parse_dimensions(names: &[String]) -> Result<Vec<Dimension>, Vec<Error>> {
                     .unwrap_or_default();
                 errors.push(Error::input(
                     "--dimension",
-                    format!("unknown dimension `{n}`{hint}; known: {}", known.join(", ")),
+                    format!(
+                        "unknown dimension {}{hint}; known: {}",
+                        anholonomy::echo::code(n),
+                        known.join(", ")
+                    ),
                 ));
             }
         }
@@ -409,7 +413,7 @@ pub fn margin_cmd(a: &MarginArgs) -> Result<u8, Vec<Error>> {
         }
         say!(
             "report: {} ({} scenarios)",
-            a.logs.join("index.html").display(),
+            anholonomy::echo::path(&a.logs.join("index.html")),
             w.scenarios
         );
     }

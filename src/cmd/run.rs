@@ -206,7 +206,7 @@ pub fn run_cmd(args: &RunArgs, mode: Mode) -> Result<u8, Vec<Error>> {
         (Some(dir), false) => print_comparison(dir, &results, &deltas),
         (Some(dir), true) => {
             let n = results.iter().filter(|(_, r)| r.is_ok()).count();
-            say!("wrote {n} baseline(s) to {}", dir.display());
+            say!("wrote {n} baseline(s) to {}", anholonomy::echo::path(dir));
             0
         }
         (None, _) => 0,
@@ -351,7 +351,7 @@ fn print_comparison(
         .zip(deltas)
         .filter_map(|((_, r), d)| Some((r.as_ref().ok()?.name.clone(), d.clone()?)))
         .collect();
-    say!("\nbaseline comparison ({}):", dir.display());
+    say!("\nbaseline comparison ({}):", anholonomy::echo::path(dir));
     say!("{}", baseline::format_table(&table).trim_end());
     table
         .iter()
@@ -401,7 +401,7 @@ fn write_report(args: &RunArgs, rows: &[RunOutcome]) -> Option<Error> {
             }
             say!(
                 "report: {} ({} scenarios)",
-                args.logs.join("index.html").display(),
+                anholonomy::echo::path(&args.logs.join("index.html")),
                 w.scenarios
             );
             None

@@ -141,7 +141,12 @@ impl Search {
                 .filter(|(_, set)| *set)
                 .map(|(name, _)| *name)
                 .collect();
-                let looked = if tried.is_empty() {
+                let looked = if let Some(d) = self.packages.get(pkg) {
+                    format!(
+                        "[model] packages sets it to {}, which is not a directory",
+                        crate::echo::code(&crate::echo::path(d))
+                    )
+                } else if tried.is_empty() {
                     "no [model] packages entry, ROS_PACKAGE_PATH or AMENT_PREFIX_PATH names it".to_string()
                 } else {
                     format!("not found through {}", tried.join(", "))
@@ -201,6 +206,9 @@ pub fn load(path: &Path, scale: [f64; 3]) -> Result<Arc<TriMesh>, String> {
             "{}: unknown mesh format `.{ext}` (read: STL, OBJ, Collada .dae)",
             path.display()
         ));
+    }
+    if ext == "stl" {
+        crate::engine::mesh_limits::check_stl_size(path)?;
     }
     let scene = mesh_loader::Loader::default().load(path).map_err(|e| {
         format!(

@@ -13,6 +13,7 @@ pub mod angles;
 pub mod batch;
 pub mod lump;
 pub mod mesh;
+pub mod mesh_limits;
 pub mod packages;
 pub mod perturb;
 pub mod reading;
@@ -22,6 +23,7 @@ pub mod required;
 pub mod settings;
 pub mod shared_world;
 pub mod urdf;
+pub mod urdf_text;
 pub mod world;
 
 /// The engine. Physics code names its types through this alias and the
@@ -35,12 +37,31 @@ use crate::record::Pose;
 
 pub use replay::{replay, Replay, ReplayError, ReplayObserver, ReplayOptions};
 
+/// A command a [`PhysicsSystem`] could not carry out.
+#[derive(Debug, Clone, PartialEq)]
+pub struct Fault {
+    /// What failed, naming the scenario key (`key `model.drive.j` (`v / r`)
+    /// gives inf`).
+    pub what: String,
+    /// The state and input it failed at, as the scenario writes them.
+    pub from: String,
+}
+
 /// A simulated robot that accepts model inputs and reports model coordinates.
 pub trait PhysicsSystem {
     /// Current model coordinates (angles unwrapped continuously).
     fn state(&self) -> State;
     /// Set the actuators for the next step.
     fn apply(&mut self, u: &Input);
+    /// A command this system could not carry out (a declared drive
+    /// expression that is NaN or infinite), from the last [`apply`] on:
+    /// the replay stops there. `None` (the default): every command is
+    /// carried out.
+    ///
+    /// [`apply`]: PhysicsSystem::apply
+    fn fault(&self) -> Option<Fault> {
+        None
+    }
     /// Advance one physics step and update the read-back.
     fn step(&mut self);
     /// World pose of each URDF link, in URDF order.

@@ -280,6 +280,14 @@ impl Replay {
         } else {
             sys.apply(u);
         }
+        if let Some(fault) = sys.fault() {
+            return Err(ReplayError::Diverged(format!(
+                "physics run: {} at t = {} s, from {}",
+                fault.what,
+                crate::numfmt::readable(t),
+                fault.from
+            )));
+        }
         Ok(true)
     }
 

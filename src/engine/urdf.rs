@@ -98,7 +98,11 @@ pub fn structure_problems(robot: &Robot) -> Vec<SetupError> {
                 out.push(SetupError::urdf_at(
                     "joint",
                     &j.name,
-                    format!("URDF joint `{}` names unknown link `{l}`", j.name),
+                    format!(
+                        "URDF joint `{}` names unknown link {}",
+                        j.name,
+                        crate::echo::code(l)
+                    ),
                 ));
             }
         }

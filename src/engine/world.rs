@@ -79,12 +79,7 @@ fn collision_shape(g: &Geometry) -> Option<(SharedShape, RPose)> {
                 crate::engine::mesh::scale_of(scale),
             )
             .ok()?;
-            let points: Vec<Vector> = m
-                .vertices
-                .iter()
-                .map(|v| vector(v[0], v[1], v[2]))
-                .collect();
-            (SharedShape::convex_hull(&points)?, RPose::IDENTITY)
+            (crate::engine::mesh_limits::hull(&m)?, RPose::IDENTITY)
         }
     })
 }

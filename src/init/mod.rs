@@ -74,24 +74,43 @@ pub fn export_models(dir: &Path, want: &[String], force: bool) -> Result<Vec<Pat
     if !errors.is_empty() {
         return Err(errors);
     }
-    write_files(&files)?;
+    write_files(&files, "models export")?;
     Ok(files.into_iter().map(|(p, _)| p).collect())
 }
 
-fn write_files(files: &[(PathBuf, String)]) -> Result<(), Vec<Error>> {
+/// Write `files` for `command` (`init`, `models export`): its errors name
+/// the command and the file.
+fn write_files(files: &[(PathBuf, String)], command: &'static str) -> Result<(), Vec<Error>> {
     for (path, text) in files {
         let res = path
             .parent()
             .map_or(Ok(()), std::fs::create_dir_all)
             .and_then(|_| std::fs::write(path, text));
         if let Err(e) = res {
-            return Err(vec![Error::Log {
+            return Err(vec![Error::Write {
                 path: path.clone(),
+                command,
                 message: e.to_string(),
             }]);
         }
     }
     Ok(())
+}
+
+/// `dir` when it is a symbolic link that leads nowhere (a loop, or a
+/// missing target): a refusal naming the command, before anything is written.
+fn dangling_link(dir: &Path, command: &str) -> Option<Error> {
+    let link = std::fs::symlink_metadata(dir).ok()?;
+    if !link.file_type().is_symlink() {
+        return None;
+    }
+    let e = std::fs::metadata(dir).err()?;
+    Some(Error::input(
+        dir,
+        format!(
+            "{command}: the directory is a symbolic link that does not resolve ({e}: a loop, or a missing target): give a new directory, or fix the link"
+        ),
+    ))
 }
 
 /// Where the starter CI downloads releases from and builds from when there
@@ -120,7 +139,9 @@ pub fn source_url(url: &str) -> Result<String, String> {
         .find(|c| c.is_whitespace() || c.is_control() || "'\"`$\\#{}".contains(*c))
     {
         return Err(format!(
-            "`{url}` holds {c:?}, which the CI files cannot quote"
+            "{} holds {}, which the CI files cannot quote",
+            crate::echo::code(url),
+            crate::echo::code(&c.to_string())
         ));
     }
     Ok(url.to_string())
@@ -175,12 +196,15 @@ pub fn init(dir: &Path, from: Option<&str>) -> Result<Vec<(String, String)>, Vec
         Ok(f) => f,
         Err(m) => return Err(vec![Error::input("--from", m)]),
     };
+    if let Some(e) = dangling_link(dir, "init") {
+        return Err(vec![e]);
+    }
     if dir.exists() {
         let empty = std::fs::read_dir(dir).map(|mut d| d.next().is_none());
         if !matches!(empty, Ok(true)) {
             return Err(vec![Error::input(
                 dir,
-                "exists and is not an empty directory: `init` writes a new repository",
+                "init: exists and is not an empty directory: `init` writes a new repository",
             )]);
         }
     }
@@ -188,7 +212,7 @@ pub fn init(dir: &Path, from: Option<&str>) -> Result<Vec<(String, String)>, Vec
         .into_iter()
         .map(|(p, t)| (dir.join(p), t))
         .collect();
-    write_files(&files)?;
+    write_files(&files, "init")?;
     let call = Call {
         log_root: None,
         sharded: false,
@@ -211,7 +235,11 @@ pub fn init(dir: &Path, from: Option<&str>) -> Result<Vec<(String, String)>, Vec
             Ok(o) if o.verdict.ok() => {
                 let path = baseline::path_for(&base, &o.name);
                 if let Err(m) = Baseline::from_outcome(&o).write(&path) {
-                    errors.push(Error::Log { path, message: m });
+                    errors.push(Error::Write {
+                        path,
+                        command: "init",
+                        message: m,
+                    });
                 }
                 ran.push((o.name.clone(), o.verdict.describe(&o.failures, None)));
             }

@@ -90,6 +90,6 @@ pub fn write_atomic(
     })();
     res.map_err(|e| {
         let _ = std::fs::remove_file(&tmp);
-        format!("{}: {e}", path.display())
+        format!("{}: {e}", crate::echo::path(path))
     })
 }

@@ -204,7 +204,7 @@ fn check(rec: &RunRecord<'_>) -> Result<(), String> {
     }
     if let Some((name, v)) = rec.sim.channels.iter().find(|(_, v)| v.len() != n_sim) {
         return Err(format!(
-            "sim channel {name:?} has {} values, expected {n_sim}",
+            "sim channel `{name}` has {} values, expected {n_sim}",
             v.len()
         ));
     }
@@ -223,7 +223,7 @@ fn check(rec: &RunRecord<'_>) -> Result<(), String> {
         .find(|(_, e)| e.len() != nc)
     {
         return Err(format!(
-            "error series for {:?} has {} values, expected {nc}",
+            "error series for `{}` has {} values, expected {nc}",
             rec.state_names[k],
             e.len()
         ));
@@ -261,7 +261,7 @@ fn check(rec: &RunRecord<'_>) -> Result<(), String> {
         .find(|s| s.t.len() != s.values.len() || s.name.split('/').all(str::is_empty))
     {
         return Err(format!(
-            "series {:?} has {} times and {} values (or an empty name)",
+            "series `{}` has {} times and {} values (or an empty name)",
             s.name,
             s.t.len(),
             s.values.len()

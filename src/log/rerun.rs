@@ -126,7 +126,10 @@ fn check_complete(path: &Path) -> Result<(), LogError> {
     f.seek(SeekFrom::End(-12)).map_err(io)?;
     f.read_exact(&mut tail).map_err(io)?;
     if &head != b"RRF2" {
-        return Err(incomplete(format!("bad header {head:?}, expected RRF2")));
+        return Err(incomplete(format!(
+            "bad header {}, expected RRF2",
+            crate::echo::code(&String::from_utf8_lossy(&head))
+        )));
     }
     if &tail[..8] != b"RRF2FOOT" {
         return Err(incomplete(

@@ -202,9 +202,10 @@ pub fn gate(prep: &Prepared, o: &mut RunOutcome) -> Result<(), crate::error::Err
 /// and `metrics` as the outcome now has them (the run wrote it before the
 /// margins were searched).
 fn amend_summary(path: &std::path::Path, o: &RunOutcome) -> Result<(), String> {
-    let text = std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", path.display()))?;
+    let text =
+        std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", crate::echo::path(path)))?;
     let mut s: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", path.display()))?;
+        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", crate::echo::path(path)))?;
     s["passed"] = serde_json::json!(o.passed);
     s["failures"] = serde_json::json!(o.failures);
     s["verdict"] = serde_json::json!(o.verdict);

@@ -40,8 +40,40 @@ pub trait KinematicModel: Send + Sync {
     }
     /// Input matrix G(q), n × m.
     fn input_matrix(&self, q: &State) -> DMatrix<f64>;
+    /// Where state `i`'s equation is written, for messages: a declared
+    /// model's `key `model.kinematics.NAME` (`EXPRESSION`)`; `None` for a
+    /// compiled model.
+    fn equation_source(&self, _i: usize) -> Option<String> {
+        None
+    }
     /// q' at time t. Models with a time-varying structure (e.g. switching) override this.
     fn velocity(&self, _t: f64, q: &State, u: &Input) -> State {
         self.drift(q) + self.input_matrix(q) * u
     }
+}
+
+/// A state and an input as a scenario writes them, for messages: `x = 0.1,
+/// theta = 90°; v = 0.2, omega = 0` (angles in degrees).
+pub fn point_text(model: &dyn KinematicModel, q: &[f64], u: &[f64]) -> String {
+    let angular = model.angular_states();
+    let state: Vec<String> = model
+        .state_names()
+        .iter()
+        .zip(q)
+        .enumerate()
+        .map(|(i, (n, v))| {
+            if angular.contains(&i) {
+                format!("{n} = {}°", crate::numfmt::readable(v.to_degrees()))
+            } else {
+                format!("{n} = {}", crate::numfmt::readable(*v))
+            }
+        })
+        .collect();
+    let input: Vec<String> = model
+        .input_names()
+        .iter()
+        .zip(u)
+        .map(|(n, v)| format!("{n} = {}", crate::numfmt::readable(*v)))
+        .collect();
+    format!("{}; {}", state.join(", "), input.join(", "))
 }

@@ -1,6 +1,8 @@
 //! Planners: one module per planner. Each turns (start, goal, model
 //! parameters, planner parameters) into a [`crate::plan::Plan`].
 
+pub mod endogenous;
+
 use thiserror::Error;
 
 /// Why a planner could not produce a plan. Always a clear, user-facing reason.
@@ -17,9 +19,20 @@ pub enum PlanError {
     /// The goal cannot be reached under the planner's constraints.
     #[error("goal unreachable: {0}")]
     Unreachable(String),
-    /// An iterative planner stopped without converging.
+    /// An iterative planner stopped without converging (a runtime
+    /// failure: exit 3).
     #[error("planner did not converge: {0}")]
     NoConvergence(String),
+    /// The model's equations cannot be planned with where the planner
+    /// starts (a declared expression that is not differentiable there);
+    /// `key` is the scenario key of the equation.
+    #[error("{reason}")]
+    Model {
+        /// The equation's scenario key (`model.kinematics.theta1`).
+        key: String,
+        /// What is wrong, naming the expression.
+        reason: String,
+    },
     /// A file the planner reads (a plan file) is unusable: bad input in
     /// that file, reported against it (`FILE:LINE: message`), not against
     /// the scenario.
@@ -29,7 +42,7 @@ pub enum PlanError {
 
 /// What is wrong where in a file a planner reads.
 #[derive(Debug, Error, Clone, PartialEq)]
-#[error("{}{}: {message}", .path.display(), .line.map(|l| format!(":{l}")).unwrap_or_default())]
+#[error("{}{}: {message}", crate::echo::path(.path), .line.map(|l| format!(":{l}")).unwrap_or_default())]
 pub struct FileProblem {
     /// The file at fault.
     pub path: std::path::PathBuf,

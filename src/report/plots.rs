@@ -83,8 +83,8 @@ where
         .map_err(err)
 }
 
-fn err<E: std::fmt::Debug>(e: E) -> String {
-    format!("plot failed: {e:?}")
+fn err<E: std::fmt::Display>(e: E) -> String {
+    format!("plot failed: {e}")
 }
 
 /// Finite [min, max] of values, padded; never empty.

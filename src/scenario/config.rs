@@ -8,6 +8,7 @@
 
 use crate::engine::required::Required;
 use crate::error::SetupError;
+use crate::planner::endogenous::EndogenousParams;
 use crate::robots::car::CarConfig;
 use crate::robots::declared::DeclaredConfig;
 use crate::robots::diff_drive::DiffDriveConfig;
@@ -20,7 +21,6 @@ use crate::robots::rolling_sphere::triangle::SphereTriangleParams;
 use crate::robots::rolling_sphere::{SphereConfig, SpherePlanner};
 use crate::robots::rover::primitives::RoverPrimitiveParams;
 use crate::robots::rover::RoverConfig;
-use crate::robots::space_robot::endogenous::EndogenousParams;
 use crate::robots::space_robot::stokes::StokesSpaceParams;
 use crate::robots::space_robot::{SpacePlanner, SpaceRobotConfig};
 use crate::robots::{self, System};
@@ -251,7 +251,9 @@ registry! {
         /// A model declared in the scenario: q' = f(q, u), its drives and read-back.
         "declared" => Declared(DeclaredConfig) {
             required: [],
-            planners: [],
+            planners: [
+                "endogenous" => |m, Endogenous(p)| robots::declared::build_planned(m, Some(p.clone())),
+            ],
             outside: |m| Some(robots::declared::build(m)),
         }
     }

@@ -171,7 +171,10 @@ impl KeyIndex {
                 key: Some(key.clone()),
                 path: path.into(),
                 line: Some(self.line_at(span.start)),
-                message: format!("key `{key}`: {raw} is not a finite number"),
+                message: format!(
+                    "key `{}`: {raw} is not a finite number",
+                    crate::echo::bare(key)
+                ),
             }),
             None => Ok(()),
         }
@@ -185,7 +188,7 @@ impl KeyIndex {
             key: Some(key.clone()),
             path: path.into(),
             line: self.line_of(&key),
-            message: format!("key `{key}`: {message}"),
+            message: format!("key `{}`: {message}", crate::echo::bare(&key)),
         }
     }
 
@@ -246,7 +249,7 @@ impl KeyIndex {
         let (key, message) = if key.is_empty() {
             (None, message)
         } else {
-            let m = format!("key `{key}`: {message}");
+            let m = format!("key `{}`: {message}", crate::echo::bare(&key));
             (Some(key), m)
         };
         Error::Input {

@@ -170,6 +170,50 @@ pub fn find(root: &DeTable<'_>, path: &KeyPath) -> Found {
     }
 }
 
+/// Tables whose keys are the file's own names (any key is accepted there,
+/// so a key a sweep inserts would be silently unused).
+pub const DECLARED_TABLES: [&str; 1] = ["model.params"];
+
+/// Why `path` may not be inserted: it names an entry of a
+/// [`DECLARED_TABLES`] table that the file does not declare (with the
+/// nearest declared name); `None` when it may be.
+pub fn undeclared(root: &DeTable<'_>, path: &KeyPath) -> Option<String> {
+    let (last, table) = path.0.split_last()?;
+    let Segment::Key(name) = last else {
+        return None;
+    };
+    let table = KeyPath(table.to_vec());
+    let written = table.to_string();
+    if !DECLARED_TABLES.contains(&written.as_str()) {
+        return None;
+    }
+    let mut cur = root;
+    for seg in &table.0 {
+        let Segment::Key(k) = seg else { return None };
+        match cur.get(k.as_str()).map(|v| v.get_ref()) {
+            Some(DeValue::Table(t)) => cur = t,
+            _ => {
+                return Some(format!(
+                    "`{written}` is not in the file: a sweep varies a parameter it declares"
+                ))
+            }
+        }
+    }
+    let declared: Vec<&str> = cur.keys().map(|k| k.get_ref().as_ref()).collect();
+    let hint = declared
+        .iter()
+        .map(|k| (strsim::jaro_winkler(name, k), *k))
+        .max_by(|a, b| a.0.total_cmp(&b.0))
+        .filter(|(score, _)| *score >= 0.8)
+        .map(|(_, k)| format!("did you mean `{k}`? "))
+        .unwrap_or_default();
+    Some(format!(
+        "{} is not declared in [{written}]: a sweep varies a parameter the file declares ({hint}declared: {})",
+        crate::echo::code(name),
+        declared.join(", ")
+    ))
+}
+
 /// `value` as a TOML number: an integer when it is one (so integer keys
 /// such as `sim.solver_iterations` accept it), else a float written to
 /// round-trip exactly.

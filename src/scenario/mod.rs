@@ -278,7 +278,7 @@ pub fn name_problem(name: &str) -> Option<String> {
     if let Some(c) = name.chars().find(|c| {
         c.is_control() || matches!(c, '/' | '\\' | ':' | '*' | '?' | '"' | '<' | '>' | '|')
     }) {
-        return Some(format!("contains {c:?}"));
+        return Some(format!("contains {}", crate::echo::code(&c.to_string())));
     }
     if name.starts_with('.') || name.starts_with(char::is_whitespace) {
         return Some("starts with a dot or a space".into());
@@ -407,7 +407,10 @@ fn take_tagged<'i>(
         return Err(keys.error_at(
             path,
             &format!("{name}.kind"),
-            format!("unknown {name} `{kind}` (known: {known})"),
+            format!(
+                "unknown {name} {} (known: {known})",
+                crate::echo::code(&kind)
+            ),
         ));
     }
     Ok((kind, v))
@@ -527,7 +530,11 @@ impl Scenario {
                 keypath::Found::Unreachable(why) => {
                     return Err(err(format!("no such number in the file: {why}")))
                 }
-                keypath::Found::Absent => {}
+                keypath::Found::Absent => {
+                    if let Some(why) = keypath::undeclared(root.get_ref(), &kp) {
+                        return Err(err(why));
+                    }
+                }
             }
             for x in dist.probes() {
                 let probe = [(kp.clone(), x)];
@@ -627,7 +634,11 @@ impl Scenario {
         let model = ModelConfig::parse(&model_kind, model)
             .map_err(serde)?
             .ok_or_else(|| {
-                keys.error_at(path, "model.kind", format!("unknown model `{model_kind}`"))
+                keys.error_at(
+                    path,
+                    "model.kind",
+                    format!("unknown model {}", crate::echo::code(&model_kind)),
+                )
             })?;
         let mut planner = PlannerConfig::parse(&planner_kind, planner)
             .map_err(serde)?
@@ -635,7 +646,7 @@ impl Scenario {
                 keys.error_at(
                     path,
                     "planner.kind",
-                    format!("unknown planner `{planner_kind}`"),
+                    format!("unknown planner {}", crate::echo::code(&planner_kind)),
                 )
             })?;
         // Every number against its documented range (the reference pages
@@ -659,7 +670,7 @@ impl Scenario {
                     return Err(keys.error_at(
                         path,
                         "name",
-                        format!("{n:?} {p}: it is the log directory name"),
+                        format!("{} {p}: it is the log directory name", crate::echo::code(n)),
                     ));
                 }
                 n.clone()
@@ -673,7 +684,10 @@ impl Scenario {
                     return Err(keys.error_at(
                         path,
                         "name",
-                        format!("not set, and the file name {stem:?} {p}: it would be the log directory name"),
+                        format!(
+                            "not set, and the file name {} {p}: it would be the log directory name",
+                            crate::echo::code(&stem)
+                        ),
                     ));
                 }
                 stem
@@ -713,7 +727,7 @@ impl Scenario {
             return Err(keys.error_at(
                 path,
                 "model.urdf",
-                format!("file not found: {}", urdf.display()),
+                format!("file not found: {}", crate::echo::path(&urdf)),
             ));
         }
         let to_si = |key: &str, v: &[f64]| -> Result<Vec<f64>, Error> {

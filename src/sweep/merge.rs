@@ -86,7 +86,10 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>) -> Result<(Summary, PathBuf
         if let Some(why) = scans[0].mismatch(&same) {
             errs.push(Error::input(
                 f,
-                format!("shard of another sweep than {}: {why}", files[0].display()),
+                format!(
+                    "shard of another sweep than {}: {why}",
+                    crate::echo::path(&files[0])
+                ),
             ));
             continue;
         }
@@ -95,7 +98,7 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>) -> Result<(Summary, PathBuf
                 f,
                 format!(
                     "shard of another sweep than {} (file or [sweep] differ)",
-                    files[0].display()
+                    crate::echo::path(&files[0])
                 ),
             ));
             continue;
@@ -115,7 +118,7 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>) -> Result<(Summary, PathBuf
                     sh.index,
                     sh.count,
                     sh.count,
-                    files[0].display()
+                    crate::echo::path(&files[0])
                 ),
             ));
             continue;
@@ -126,7 +129,7 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>) -> Result<(Summary, PathBuf
                 format!(
                     "shard {}/{n_shards} given twice (also {})",
                     sh.index,
-                    files[j].display()
+                    crate::echo::path(&files[j])
                 ),
             ));
             continue;

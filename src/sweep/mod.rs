@@ -71,11 +71,9 @@ impl Shard {
         let num = |k: &str| -> Result<Option<usize>, String> {
             match get(k) {
                 None => Ok(None),
-                Some(v) => v
-                    .trim()
-                    .parse()
-                    .map(Some)
-                    .map_err(|_| format!("{k}={v:?}: not a non-negative integer")),
+                Some(v) => v.trim().parse().map(Some).map_err(|_| {
+                    format!("{k}={}: not a non-negative integer", crate::echo::code(&v))
+                }),
             }
         };
         let make = |index: usize, count: usize, from: String| {
@@ -206,8 +204,10 @@ fn record_line(
             metrics: Metrics(&empty),
         },
     };
-    let mut line = serde_json::to_string(&rec)
-        .unwrap_or_else(|e| format!("{{\"error\":{:?}}}", e.to_string()));
+    let mut line = serde_json::to_string(&rec).unwrap_or_else(|e| {
+        let msg = serde_json::Value::String(e.to_string());
+        format!("{{\"error\":{msg}}}")
+    });
     line.pop();
     let wall = serde_json::to_string(&wall_s).unwrap_or("null".into());
     line.push_str(&format!(",\"wall_s\":{wall}}}\n"));
@@ -299,7 +299,7 @@ fn open_records(
     h: &Header,
     resume: Option<&Scan>,
 ) -> Result<(std::fs::File, PathBuf), String> {
-    let io = |p: &Path, e: std::io::Error| format!("{}: {e}", p.display());
+    let io = |p: &Path, e: std::io::Error| format!("{}: {e}", crate::echo::path(p));
     std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
     let path = dir.join(records::file_name(shard));
     if let Some(scan) = resume {
@@ -431,7 +431,8 @@ pub fn run_sweep_report(
     let (mut entries, files) = match &path {
         Some(p) => {
             drop(sink);
-            let scan = records::scan(p, 0).map_err(|m| log_err(format!("{}: {m}", p.display())))?;
+            let scan = records::scan(p, 0)
+                .map_err(|m| log_err(format!("{}: {m}", crate::echo::path(p))))?;
             (scan.entries, vec![p.clone()])
         }
         None => (memory.into_inner().unwrap_or_default(), Vec::new()),

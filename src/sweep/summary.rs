@@ -167,7 +167,7 @@ fn write_doc(
         .iter()
         .map(|f| std::fs::File::open(f).map(BufReader::new))
         .collect::<std::io::Result<Vec<_>>>()
-        .map_err(|e| format!("{}: {e}", out.display()))?;
+        .map_err(|e| format!("{}: {e}", crate::echo::path(out)))?;
     write_atomic(out, |w| {
         let mut text = serde_json::to_string_pretty(head).map_err(std::io::Error::other)?;
         // Reopen the object: drop the closing "\n}".

@@ -447,8 +447,9 @@ fn unknown_metric(name: &str, system: &dyn System, more: &[String]) -> String {
         format!("; {}", extra.join(", "))
     };
     format!(
-        "unknown metric `{name}`{hint}; known: ideal_goal_C, sim_goal_C, \
+        "unknown metric {}{hint}; known: ideal_goal_C, sim_goal_C, \
          tracking_C_rms, tracking_C_max, tracking_C_final for C in {}{extra}",
+        crate::echo::code(name),
         coords.join(", ")
     )
 }
@@ -472,6 +473,7 @@ fn plan_error_key(sc: &Scenario, e: &PlanError) -> String {
             }
         }
         PlanError::Unreachable(_) => "goal".into(),
+        PlanError::Model { key, .. } => key.clone(),
         PlanError::NoConvergence(_) | PlanError::File(_) => "planner".into(),
     }
 }
@@ -623,7 +625,7 @@ pub fn prepare_each(paths: &[PathBuf], call: &Call<'_>) -> (Vec<Prepared>, Vec<E
                 format!(
                     "`{}` is also the name of {}: both would write the same log directory",
                     sc.name,
-                    other.display()
+                    crate::echo::path(&other)
                 ),
             ));
             continue;

@@ -163,28 +163,36 @@ fn resolve_meshes(
     let mut out = Vec::new();
     for l in &mut robot.links {
         let name = l.name.clone();
-        let fix = |g: &mut Geometry, tag: String, what: &str| -> Result<(), (Place, String)> {
+        type Loaded = Option<std::sync::Arc<mesh::TriMesh>>;
+        let fix = |g: &mut Geometry, tag: String, what: &str| -> Result<Loaded, (Place, String)> {
             let Geometry::Mesh { filename, scale } = g else {
-                return Ok(());
+                return Ok(None);
             };
             let at = Place::new("link", &name, &[&tag, "geometry", "mesh"]);
             let file = search
                 .resolve(filename, urdf_dir)
                 .map_err(|m| (at.clone(), format!("URDF link `{name}` {what} mesh: {m}")))?;
-            mesh::load(&file, mesh::scale_of(scale))
+            let m = mesh::load(&file, mesh::scale_of(scale))
                 .map_err(|m| (at.clone(), format!("URDF link `{name}` {what} mesh: {m}")))?;
             *filename = file.to_string_lossy().into_owned();
-            Ok(())
+            Ok(Some(m))
         };
         for (k, c) in l.collision.iter_mut().enumerate() {
-            if let Err((place, m)) = fix(&mut c.geometry, format!("collision#{k}"), "collision") {
-                out.push((place, m, true));
+            match fix(&mut c.geometry, format!("collision#{k}"), "collision") {
+                Err((place, m)) => out.push((place, m, true)),
+                Ok(Some(m)) => {
+                    if let (_, Some(t)) = crate::engine::mesh_limits::hull_with(&m) {
+                        let at = Place::new("link", &name, &[&format!("collision#{k}")]);
+                        out.push((at, thinned(&name, &m, &t), false));
+                    }
+                }
+                Ok(None) => {}
             }
         }
         let mut keep = Vec::new();
         for (k, mut v) in std::mem::take(&mut l.visual).into_iter().enumerate() {
             match fix(&mut v.geometry, format!("visual#{k}"), "visual") {
-                Ok(()) => keep.push(v),
+                Ok(_) => keep.push(v),
                 Err((place, m)) => {
                     out.push((place, format!("{m}: drawn without it"), false));
                 }
@@ -193,6 +201,24 @@ fn resolve_meshes(
         l.visual = keep;
     }
     out
+}
+
+/// The warning for a collision mesh thinned for its hull.
+fn thinned(
+    link: &str,
+    m: &crate::record::TriMesh,
+    t: &crate::engine::mesh_limits::Thinned,
+) -> String {
+    use crate::numfmt::readable;
+    format!(
+        "URDF link `{link}` collision mesh: {} triangles, over the budget of {} for a collision hull: its hull is built from {} of its {} points (one per {} mm grid cell), within {} mm of the exact hull",
+        m.triangles.len(),
+        crate::engine::mesh_limits::HULL_TRIANGLES,
+        t.kept,
+        t.of,
+        readable(t.within / 3f64.sqrt() * 1e3),
+        readable(t.within * 1e3)
+    )
 }
 
 /// A URDF refusal of the physics about the file at `path`, with the line of
@@ -215,6 +241,9 @@ pub fn line_of_error(text: &str, e: &SetupError) -> Option<usize> {
     }
 }
 
+use crate::engine::urdf_text::numbers;
+use crate::numfmt::shortest;
+
 fn finite<const N: usize>(v: &[f64; N]) -> bool {
     v.iter().all(|x| x.is_finite())
 }
@@ -224,8 +253,9 @@ fn check_pose(p: &Pose, place: &Place, what: &str) -> Result<(), (Place, String)
         return Err((
             place.clone(),
             format!(
-                "{what} <origin> needs finite xyz and rpy, got xyz {:?} rpy {:?}",
-                p.xyz.0, p.rpy.0
+                "{what} <origin> needs finite xyz and rpy, got xyz=\"{}\" rpy=\"{}\"",
+                numbers(&p.xyz.0),
+                numbers(&p.rpy.0)
             ),
         ));
     }
@@ -251,7 +281,10 @@ fn check_geometry(g: &Geometry, place: &Place, what: &str) -> Result<(), (Place,
     } else {
         Err((
             place.clone(),
-            format!("{what} <geometry> needs finite sizes > 0, got {g:?}"),
+            format!(
+                "{what} <geometry> needs finite sizes > 0, got {}",
+                crate::engine::urdf_text::geometry(g)
+            ),
         ))
     }
 }
@@ -280,8 +313,9 @@ pub fn number_problems(robot: &Robot) -> Vec<(Place, String)> {
             each(Err((
                 Place::new("material", &m.name, &["color"]),
                 format!(
-                    "URDF material `{}` <color> rgba must be in [0, 1], got {:?}",
-                    m.name, c.rgba.0
+                    "URDF material `{}` <color> rgba must be in [0, 1], got rgba=\"{}\"",
+                    m.name,
+                    numbers(&c.rgba.0)
                 ),
             )));
         }
@@ -294,7 +328,7 @@ pub fn number_problems(robot: &Robot) -> Vec<(Place, String)> {
             if !(m.is_finite() && m >= 0.0) {
                 return Err((
                     at(&["inertial", "mass"]),
-                    format!("URDF link `{n}` <mass> must be finite and ≥ 0 (0: a frame), got {m}"),
+                    format!("URDF link `{n}` <mass> must be finite and ≥ 0 (0: a frame), got value=\"{}\"", shortest(m)),
                 ));
             }
             let i = &l.inertial.inertia;
@@ -307,8 +341,8 @@ pub fn number_problems(robot: &Robot) -> Vec<(Place, String)> {
                 return Err((
                 at(&["inertial", "inertia"]),
                 format!(
-                    "URDF link `{n}` <inertia> must be finite and positive definite, got ixx {} ixy {} ixz {} iyy {} iyz {} izz {}",
-                    i.ixx, i.ixy, i.ixz, i.iyy, i.iyz, i.izz
+                    "URDF link `{n}` <inertia> must be finite and positive definite, got ixx=\"{}\" ixy=\"{}\" ixz=\"{}\" iyy=\"{}\" iyz=\"{}\" izz=\"{}\"",
+                    shortest(i.ixx), shortest(i.ixy), shortest(i.ixz), shortest(i.iyy), shortest(i.iyz), shortest(i.izz)
                 ),
             ));
             }
@@ -327,7 +361,10 @@ pub fn number_problems(robot: &Robot) -> Vec<(Place, String)> {
                     if !colour_ok(c) {
                         return Err((
                             at(&[&tag, "material"]),
-                            format!("{what} <color> rgba must be in [0, 1], got {:?}", c.rgba.0),
+                            format!(
+                                "{what} <color> rgba must be in [0, 1], got rgba=\"{}\"",
+                                numbers(&c.rgba.0)
+                            ),
                         ));
                     }
                 }
@@ -352,7 +389,10 @@ pub fn number_problems(robot: &Robot) -> Vec<(Place, String)> {
             if moves && !(finite(&a) && a.iter().any(|x| *x != 0.0)) {
                 return Err((
                     at(&["axis"]),
-                    format!("URDF joint `{n}` <axis> must be finite and non-zero, got {a:?}"),
+                    format!(
+                        "URDF joint `{n}` <axis> must be finite and non-zero, got xyz=\"{}\"",
+                        numbers(&a)
+                    ),
                 ));
             }
             let lim = &j.limit;
@@ -363,8 +403,8 @@ pub fn number_problems(robot: &Robot) -> Vec<(Place, String)> {
                     return Err((
                     at(&["limit"]),
                     format!(
-                        "URDF joint `{n}` <limit> needs finite lower ≤ upper and effort, velocity ≥ 0, got lower {} upper {} effort {} velocity {}",
-                        lim.lower, lim.upper, lim.effort, lim.velocity
+                        "URDF joint `{n}` <limit> needs finite lower ≤ upper and effort, velocity ≥ 0, got lower=\"{}\" upper=\"{}\" effort=\"{}\" velocity=\"{}\"",
+                        shortest(lim.lower), shortest(lim.upper), shortest(lim.effort), shortest(lim.velocity)
                     ),
                 ));
                 }
@@ -378,8 +418,8 @@ pub fn number_problems(robot: &Robot) -> Vec<(Place, String)> {
                     return Err((
                     at(&["dynamics"]),
                     format!(
-                        "URDF joint `{n}` <dynamics> needs finite damping, friction ≥ 0, got {} and {}",
-                        d.damping, d.friction
+                        "URDF joint `{n}` <dynamics> needs finite damping, friction ≥ 0, got damping=\"{}\" friction=\"{}\"",
+                        shortest(d.damping), shortest(d.friction)
                     ),
                 ));
                 }

@@ -34,7 +34,49 @@ fn long_number(text: &str) -> Option<&str> {
     start.filter(|s| text.len() - s >= 20).map(|s| &text[s..])
 }
 
-/// Run the binary in `dir`, killing it after `limit`. Returns (exit code, stdout, stderr).
+/// Longest stderr line a case may print: echoed user text is shortened.
+const LONGEST_LINE: usize = 2000;
+
+/// Rust `Debug` output in `text` (`Some(`, `Vec3([`, `Name { field: `).
+fn debug_output(text: &str) -> Option<&str> {
+    for needle in ["Some(", "Vec3([", "Ok(", "Err("] {
+        if let Some(i) = text.find(needle) {
+            return Some(&text[i..(i + 40).min(text.len())]);
+        }
+    }
+    // A struct: a capitalised word, ` { `, a lower-case field and `: `.
+    let b = text.as_bytes();
+    for (i, _) in text.match_indices(" { ") {
+        let before = text[..i]
+            .rsplit(|c: char| !c.is_alphanumeric())
+            .next()
+            .unwrap_or("");
+        let after = &text[i + 3..];
+        let field: String = after
+            .chars()
+            .take_while(|c| c.is_ascii_lowercase() || *c == '_')
+            .collect();
+        if before.starts_with(|c: char| c.is_ascii_uppercase())
+            && !field.is_empty()
+            && after[field.len()..].starts_with(": ")
+        {
+            return Some(&text[i - before.len()..(i + 40).min(b.len())]);
+        }
+    }
+    None
+}
+
+/// The binary the corpus runs: `ANHOLONOMY_CORPUS_BIN` (another build, to
+/// compare its messages or to see a new case fail on an old build;
+/// docs/src/development.md), else this one.
+fn binary() -> std::ffi::OsString {
+    std::env::var_os("ANHOLONOMY_CORPUS_BIN")
+        .unwrap_or_else(|| env!("CARGO_BIN_EXE_anholonomy").into())
+}
+
+/// Run the binary in `dir`, killing it after `limit`. Returns (exit code,
+/// stdout, stderr); a run killed at the limit has no code and says so in
+/// its stderr.
 fn run_limited(
     dir: &Path,
     args: &[String],
@@ -43,11 +85,7 @@ fn run_limited(
 ) -> (Option<i32>, String, String) {
     let out = dir.join(".stdout");
     let err = dir.join(".stderr");
-    // ANHOLONOMY_CORPUS_BIN runs another build (an older one, to compare
-    // its messages; docs/src/development.md).
-    let bin = std::env::var_os("ANHOLONOMY_CORPUS_BIN")
-        .unwrap_or_else(|| env!("CARGO_BIN_EXE_anholonomy").into());
-    let mut cmd = Command::new(bin);
+    let mut cmd = Command::new(binary());
     if let Some(p) = path {
         cmd.env("PATH", p);
     }
@@ -65,12 +103,10 @@ fn run_limited(
             break s;
         }
         if t0.elapsed() > limit {
+            // A problem of this case, reported with the others.
             let _ = child.kill();
             let _ = child.wait();
-            panic!(
-                "hang: `anholonomy {}` killed after {limit:?}",
-                args.join(" ")
-            );
+            return (None, String::new(), format!("hang: killed after {limit:?}"));
         }
         std::thread::sleep(Duration::from_millis(5));
     };
@@ -227,6 +263,12 @@ fn check_case(case: &Case, args: &[String], cmd: &str, problems: &mut Vec<String
     if let Some(n) = long_number(&stderr) {
         bad(format!("a number in {} digits", n.len()));
     }
+    if let Some(d) = debug_output(&stderr) {
+        bad(format!("Rust Debug output: {d}"));
+    }
+    if let Some(l) = stderr.lines().find(|l| l.chars().count() > LONGEST_LINE) {
+        bad(format!("a line of {} characters", l.chars().count()));
+    }
     let lines: Vec<&str> = stderr.lines().collect();
     if lines.len() != case.expect.len() {
         bad(format!(
@@ -346,10 +388,14 @@ fn fault_problems(case: &FaultCase) -> Vec<String> {
     for (name, bytes) in &case.files {
         std::fs::write(dir.path().join(name), bytes).unwrap();
     }
+    #[cfg(unix)]
+    for (link, target) in &case.symlinks {
+        std::os::unix::fs::symlink(target, dir.path().join(link)).unwrap();
+    }
     let t0 = Instant::now();
     let out = dir.path().join(".stdout");
     let err = dir.path().join(".stderr");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_anholonomy"))
+    let mut child = Command::new(binary())
         .args(&case.args)
         .current_dir(dir.path())
         .stdin(Stdio::null())
@@ -398,6 +444,9 @@ fn fault_problems(case: &FaultCase) -> Vec<String> {
     }
     if case.one_line && (stderr.lines().count() != 1 || !stderr.starts_with("error: ")) {
         problems.push("not one `error:` line".into());
+    }
+    if let Some(d) = debug_output(&stderr) {
+        problems.push(format!("Rust Debug output: {d}"));
     }
     // Nothing the run started still runs: the laws and what they started.
     let mut left = Vec::new();

@@ -13,6 +13,7 @@ mod baseline;
 mod car;
 mod cli;
 mod declared;
+mod declared_plan;
 mod determinism;
 mod diff_drive;
 mod dilf;

@@ -12,12 +12,12 @@
 
 use anholonomy::model::{Input, KinematicModel, State};
 use anholonomy::plan::{ControlLaw, Limits, Plan};
+use anholonomy::planner::endogenous;
 use anholonomy::planner::PlanError;
 use anholonomy::robots::rolling_disk::kinematics::RollingDisk;
 use anholonomy::robots::rolling_disk::stokes;
 use anholonomy::robots::rolling_sphere::kinematics::{euler_to_rotation, RollingSphere};
 use anholonomy::robots::rolling_sphere::{geometric, triangle};
-use anholonomy::robots::space_robot::endogenous;
 use anholonomy::robots::space_robot::manipulator::SpaceManipulator;
 use nalgebra::{Matrix3, Vector3};
 use proptest::prelude::*;
@@ -102,6 +102,7 @@ fn justified(e: &PlanError) -> Result<(), TestCaseError> {
         PlanError::InvalidParameter { reason, .. } => reason.clone(),
         PlanError::Unreachable(m) | PlanError::NoConvergence(m) => m.clone(),
         PlanError::File(f) => f.message.clone(),
+        PlanError::Model { reason, .. } => reason.clone(),
     };
     prop_assert!(reason.trim().len() > 10, "refusal without a reason: {e:?}");
     Ok(())
@@ -286,10 +287,12 @@ fn endogenous_error(s: [f64; 3], v: [f64; 3], g: [f64; 3]) -> Result<Option<f64>
     };
     let lim = limits(vec![30.0, 30.0]);
     let rad = |d: [f64; 3]| st(&d.map(f64::to_radians));
-    let plan = match endogenous::plan(&m, &rad(s), &rad(g), &params, &lim) {
-        Ok(p) => p,
-        Err(e) => return justified(&e).map(|_| None),
-    };
+    let plan =
+        match anholonomy::robots::space_robot::plan_endogenous(&m, &rad(s), &rad(g), &params, &lim)
+        {
+            Ok(p) => p,
+            Err(e) => return justified(&e).map(|_| None),
+        };
     within_limits(&plan, &lim)?;
     let rhs = |q: &[f64], u: &Input| m.velocity(0.0, &st(q), u).as_slice().to_vec();
     let q = integrate(&plan, &lim, &rhs, rad(s).as_slice().to_vec());

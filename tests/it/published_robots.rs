@@ -348,7 +348,7 @@ fn bad_meshes_are_refused_and_nothing_is_written() {
     let cases: [(&str, &str, &str); 3] = [
         ("missing.stl", "", "collision mesh: `package://pocket_bot_description/meshes/missing.stl`: no file `meshes/missing.stl` in package `pocket_bot_description`"),
         ("lidar.ply", "ply\n", "unknown mesh format `.ply`"),
-        ("cut.stl", "", "not a readable mesh"),
+        ("cut.stl", "", "binary STL whose header counts 320 triangles"),
     ];
     let stl = std::fs::read(pkg.join("meshes/lidar.stl")).unwrap();
     std::fs::write(pkg.join("meshes/cut.stl"), &stl[..stl.len() / 2]).unwrap();

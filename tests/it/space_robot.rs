@@ -380,7 +380,7 @@ fn other_bad_input_is_reported() {
 /// the one at T being the right limit (segment 2's value).
 #[test]
 fn the_mcap_carries_the_command_law_of_an_endogenous_plan() {
-    use anholonomy::robots::space_robot::endogenous::legendre;
+    use anholonomy::planner::endogenous::legendre;
     let dir = tempfile::tempdir().unwrap();
     let prep = crate::common::prepared(&crate::common::scenario("space_manipulator_s1.toml"));
     crate::common::run_prepared(&prep, Some(dir.path()));

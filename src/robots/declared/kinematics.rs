@@ -1,308 +1,14 @@
 //! Kinematic models declared in a scenario: q' = f(q, u), one expression
-//! per state, over the states, the inputs and named parameters.
-//!
-//! Expressions are parsed once by `evalexpr` (a well-kept expression
-//! crate), its operator tree checked against the language and compiled to
-//! a short stack program over f64 slots: an evaluation is a loop over a few
-//! instructions, as fast as the arithmetic it does. The language is exactly
-//! + − * / ^, parentheses, the [`FUNCTIONS`], `pi`, numbers and names.
+//! per state, over the states, the inputs and named parameters. The
+//! expression language is [`crate::robots::declared::expr`].
 
 use crate::model::{Input, KinematicModel, State};
-use evalexpr::{Node, Operator, Value};
 use nalgebra::DMatrix;
 use std::collections::HashMap;
 use std::sync::{Mutex, OnceLock};
 
-/// Functions of the expression language: (name, arity).
-pub const FUNCTIONS: [(&str, usize); 17] = [
-    ("sin", 1),
-    ("cos", 1),
-    ("tan", 1),
-    ("asin", 1),
-    ("acos", 1),
-    ("atan", 1),
-    ("atan2", 2),
-    ("sqrt", 1),
-    ("abs", 1),
-    ("min", 2),
-    ("max", 2),
-    ("exp", 1),
-    ("ln", 1),
-    ("sign", 1),
-    ("sinh", 1),
-    ("cosh", 1),
-    ("tanh", 1),
-];
-
-/// Whether `name` is a function or constant of the language.
-pub fn reserved(name: &str) -> bool {
-    name == "pi" || FUNCTIONS.iter().any(|(f, _)| *f == name)
-}
-
-fn sign(a: f64) -> f64 {
-    if a > 0.0 {
-        1.0
-    } else if a < 0.0 {
-        -1.0
-    } else {
-        0.0
-    }
-}
-
-fn unary(name: &str) -> Option<fn(f64) -> f64> {
-    Some(match name {
-        "sin" => f64::sin,
-        "cos" => f64::cos,
-        "tan" => f64::tan,
-        "asin" => f64::asin,
-        "acos" => f64::acos,
-        "atan" => f64::atan,
-        "sqrt" => f64::sqrt,
-        "abs" => f64::abs,
-        "exp" => f64::exp,
-        "ln" => f64::ln,
-        "sign" => sign,
-        "sinh" => f64::sinh,
-        "cosh" => f64::cosh,
-        "tanh" => f64::tanh,
-        _ => return None,
-    })
-}
-
-fn binary(name: &str) -> Option<fn(f64, f64) -> f64> {
-    Some(match name {
-        "atan2" => f64::atan2,
-        "min" => f64::min,
-        "max" => f64::max,
-        _ => return None,
-    })
-}
-
-/// One instruction of a compiled expression (a stack machine).
-#[derive(Debug, Clone, Copy)]
-enum Op {
-    Slot(usize),
-    Const(f64),
-    Add,
-    Sub,
-    Mul,
-    Div,
-    Pow,
-    Neg,
-    F1(fn(f64) -> f64),
-    F2(fn(f64, f64) -> f64),
-}
-
-/// One parsed expression, compiled.
-#[derive(Debug, Clone)]
-pub struct Expr {
-    ops: Vec<Op>,
-    depth: usize,
-    text: String,
-}
-
-/// Compiles an evalexpr tree into [`Op`]s.
-struct Compiler<'a> {
-    names: &'a [&'a str],
-    text: &'a str,
-    ops: Vec<Op>,
-    depth: usize,
-    max: usize,
-}
-
-impl Compiler<'_> {
-    fn push(&mut self, op: Op, pops: usize) {
-        self.ops.push(op);
-        self.depth = self.depth + 1 - pops;
-        self.max = self.max.max(self.depth);
-    }
-
-    /// The arguments of a call: a tuple's items, or one node.
-    fn args(node: &Node) -> Vec<&Node> {
-        let mut n = node;
-        while matches!(n.operator(), Operator::RootNode) && n.children().len() == 1 {
-            n = &n.children()[0];
-        }
-        match n.operator() {
-            Operator::Tuple => n.children().iter().collect(),
-            _ => vec![n],
-        }
-    }
-
-    fn node(&mut self, node: &Node) -> Result<(), String> {
-        let text = self.text;
-        let kids = node.children();
-        let two = |c: &mut Self, op: Op| -> Result<(), String> {
-            c.node(&kids[0])?;
-            c.node(&kids[1])?;
-            c.push(op, 2);
-            Ok(())
-        };
-        match node.operator() {
-            Operator::RootNode => match kids {
-                [one] => self.node(one),
-                [] => Err(format!("expression `{text}`: an empty pair of parentheses")),
-                _ => Err(format!("expression `{text}`: several expressions in one")),
-            },
-            Operator::Add => two(self, Op::Add),
-            Operator::Sub => two(self, Op::Sub),
-            Operator::Mul => two(self, Op::Mul),
-            Operator::Div => two(self, Op::Div),
-            Operator::Exp => two(self, Op::Pow),
-            Operator::Neg => {
-                self.node(&kids[0])?;
-                self.push(Op::Neg, 1);
-                Ok(())
-            }
-            Operator::Const { value } => {
-                let v = match value {
-                    Value::Float(f) => *f,
-                    Value::Int(i) => *i as f64,
-                    other => {
-                        return Err(format!(
-                            "expression `{text}`: `{other}` is not a number"
-                        ))
-                    }
-                };
-                self.push(Op::Const(v), 0);
-                Ok(())
-            }
-            Operator::VariableIdentifierRead { identifier } => {
-                if identifier == "pi" {
-                    self.push(Op::Const(std::f64::consts::PI), 0);
-                    return Ok(());
-                }
-                if let Some(i) = self.names.iter().position(|n| n == identifier) {
-                    self.push(Op::Slot(i), 0);
-                    return Ok(());
-                }
-                let best = self
-                    .names
-                    .iter()
-                    .map(|n| (strsim::jaro_winkler(identifier, n), *n))
-                    .max_by(|a, b| a.0.total_cmp(&b.0))
-                    .filter(|(s, _)| *s >= 0.8)
-                    .map(|(_, n)| format!(" (did you mean `{n}`?)"))
-                    .unwrap_or_default();
-                let fs: Vec<&str> = FUNCTIONS.iter().map(|f| f.0).collect();
-                Err(format!(
-                    "expression `{text}`: unknown name `{identifier}`{best}; known: {}, pi, and the functions {}",
-                    self.names.join(", "),
-                    fs.join(", ")
-                ))
-            }
-            Operator::FunctionIdentifier { identifier } => {
-                let Some(&(_, arity)) = FUNCTIONS.iter().find(|f| f.0 == identifier) else {
-                    let fs: Vec<&str> = FUNCTIONS.iter().map(|f| f.0).collect();
-                    return Err(format!(
-                        "expression `{text}`: unknown function `{identifier}` (functions: {})",
-                        fs.join(", ")
-                    ));
-                };
-                let args = Self::args(&kids[0]);
-                if args.len() != arity {
-                    return Err(format!(
-                        "expression `{text}`: `{identifier}` takes {arity} argument{}, got {}",
-                        if arity == 1 { "" } else { "s" },
-                        args.len()
-                    ));
-                }
-                for a in &args {
-                    self.node(a)?;
-                }
-                match (unary(identifier), binary(identifier)) {
-                    (Some(f), _) => self.push(Op::F1(f), 1),
-                    (_, Some(f)) => self.push(Op::F2(f), 2),
-                    _ => unreachable!("every function of FUNCTIONS has an implementation"),
-                }
-                Ok(())
-            }
-            other => Err(format!(
-                "expression `{text}`: `{other}` is not part of the language (+ - * / ^, parentheses, functions, numbers, names)"
-            )),
-        }
-    }
-}
-
-impl Expr {
-    /// Parse `text` over `names` (the value vector's slot names). The error
-    /// is one line: the parser's complaint, a wrong call, or the unknown
-    /// name with the nearest known one.
-    pub fn parse(text: &str, names: &[&str]) -> Result<Expr, String> {
-        if text.trim().is_empty() {
-            return Err("the expression is empty".into());
-        }
-        let tree = evalexpr::build_operator_tree(text).map_err(|e| {
-            format!(
-                "expression `{text}` does not parse: {}",
-                e.to_string().replace('\n', " ")
-            )
-        })?;
-        let mut c = Compiler {
-            names,
-            text,
-            ops: Vec::new(),
-            depth: 0,
-            max: 0,
-        };
-        c.node(&tree)?;
-        if c.depth != 1 {
-            return Err(format!("expression `{text}`: not one value"));
-        }
-        Ok(Expr {
-            ops: c.ops,
-            depth: c.max,
-            text: text.to_string(),
-        })
-    }
-
-    /// The value for the slot values `values`.
-    #[inline]
-    pub fn eval(&self, values: &[f64]) -> f64 {
-        let mut small = [0.0f64; 16];
-        let mut big;
-        let stack: &mut [f64] = if self.depth <= small.len() {
-            &mut small
-        } else {
-            big = vec![0.0; self.depth];
-            &mut big
-        };
-        let mut sp = 0;
-        for op in &self.ops {
-            match *op {
-                Op::Slot(i) => {
-                    stack[sp] = values[i];
-                    sp += 1;
-                }
-                Op::Const(v) => {
-                    stack[sp] = v;
-                    sp += 1;
-                }
-                Op::Neg => stack[sp - 1] = -stack[sp - 1],
-                Op::F1(f) => stack[sp - 1] = f(stack[sp - 1]),
-                op => {
-                    sp -= 1;
-                    let (a, b) = (stack[sp - 1], stack[sp]);
-                    stack[sp - 1] = match op {
-                        Op::Add => a + b,
-                        Op::Sub => a - b,
-                        Op::Mul => a * b,
-                        Op::Div => a / b,
-                        Op::Pow => a.powf(b),
-                        Op::F2(f) => f(a, b),
-                        _ => unreachable!("one-operand instructions are above"),
-                    };
-                }
-            }
-        }
-        stack[0]
-    }
-
-    /// The expression as written.
-    pub fn text(&self) -> &str {
-        &self.text
-    }
-}
+pub use crate::robots::declared::expr::{reserved, Expr, ExprError, Kink, FUNCTIONS};
+use num_dual::Dual64;
 
 /// A `&'static` copy of `names`, made once per distinct list: the model
 /// trait hands out static names, and sweeps build a declared system per
@@ -393,6 +99,66 @@ impl Declared {
         out.extend_from_slice(&self.params);
     }
 
+    /// q' = f(q, u) with A = ∂f/∂q and B = ∂f/∂u (row-major, n × n and
+    /// n × m) by forward-mode automatic differentiation of each compiled
+    /// equation ([`Expr::eval_dual`]): one pass per state or input the
+    /// equation reads. q' is [`KinematicModel::velocity`]'s to the bit.
+    /// Returns the first point met where an equation is not
+    /// differentiable: its state's index and the kink.
+    pub fn linearize(
+        &self,
+        q: &[f64],
+        u: &[f64],
+        qdot: &mut [f64],
+        a: &mut [f64],
+        b: &mut [f64],
+    ) -> Option<(usize, Kink)> {
+        let (n, m) = (q.len(), u.len());
+        let mut small = [0.0; 32];
+        let mut small_d = [Dual64::from_re(0.0); 32];
+        let (mut heap, mut heap_d);
+        let total = n + m + self.params.len();
+        let (values, duals): (&mut [f64], &mut [Dual64]) = if total <= small.len() {
+            (&mut small[..total], &mut small_d[..total])
+        } else {
+            heap = vec![0.0; total];
+            heap_d = vec![Dual64::from_re(0.0); total];
+            (&mut heap, &mut heap_d)
+        };
+        values[..n].copy_from_slice(q);
+        values[n..n + m].copy_from_slice(u);
+        values[n + m..].copy_from_slice(&self.params);
+        for (d, v) in duals.iter_mut().zip(values.iter()) {
+            *d = Dual64::from_re(*v);
+        }
+        a.fill(0.0);
+        b.fill(0.0);
+        let mut first = None;
+        for (i, f) in self.f.iter().enumerate() {
+            let moving = f.slots().iter().take_while(|&&j| j < n + m);
+            if moving.clone().next().is_none() {
+                qdot[i] = f.eval(values);
+            }
+            for &j in moving {
+                duals[j].eps = 1.0;
+                let mut kink = None;
+                let d = f.eval_dual(duals, &mut kink);
+                duals[j].eps = 0.0;
+                // A dual pass's value is `eval`'s to the bit.
+                qdot[i] = d.re;
+                if j < n {
+                    a[i * n + j] = d.eps;
+                } else {
+                    b[i * m + j - n] = d.eps;
+                }
+                if let (None, Some(k)) = (&first, kink) {
+                    first = Some((i, k));
+                }
+            }
+        }
+        first
+    }
+
     /// The equations as written, one per state.
     pub fn equations(&self) -> impl Iterator<Item = (&'static str, &str)> {
         self.states
@@ -417,6 +183,13 @@ impl KinematicModel for Declared {
     }
     fn position_states(&self) -> Option<[usize; 2]> {
         self.position
+    }
+    fn equation_source(&self, i: usize) -> Option<String> {
+        let (s, e) = (self.states.get(i)?, self.f.get(i)?);
+        Some(format!(
+            "key `model.kinematics.{s}` ({})",
+            crate::echo::code(e.text())
+        ))
     }
     /// Columns f(q, e_j) − f(q, 0): the input matrix of a control-affine
     /// model (a general model's linearisation at u = 0 is not this; no
@@ -473,27 +246,128 @@ mod tests {
             -(0.3f64.powf(2.0))
         );
         assert_eq!(Expr::parse("1/2", &names).unwrap().eval(&vals), 0.5);
-        let e = Expr::parse("v * cos(thetta)", &names).unwrap_err();
+        let e = Expr::parse("v * cos(thetta)", &names)
+            .unwrap_err()
+            .to_string();
         assert!(
             e.contains("unknown name `thetta` (did you mean `theta`?)"),
             "{e}"
         );
-        let e = Expr::parse("v * (cos(theta)", &names).unwrap_err();
+        let e = Expr::parse("v * (cos(theta)", &names)
+            .unwrap_err()
+            .to_string();
         assert!(e.contains("does not parse"), "{e}");
         // Outside the language, and wrong calls.
         assert!(Expr::parse("log10(x)", &names)
             .unwrap_err()
+            .to_string()
             .contains("unknown function `log10`"));
         assert!(Expr::parse("E * x", &names)
             .unwrap_err()
+            .to_string()
             .contains("unknown name `E`"));
         assert!(Expr::parse("x == v", &names)
             .unwrap_err()
+            .to_string()
             .contains("not part of the language"));
-        let e = Expr::parse("sin(x, v)", &names).unwrap_err();
+        let e = Expr::parse("sin(x, v)", &names).unwrap_err().to_string();
         assert!(e.contains("`sin` takes 1 argument, got 2"), "{e}");
-        let e = Expr::parse("atan2(x)", &names).unwrap_err();
+        let e = Expr::parse("atan2(x)", &names).unwrap_err().to_string();
         assert!(e.contains("`atan2` takes 2 arguments, got 1"), "{e}");
+    }
+
+    fn model(eqs: &[&str]) -> Declared {
+        let s = |v: &[&str]| v.iter().map(|x| x.to_string()).collect::<Vec<_>>();
+        let (states, inputs) = (s(&["x", "y", "th"]), s(&["v", "w"]));
+        let params = s(&["k"]);
+        let names = Declared::slot_names(&states, &inputs, &params);
+        let f = eqs
+            .iter()
+            .map(|t| Expr::parse(t, &names).unwrap())
+            .collect();
+        Declared::new(&states, &inputs, &[2], vec![0.7], f)
+    }
+
+    /// A and B by forward-mode AD against central differences of f, on
+    /// every function of the language, at random points.
+    #[test]
+    fn forward_mode_jacobians_match_central_differences() {
+        use rand::{Rng, SeedableRng};
+        let m = model(&[
+            "v * cos(th) + atan2(y, x) * w - sqrt(x^2 + 1) + abs(v - 2) * min(x, y)",
+            "exp(-x) * sinh(w) + ln(2 + y) * cosh(v) + tanh(th) * max(v, w) / k",
+            "tan(th / 4) + asin(y / 3) * acos(x / 3) + atan(w) * sign(v) + (x + 2)^(y + 1) + y^2",
+        ]);
+        let mut rng = rand_chacha::ChaCha8Rng::seed_from_u64(3);
+        let (mut qdot, mut a, mut b) = (vec![0.0; 3], vec![0.0; 9], vec![0.0; 6]);
+        for _ in 0..200 {
+            let q: Vec<f64> = (0..3).map(|_| rng.random_range(-1.0..1.0)).collect();
+            let u: Vec<f64> = (0..2).map(|_| rng.random_range(-1.0..1.0)).collect();
+            assert_eq!(m.linearize(&q, &u, &mut qdot, &mut a, &mut b), None);
+            let f = |q: &[f64], u: &[f64]| {
+                m.velocity(
+                    0.0,
+                    &State::from_column_slice(q),
+                    &Input::from_column_slice(u),
+                )
+            };
+            assert_eq!(qdot.as_slice(), f(&q, &u).as_slice());
+            let h = 1e-6;
+            for j in 0..5 {
+                let (mut qp, mut qm, mut up, mut um) = (q.clone(), q.clone(), u.clone(), u.clone());
+                if j < 3 {
+                    qp[j] += h;
+                    qm[j] -= h;
+                } else {
+                    up[j - 3] += h;
+                    um[j - 3] -= h;
+                }
+                let fd = (f(&qp, &up) - f(&qm, &um)) / (2.0 * h);
+                for i in 0..3 {
+                    let ad = if j < 3 {
+                        a[i * 3 + j]
+                    } else {
+                        b[i * 2 + j - 3]
+                    };
+                    assert!(
+                        (ad - fd[i]).abs() < 1e-6 * (1.0 + fd[i].abs()),
+                        "∂f{i}/∂x{j} at {q:?} {u:?}: AD {ad}, differences {}",
+                        fd[i]
+                    );
+                }
+            }
+        }
+    }
+
+    /// Kinks where they are, and not where the functions are smooth.
+    #[test]
+    fn kinks_are_found_where_an_equation_is_not_differentiable() {
+        let (mut qdot, mut a, mut b) = (vec![0.0; 3], vec![0.0; 9], vec![0.0; 6]);
+        let at = |eq: &str, q: [f64; 3], u: [f64; 2]| {
+            let m = model(&[eq, "0", "0"]);
+            let (mut qdot, mut a, mut b) = (vec![0.0; 3], vec![0.0; 9], vec![0.0; 6]);
+            m.linearize(&q, &u, &mut qdot, &mut a, &mut b)
+                .map(|(i, k)| (i, k.fun.map(|f| f.name())))
+        };
+        let rest = [0.0, 0.0];
+        assert_eq!(at("abs(v)", [0.0; 3], rest), Some((0, Some("abs"))));
+        assert_eq!(at("sign(v) * w", [0.0; 3], rest), Some((0, Some("sign"))));
+        assert_eq!(
+            at("min(x, y)", [0.3, 0.3, 0.0], rest),
+            Some((0, Some("min")))
+        );
+        assert_eq!(at("max(v, w)", [0.0; 3], rest), Some((0, Some("max"))));
+        assert_eq!(at("atan2(y, x)", [0.0; 3], rest), Some((0, Some("atan2"))));
+        assert_eq!(at("sqrt(x)", [0.0; 3], rest), Some((0, Some("sqrt"))));
+        // Smooth there: away from the kink, a constant argument, x^2 at x < 0.
+        assert_eq!(at("abs(v)", [0.0; 3], [0.2, 0.0]), None);
+        assert_eq!(at("abs(k) * v", [0.0; 3], rest), None);
+        assert_eq!(at("min(x, x) + x^2", [-0.5, 0.0, 0.0], rest), None);
+        // A kink still gives finite one-sided derivatives (an iteration
+        // passing through goes on).
+        let m = model(&["abs(v)", "0", "0"]);
+        m.linearize(&[0.0; 3], &rest, &mut qdot, &mut a, &mut b);
+        assert!(a.iter().chain(&b).all(|x| x.is_finite()));
     }
 
     #[test]

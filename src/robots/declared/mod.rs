@@ -3,17 +3,22 @@
 //! with the URDF joints that drive it and the links it is read back from.
 //! Any nonholonomic robot, without writing Rust: a tractor with trailers, a
 //! skid steer, a differential drive whose reference point is ahead of the
-//! axle. Plans come from outside (files, external laws, Python callables).
+//! axle. Plans come from outside (files, external laws, Python callables)
+//! or from seed 001's endogenous planner ([`crate::robots::declared::plan`]).
 
+pub mod expr;
 pub mod kinematics;
 pub mod physics;
+pub mod plan;
 
+use crate::echo::code;
 use crate::engine::perturb::Exposure;
 use crate::engine::required::Named;
 use crate::engine::{PhysicsSettings, PhysicsSystem};
 use crate::error::SetupError;
 use crate::model::{KinematicModel, State};
 use crate::plan::{Limits, Plan};
+use crate::planner::endogenous::EndogenousParams;
 use crate::planner::PlanError;
 use crate::robots::declared::kinematics::{Declared, Expr};
 use crate::robots::declared::physics::{DeclaredPhysics, Read, Rig};
@@ -25,8 +30,8 @@ use std::collections::BTreeMap;
 use std::path::{Path, PathBuf};
 
 /// A kinematic model q' = f(q, u) written in the scenario, and how its URDF
-/// is driven and read back. No built-in planner: plans come from a file, an
-/// external law or a Python callable.
+/// is driven and read back. Plans come from a file, an external law, a
+/// Python callable or seed 001's endogenous planner (`kind = "endogenous"`).
 #[derive(Debug, Clone, Deserialize, Serialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
 pub struct DeclaredConfig {
@@ -67,7 +72,9 @@ pub struct DeclaredConfig {
 
 /// The declared system.
 pub struct DeclaredSystem {
-    model: Declared,
+    pub(super) model: Declared,
+    /// `[planner] kind = "endogenous"`, when it plans for itself.
+    pub(super) planner: Option<EndogenousParams>,
     rig: Rig,
     max_rate: Vec<f64>,
     /// The state read as the root's yaw, for the 3D goal arrow.
@@ -81,9 +88,18 @@ fn is_name(s: &str) -> bool {
         && c.all(|x| x.is_ascii_alphanumeric() || x == '_')
 }
 
-/// Build the declared system: every name and expression checked, each
-/// error naming its `[model]` key.
+/// Build the declared system for plans from outside: every name and
+/// expression checked, each error naming its `[model]` key.
 pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, SetupError> {
+    build_planned(cfg, None)
+}
+
+/// [`build`], planning with seed 001's endogenous planner when `planner`
+/// is given.
+pub fn build_planned(
+    cfg: &DeclaredConfig,
+    planner: Option<EndogenousParams>,
+) -> Result<Box<dyn System>, SetupError> {
     let params: Vec<String> = cfg.params.keys().cloned().collect();
     let mut seen: BTreeMap<&str, &str> = BTreeMap::new();
     for (key, list) in [
@@ -99,20 +115,21 @@ pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, SetupError> {
                 return Err(SetupError::key(
                     format!("model.{key}"),
                     format!(
-                        "`{n}` is not a name (letters, digits and _, not starting with a digit)"
+                        "{} is not a name (letters, digits and _, not starting with a digit)",
+                        code(n)
                     ),
                 ));
             }
             if crate::robots::declared::kinematics::reserved(n) {
                 return Err(SetupError::key(
                     format!("model.{key}"),
-                    format!("`{n}` is a function of the expression language"),
+                    format!("{} is a function of the expression language", code(n)),
                 ));
             }
             if let Some(other) = seen.insert(n, key) {
                 return Err(SetupError::key(
                     format!("model.{key}"),
-                    format!("`{n}` is also one of `model.{other}`"),
+                    format!("{} is also one of `model.{other}`", code(n)),
                 ));
             }
         }
@@ -132,7 +149,11 @@ pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, SetupError> {
             None => {
                 return Err(SetupError::key(
                     "model.angles",
-                    format!("`{a}` is not a state (states: {})", cfg.states.join(", ")),
+                    format!(
+                        "{} is not a state (states: {})",
+                        code(a),
+                        cfg.states.join(", ")
+                    ),
                 ))
             }
         }
@@ -148,7 +169,11 @@ pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, SetupError> {
         if let Some(k) = map.keys().find(|k| !cfg.states.contains(k)) {
             return Err(SetupError::key(
                 format!("model.{table}.{k}"),
-                format!("`{k}` is not a state (states: {})", cfg.states.join(", ")),
+                format!(
+                    "{} is not a state (states: {})",
+                    code(k),
+                    cfg.states.join(", ")
+                ),
             ));
         }
     }
@@ -156,7 +181,7 @@ pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, SetupError> {
         if !cfg.inputs.contains(k) {
             return Err(SetupError::key(
                 format!("model.limits.{k}"),
-                format!("`{k}` is not an input"),
+                format!("{} is not an input", code(k)),
             ));
         }
     }
@@ -217,6 +242,7 @@ pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, SetupError> {
             .collect(),
         heading,
         model,
+        planner,
     }))
 }
 
@@ -227,8 +253,11 @@ impl System for DeclaredSystem {
     fn default_max_rate(&self) -> Vec<f64> {
         self.max_rate.clone()
     }
-    fn plan(&self, _start: &State, _goal: &State, _limits: &Limits) -> Result<Plan, PlanError> {
-        Err(no_planner("declared"))
+    fn plan(&self, start: &State, goal: &State, limits: &Limits) -> Result<Plan, PlanError> {
+        match &self.planner {
+            Some(p) => crate::robots::declared::plan::plan(&self.model, start, goal, p, limits),
+            None => Err(no_planner("declared")),
+        }
     }
     fn goal_heading(&self, goal: &State) -> Option<f64> {
         self.heading.map(|i| goal[i])

@@ -26,7 +26,8 @@ use crate::engine::rapier::prelude::*;
 use crate::engine::reading::UrdfReading;
 use crate::engine::real::{f, r, vector};
 use crate::engine::urdf::{Drive, SimWorld};
-use crate::engine::{PhysicsSettings, PhysicsSystem};
+use crate::engine::urdf_text;
+use crate::engine::{Fault, PhysicsSettings, PhysicsSystem};
 use crate::error::SetupError;
 use crate::model::{Input, KinematicModel, State};
 use crate::record::Pose;
@@ -63,12 +64,14 @@ pub enum LinkCoord {
 impl Read {
     /// `LINK.x|y|z|roll|pitch|yaw` or `JOINT.position`.
     pub fn parse(s: &str) -> Result<Read, SetupError> {
+        let shown = crate::echo::code(s);
         let (name, what) = s.rsplit_once('.').ok_or_else(|| {
-            format!("`{s}`: expected LINK.x|y|z|roll|pitch|yaw or JOINT.position")
+            format!("{shown}: expected LINK.x|y|z|roll|pitch|yaw or JOINT.position")
         })?;
         if name.is_empty() {
             return Err(SetupError::other(format!(
-                "`{s}`: no link or joint name before `.{what}`"
+                "{shown}: no link or joint name before `.{}`",
+                crate::echo::bare(what)
             )));
         }
         let coord = match what {
@@ -81,8 +84,9 @@ impl Read {
             "position" => return Ok(Read::Joint(name.to_string())),
             _ => {
                 return Err(SetupError::other(format!(
-                    "`{s}`: `.{what}` is not a coordinate (LINK.x|y|z|roll|pitch|yaw or JOINT.position)"
-                )))
+                "{shown}: `.{}` is not a coordinate (LINK.x|y|z|roll|pitch|yaw or JOINT.position)",
+                crate::echo::bare(what)
+            )))
             }
         };
         Ok(Read::Link(name.to_string(), coord))
@@ -134,6 +138,11 @@ pub struct DeclaredPhysics {
     /// Slot values of the last command (states, inputs, parameters).
     values: Vec<f64>,
     reading: UrdfReading,
+    /// The joints of `drives` and `positions`, for messages.
+    drive_names: Vec<String>,
+    position_names: Vec<String>,
+    /// The first drive that was not finite ([`PhysicsSystem::fault`]).
+    fault: Option<Fault>,
 }
 
 fn joint<'r>(robot: &'r Robot, name: &str) -> Option<&'r urdf_rs::Joint> {
@@ -164,13 +173,21 @@ impl DeclaredPhysics {
             let key = format!("model.read.{s}");
             match rd {
                 Read::Link(l, _) if !robot.links.iter().any(|x| x.name == *l) => {
-                    return Err(SetupError::key(&key, format!("URDF has no link `{l}`")))
+                    return Err(SetupError::key(
+                        &key,
+                        format!("URDF has no link {}", crate::echo::code(l)),
+                    ))
                 }
                 Read::Joint(j) => match joint(robot, j) {
-                    None => return Err(SetupError::key(&key, format!("URDF has no joint `{j}`"))),
+                    None => {
+                        return Err(SetupError::key(
+                            &key,
+                            format!("URDF has no joint {}", crate::echo::code(j)),
+                        ))
+                    }
                     Some(x) if matches!(x.joint_type, JointType::Fixed | JointType::Floating | JointType::Planar | JointType::Spherical) => {
-                        return Err(SetupError::key(&key, format!("joint `{j}` is {:?}: only revolute, continuous and prismatic joints have one position",
-                            x.joint_type
+                        return Err(SetupError::key(&key, format!("joint `{j}` is {}: only revolute, continuous and prismatic joints have one position",
+                            urdf_text::joint_type(&x.joint_type)
                         )))
                     }
                     _ => {}
@@ -182,10 +199,15 @@ impl DeclaredPhysics {
             for (j, _) in list {
                 let key = format!("model.{table}.{j}");
                 match joint(robot, j) {
-                    None => return Err(SetupError::key(&key, format!("URDF has no joint `{j}`"))),
+                    None => {
+                        return Err(SetupError::key(
+                            &key,
+                            format!("URDF has no joint {}", crate::echo::code(j)),
+                        ))
+                    }
                     Some(x) if !matches!(x.joint_type, JointType::Revolute | JointType::Continuous | JointType::Prismatic) => {
                         return Err(SetupError::key(&key, format!("joint `{j}` is {}: a drive needs a revolute, continuous or prismatic joint",
-                            format!("{:?}", x.joint_type).to_lowercase()
+                            urdf_text::joint_type(&x.joint_type)
                         )))
                     }
                     _ => {}
@@ -196,7 +218,7 @@ impl DeclaredPhysics {
             if !robot.links.iter().any(|x| x.name == *l) {
                 return Err(SetupError::key(
                     "model.frictionless",
-                    format!("URDF has no link `{l}`"),
+                    format!("URDF has no link {}", crate::echo::code(l)),
                 ));
             }
         }
@@ -285,6 +307,9 @@ impl DeclaredPhysics {
             q: State::from_column_slice(start),
             values: Vec::new(),
             reading,
+            drive_names: rig.drives.iter().map(|(j, _)| j.clone()).collect(),
+            position_names: rig.positions.iter().map(|(j, _)| j.clone()).collect(),
+            fault: None,
         };
         me.read_back();
         // The start as given (read-back only adds rounding): the unwrapping
@@ -428,22 +453,52 @@ impl PhysicsSystem for DeclaredPhysics {
         self.q.clone()
     }
 
+    /// A drive that is not finite is not applied (its joint keeps its last
+    /// target) and is the system's [`PhysicsSystem::fault`]: the replay
+    /// stops there.
     fn apply(&mut self, u: &Input) {
         let mut values = std::mem::take(&mut self.values);
         self.model
             .values(self.q.as_slice(), u.as_slice(), &mut values);
-        for (d, e) in &mut self.drives {
-            let rate = e.eval(&values);
-            self.sim.drive(d, if rate.is_finite() { rate } else { 0.0 });
-        }
-        for (d, e) in &mut self.positions {
-            let target = e.eval(&values);
-            if target.is_finite() {
-                d.angle = target;
+        let mut fault = None;
+        for (table, list) in [
+            ("drive", &mut self.drives),
+            ("drive_position", &mut self.positions),
+        ] {
+            for (j, (d, e)) in list.iter_mut().enumerate() {
+                let v = e.eval(&values);
+                if !v.is_finite() {
+                    fault.get_or_insert((table, j, v));
+                    continue;
+                }
+                if table == "drive" {
+                    self.sim.drive(d, v);
+                } else {
+                    d.angle = v;
+                    self.sim.drive(d, 0.0);
+                }
             }
-            self.sim.drive(d, 0.0);
+        }
+        if let (None, Some((table, j, v))) = (&self.fault, fault) {
+            let (name, e) = if table == "drive" {
+                (&self.drive_names[j], &self.drives[j].1)
+            } else {
+                (&self.position_names[j], &self.positions[j].1)
+            };
+            self.fault = Some(Fault {
+                what: format!(
+                    "key `model.{table}.{}` ({}) gives {v}",
+                    crate::echo::bare(name),
+                    crate::echo::code(e.text())
+                ),
+                from: crate::model::point_text(&self.model, self.q.as_slice(), u.as_slice()),
+            });
         }
         self.values = values;
+    }
+
+    fn fault(&self) -> Option<Fault> {
+        self.fault.clone()
     }
 
     fn step(&mut self) {

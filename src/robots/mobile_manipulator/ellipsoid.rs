@@ -104,8 +104,8 @@ impl Superellipsoid {
     pub fn validate(&self) -> Result<(), String> {
         if self.semi_axes.iter().any(|a| !(a.is_finite() && *a > 0.0)) {
             return Err(format!(
-                "`semi_axes` must be finite and > 0, got {:?}",
-                self.semi_axes
+                "`semi_axes` must be finite and > 0, got {}",
+                crate::numfmt::list(&self.semi_axes)
             ));
         }
         if !(self.exponent.is_finite() && self.exponent >= 0.5) {

@@ -414,8 +414,8 @@ impl CompliantWrist {
             return Err((
                 "stiffness",
                 format!(
-                    "every axis must be > 0 (N/m, N m/rad), got {:?}",
-                    self.stiffness
+                    "every axis must be > 0 (N/m, N m/rad), got {}",
+                    crate::numfmt::list(&self.stiffness)
                 ),
             ));
         }
@@ -423,15 +423,18 @@ impl CompliantWrist {
             return Err((
                 "damping",
                 format!(
-                    "every axis must be ≥ 0 (N s/m, N m s/rad), got {:?}",
-                    self.damping
+                    "every axis must be ≥ 0 (N s/m, N m s/rad), got {}",
+                    crate::numfmt::list(&self.damping)
                 ),
             ));
         }
         if !ok(&self.travel, false) {
             return Err((
                 "travel",
-                format!("every axis must be > 0 (m, rad), got {:?}", self.travel),
+                format!(
+                    "every axis must be > 0 (m, rad), got {}",
+                    crate::numfmt::list(&self.travel)
+                ),
             ));
         }
         if self.travel[3..]
@@ -441,8 +444,8 @@ impl CompliantWrist {
             return Err((
                 "travel",
                 format!(
-                    "rotational travel must be below 90° (rad), got {:?}",
-                    &self.travel[3..]
+                    "rotational travel must be below 90° (rad), got {}",
+                    crate::numfmt::list(&self.travel[3..])
                 ),
             ));
         }

@@ -389,11 +389,15 @@ pub fn solve(
     }
     best.ok_or_else(|| {
         PlanError::Unreachable(format!(
-            "no (A)-(B)-(A) solution with θ' ≤ {}° for r = {r:.6} m, Δβ = {:.4}° (direction {:?}); \
+            "no (A)-(B)-(A) solution with θ' ≤ {}° for r = {r:.6} m, Δβ = {:.4}° (direction = \"{}\"); \
              raise max_theta_prime_deg or candidate_turns",
             p.max_theta_prime_deg,
             db0.to_degrees(),
-            p.direction
+            match p.direction {
+                ArcDirection::Auto => "auto",
+                ArcDirection::Ccw => "ccw",
+                ArcDirection::Cw => "cw",
+            }
         ))
     })
 }

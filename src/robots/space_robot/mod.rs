@@ -18,7 +18,6 @@
 //! `sim_via_error_deg`: the largest coordinate error (deg, wrapped) at the
 //! via times T, 2T, ….
 
-pub mod endogenous;
 pub mod kinematics;
 pub mod manipulator;
 pub mod physics;
@@ -34,10 +33,10 @@ use crate::metric::{m, Direction::*, Family::*, Metric, Unit};
 use crate::model::{KinematicModel, State};
 use crate::paper::{rows_from, same, PaperRow};
 use crate::plan::{Limits, Plan};
+use crate::planner::endogenous::{self, EndogenousParams, EndogenousSystem, Fixed, Linearization};
 use crate::planner::PlanError;
 use crate::record::Comparison;
 use crate::record::SimTrajectory;
-use crate::robots::space_robot::endogenous::EndogenousParams;
 use crate::robots::space_robot::kinematics::{SpaceRobot, SpaceRobotModel};
 use crate::robots::space_robot::manipulator::SpaceManipulator;
 use crate::robots::space_robot::physics::SpaceRobotPhysics;
@@ -183,6 +182,82 @@ impl Space {
     }
 }
 
+/// Seed 001's Eq. 29 for the endogenous planner: its analytic
+/// linearisation (one cos/sin per call).
+impl EndogenousSystem for SpaceManipulator {
+    type Dims = Fixed<3, 2>;
+    fn dims(&self) -> Fixed<3, 2> {
+        Fixed
+    }
+    #[inline]
+    fn linearize(&self, q: &[f64], u: &[f64], out: &mut Linearization) {
+        let l = SpaceManipulator::linearize(
+            self,
+            &nalgebra::Vector3::new(q[0], q[1], q[2]),
+            &nalgebra::Vector2::new(u[0], u[1]),
+        );
+        let (qdot, a, b) = (&mut out.qdot[..3], &mut out.a[..9], &mut out.b[..6]);
+        for r in 0..3 {
+            qdot[r] = l.qdot[r];
+            for c in 0..3 {
+                a[r * 3 + c] = l.a[(r, c)];
+            }
+            for c in 0..2 {
+                b[r * 2 + c] = l.g[(r, c)];
+            }
+        }
+    }
+    fn error_unit(&self) -> &'static str {
+        " rad"
+    }
+}
+
+/// The endogenous planner on the space manipulator: start → via points
+/// (`params.via_deg`, degrees) → goal, one segment of `segment_time` each.
+/// States are (φ, θ1, θ2) in rad.
+pub fn plan_endogenous(
+    model: &SpaceManipulator,
+    start: &State,
+    goal: &State,
+    params: &EndogenousParams,
+    limits: &Limits,
+) -> Result<Plan, PlanError> {
+    let invalid = |name: &str, reason: &str| PlanError::InvalidParameter {
+        name: name.into(),
+        reason: reason.into(),
+    };
+    model.validate().map_err(|r| invalid("model", &r))?;
+    let three = |name: &str, v: &State| -> Result<Vec<f64>, PlanError> {
+        if v.len() != 3 || v.iter().any(|x| !x.is_finite()) {
+            return Err(invalid(
+                name,
+                "needs 3 finite coordinates (phi, theta1, theta2)",
+            ));
+        }
+        Ok(v.as_slice().to_vec())
+    };
+    let q0 = three("start", start)?;
+    let mut targets: Vec<Vec<f64>> = Vec::new();
+    for v in &params.via_deg {
+        if v.len() != 3 || v.iter().any(|x| !x.is_finite()) {
+            return Err(invalid("via_deg", "each via point needs 3 finite angles"));
+        }
+        targets.push(v.iter().map(|x| x.to_radians()).collect());
+    }
+    targets.push(three("goal", goal)?);
+    if !limits.max_rate.is_empty() && limits.max_rate.len() != 2 {
+        return Err(invalid("limits.max_rate", "needs one entry per input (2)"));
+    }
+    let sol = endogenous::solve(model, &q0, &targets, params)?;
+    endogenous::check_rate_limits(&sol, params, limits, &["u1", "u2"], " rad/s")?;
+    Ok(endogenous::into_plan(
+        sol,
+        params,
+        2,
+        serde_json::json!({ "model": model.name() }),
+    ))
+}
+
 fn manipulator(r: &SpaceRobot) -> SpaceManipulator {
     use crate::robots::space_robot::manipulator::SpaceManipulatorParams;
     SpaceManipulator::new(SpaceManipulatorParams {
@@ -218,7 +293,7 @@ impl System for Space {
         match &self.planner {
             Planner::Stokes(p) => stokes::plan(&self.model, start, goal, p, limits),
             Planner::Endogenous(p) => {
-                endogenous::plan(&manipulator(&self.model.robot), start, goal, p, limits)
+                plan_endogenous(&manipulator(&self.model.robot), start, goal, p, limits)
             }
         }
     }

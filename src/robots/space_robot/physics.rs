@@ -123,8 +123,8 @@ pub fn check_urdf(robot: &urdf_rs::Robot, model: &SpaceRobot) -> Result<(), Setu
                 "link",
                 name.to_string(),
                 format!(
-                    "URDF link `{name}` CoM {:?} must be at ({com_x}, 0, 0) for the planar model",
-                    o.xyz.0
+                    "URDF link `{name}` CoM xyz=\"{}\" must be at ({com_x}, 0, 0) for the planar model",
+                    crate::engine::urdf_text::numbers(&o.xyz.0)
                 ),
             ));
         }

@@ -98,7 +98,7 @@ impl ExternalParams {
         if let Some(a) = self.command.iter().find(|a| a.contains('\0')) {
             return Err(SetupError::key(
                 "planner.command",
-                format!("{a:?} contains a NUL byte"),
+                format!("{} contains a NUL byte", crate::echo::code(a)),
             ));
         }
         resolve_program(program, &self.dir()).map_err(|m| SetupError::key("planner.command", m))
@@ -130,15 +130,15 @@ pub fn resolve_program(program: &str, dir: &Path) -> Result<PathBuf, String> {
     if program.contains('/') || program.contains(std::path::MAIN_SEPARATOR) {
         let p = dir.join(program);
         if !p.exists() {
-            return Err(format!("program not found: {}", p.display()));
+            return Err(format!("program not found: {}", crate::echo::path(&p)));
         }
         if !executable(&p) {
             return Err(format!(
                 "program is not an executable file: {} (for a script, name its interpreter first, e.g. [\"python3\", \"{program}\"])",
-                p.display()
+                crate::echo::path(&p)
             ));
         }
-        return std::path::absolute(&p).map_err(|e| format!("{}: {e}", p.display()));
+        return std::path::absolute(&p).map_err(|e| format!("{}: {e}", crate::echo::path(&p)));
     }
     let path = std::env::var_os("PATH").unwrap_or_default();
     std::env::split_paths(&path)

@@ -164,8 +164,8 @@ impl FilePlanParams {
                     "planner.path",
                     format!(
                         "{}: a ROS 1 bag, which is not read here: convert it to a ROS 2 bag without ROS, `pip install rosbags` then `rosbags-convert --src {} --dst {stem}_ros2`, and set `path = \"{stem}_ros2\"`",
-                        self.path.display(),
-                        self.path.display(),
+                        crate::echo::path(&self.path),
+                        crate::echo::path(&self.path),
                     ),
                 ));
             }
@@ -174,7 +174,7 @@ impl FilePlanParams {
             None if !self.file().exists() => {
                 return Err(SetupError::key(
                     "planner.path",
-                    format!("file not found: {}", self.file().display()),
+                    format!("file not found: {}", crate::echo::path(&self.file())),
                 ))
             }
             other => {
@@ -182,7 +182,7 @@ impl FilePlanParams {
                     "planner.path",
                     format!(
                         "{}: unknown plan file format{} (use a .csv, .json, .mcap or .db3 file, or a ROS 2 bag's directory)",
-                        self.path.display(),
+                        crate::echo::path(&self.path),
                         other.map(|e| format!(" `.{e}`")).unwrap_or_default()
                     ),
                 ))
@@ -266,7 +266,7 @@ impl FilePlanParams {
         if !f.exists() {
             return Err(SetupError::key(
                 "planner.path",
-                format!("file not found: {}", f.display()),
+                format!("file not found: {}", crate::echo::path(&f)),
             ));
         }
         Ok(())
@@ -472,7 +472,7 @@ fn read_detailed(
                         name: k.into(),
                         reason: format!(
                             "only ROS 2 bags take it; topic `{topic}` of {} is a run log's (JSON)",
-                            params.path.display()
+                            crate::echo::path(&params.path)
                         ),
                     });
                 }

@@ -12,6 +12,8 @@ use super::*;
 pub struct FaultCase {
     pub name: String,
     pub files: Vec<(String, Vec<u8>)>,
+    /// Symbolic links (link, target) made in the directory.
+    pub symlinks: Vec<(String, String)>,
     pub args: Vec<String>,
     /// Expected exit code.
     pub code: i32,
@@ -54,6 +56,7 @@ pub fn cases() -> Vec<FaultCase> {
     let run = |name: &str, text: String, code: i32, has: &[&str]| FaultCase {
         name: name.into(),
         files: vec![("case.toml".into(), text.into_bytes())],
+        symlinks: Vec::new(),
         args: args(&["run", "case.toml", "--no-logs", "--quiet"]),
         code,
         stderr_has: strings(has),
@@ -170,6 +173,7 @@ pub fn cases() -> Vec<FaultCase> {
         FaultCase {
             name: name.into(),
             files: vec![("case.toml".into(), d.clone().into_bytes())],
+            symlinks: Vec::new(),
             args: a,
             code,
             stderr_has: strings(has),
@@ -211,6 +215,7 @@ pub fn cases() -> Vec<FaultCase> {
     out.push(FaultCase {
         name: "check with [margins] resolution = 1e-300".into(),
         files: vec![("case.toml".into(), gated.into_bytes())],
+        symlinks: Vec::new(),
         args: args(&["check", "case.toml", "--no-logs", "--quiet"]),
         code: 0,
         stderr_has: Vec::new(),
@@ -237,5 +242,6 @@ pub fn cases() -> Vec<FaultCase> {
         2,
         &["error: the argument '--markdown' cannot be used with '--json'"],
     ));
+    out.extend(super::surfaces::faults());
     out
 }

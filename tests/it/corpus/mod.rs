@@ -159,6 +159,7 @@ mod published;
 mod ros_bags;
 mod runaway;
 mod studies;
+mod surfaces;
 mod tables;
 
 /// Every case.
@@ -174,5 +175,6 @@ pub fn corpus() -> Vec<Case> {
     published::cases(&mut c);
     runaway::cases(&mut c);
     held_out::cases(&mut c);
+    surfaces::cases(&mut c);
     c.0
 }

@@ -44,7 +44,7 @@ pub struct Contact {
 
 /// The solver did not converge (never seen on valid shapes; reported, not hidden).
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
-#[error("part–obstacle contact solve did not converge (part centre {part:?}, obstacle centre {obstacle:?})")]
+#[error("part–obstacle contact solve did not converge (part centre {}, obstacle centre {})", crate::numfmt::list(.part), crate::numfmt::list(.obstacle))]
 pub struct ContactError {
     /// Part centre.
     pub part: [f64; 3],

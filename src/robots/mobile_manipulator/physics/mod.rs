@@ -268,7 +268,9 @@ fn check_urdf(robot: &urdf_rs::Robot) -> Result<(), SetupError> {
         }) || j.axis.xyz.0 != [0.0, 0.0, 1.0];
         if bad {
             return Err(SetupError::urdf_at("joint", name.to_string(), format!(
-                "URDF joint `{name}` differs from the PUMA 560 model (origin {xyz:?} rpy {rpy:?}, axis z expected)"
+                "URDF joint `{name}` differs from the PUMA 560 model (origin xyz=\"{}\" rpy=\"{}\", axis z expected)",
+                crate::engine::urdf_text::numbers(&xyz),
+                crate::engine::urdf_text::numbers(&rpy)
             )));
         }
     }

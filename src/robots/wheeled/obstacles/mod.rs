@@ -139,7 +139,10 @@ pub struct WithObstacles {
 
 impl WithObstacles {
     /// Add `obstacles` to the world of `inner` (which must have a
-    /// [`SimWorld`]); `friction` is the robot's (`[sim] friction`).
+    /// [`SimWorld`]); `friction` is the robot's (`[sim] friction`). A robot
+    /// that starts inside an obstacle (deeper than [`TOUCH`]) is refused,
+    /// naming `start` and the obstacle: the contact solver would push it out
+    /// at once, and the run would measure that, not the plan.
     pub fn new(
         mut inner: Box<dyn PhysicsSystem>,
         obstacles: &[Obstacle],
@@ -149,10 +152,20 @@ impl WithObstacles {
             .sim_world()
             .ok_or_else(|| SetupError::other("this model's physics cannot hold obstacles"))?;
         let ground = sw.ground;
-        let handles = obstacles
+        let handles: Vec<ColliderHandle> = obstacles
             .iter()
             .map(|o| sw.world.insert_collider(o.collider(friction), Some(ground)))
             .collect();
+        if let Some((k, depth)) = overlap(sw, &handles) {
+            return Err(SetupError::key(
+                "start",
+                format!(
+                    "the robot starts inside obstacle {} ({} m deep): move the start or the obstacle",
+                    crate::echo::code(&obstacles[k].name),
+                    crate::numfmt::readable(depth)
+                ),
+            ));
+        }
         let mut me = WithObstacles {
             inner,
             obstacles: handles,
@@ -170,6 +183,31 @@ impl WithObstacles {
         };
         (self.clearance, self.contacts) = least_distance(sw, &obstacles);
     }
+}
+
+/// The first obstacle a robot collider penetrates deeper than [`TOUCH`],
+/// and how deep.
+fn overlap(sw: &SimWorld, obstacles: &[ColliderHandle]) -> Option<(usize, f64)> {
+    let cs = &sw.world.colliders;
+    for (k, o) in obstacles.iter().enumerate() {
+        for c in &sw.robot.colliders {
+            let (x, y) = (&cs[*c], &cs[*o]);
+            let contact = crate::engine::rapier::parry::query::contact(
+                x.position(),
+                x.shape(),
+                y.position(),
+                y.shape(),
+                r(0.0),
+            );
+            if let Ok(Some(c)) = contact {
+                let depth = -f(c.dist);
+                if depth > TOUCH {
+                    return Some((k, depth));
+                }
+            }
+        }
+    }
+    None
 }
 
 /// Least distance between the robot's colliders and the obstacles, m, and
@@ -214,6 +252,9 @@ impl PhysicsSystem for WithObstacles {
     }
     fn apply(&mut self, u: &Input) {
         self.inner.apply(u)
+    }
+    fn fault(&self) -> Option<crate::engine::Fault> {
+        self.inner.fault()
     }
     fn step(&mut self) {
         self.inner.step();

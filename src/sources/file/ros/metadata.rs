@@ -26,7 +26,7 @@ pub fn bag_files(dir: &Path) -> Result<(Storage, Vec<PathBuf>), PlanError> {
         let mcaps = mcap_files_in(dir);
         let hint = match mcaps.as_slice() {
             [] => String::new(),
-            [one] => format!(" (it holds {}: point `path` at it)", one.display()),
+            [one] => format!(" (it holds {}: point `path` at it)", crate::echo::path(one)),
             _ => " (it holds several .mcap files: point `path` at one)".into(),
         };
         return Err(PlanError::file(

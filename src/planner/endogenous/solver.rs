@@ -2,11 +2,11 @@
 //! pseudo-inverse step in the null space of Ψ, grid refinement, and the
 //! planner's result types.
 
+use crate::planner::endogenous::expansion::ControlExpansion;
+use crate::planner::endogenous::integrator::{Dims, EndogenousSystem, Integrator};
+use crate::planner::endogenous::params::{ControlConstraint, Order, Settings};
 use crate::planner::PlanError;
-use crate::robots::space_robot::endogenous::expansion::ControlExpansion;
-use crate::robots::space_robot::endogenous::integrator::{EndogenousSystem, Integrator};
-use crate::robots::space_robot::endogenous::params::{ControlConstraint, Order, Settings};
-use nalgebra::{DMatrix, DVector, SVector};
+use nalgebra::{DMatrix, DVector};
 
 /// How one segment's iteration went.
 #[derive(Debug, Clone, serde::Serialize)]
@@ -120,10 +120,10 @@ pub fn extended_step(
     pinv_solve(&jext, &rhs, rcond)
 }
 
-pub(super) struct SegmentOutcome<const N: usize> {
+pub(super) struct SegmentOutcome {
     pub(super) lambda: Vec<f64>,
     pub(super) report: SegmentReport,
-    pub(super) endpoint: SVector<f64, N>,
+    pub(super) endpoint: Vec<f64>,
 }
 
 /// Most RK4 steps per segment the grid refinement may reach (the
@@ -135,17 +135,19 @@ fn no_conv(label: &str, why: String) -> PlanError {
 }
 
 #[allow(clippy::too_many_arguments)]
-pub(super) fn solve_segment<const N: usize, const M: usize, S: EndogenousSystem<N, M>>(
+pub(super) fn solve_segment<S: EndogenousSystem>(
     sys: &S,
-    q0: &SVector<f64, N>,
-    target: &SVector<f64, N>,
+    q0: &[f64],
+    target: &[f64],
     duration: f64,
     terms: &[usize],
     constraints: Vec<ControlConstraint>,
     set: &Settings,
     label: &str,
-) -> Result<SegmentOutcome<N>, PlanError> {
+) -> Result<SegmentOutcome, PlanError> {
     let s: usize = terms.iter().sum();
+    let d = sys.dims();
+    let unit = sys.error_unit();
     let (psi, w) = constraint_rows(terms, duration, &constraints);
     // Eq. 27: λ0 from Ψ λ0 = (w, d) with the Moore–Penrose inverse (λ0 = 0 without constraints).
     let mut lambda = if psi.nrows() > 0 {
@@ -168,8 +170,11 @@ pub(super) fn solve_segment<const N: usize, const M: usize, S: EndogenousSystem<
     // when the SVD cut-off drops a direction of J.
     let z = null_space(&psi, s);
     let mut steps = set.rk4_steps;
-    let mut integ = Integrator::<N, M>::new(duration, steps, terms);
-    let mut jac = DMatrix::zeros(N, s);
+    let mut integ = Integrator::new(d, duration, steps, terms);
+    // Where the iteration starts: the system may refuse (a kink there).
+    sys.check_start(q0, &integ.u_start(lambda.as_slice()))?;
+    let mut jac = DMatrix::zeros(d.n(), s);
+    let target = DVector::from_column_slice(target);
     let mut best = f64::INFINITY;
     let mut best_it = 0;
     let mut initial = f64::NAN;
@@ -182,8 +187,8 @@ pub(super) fn solve_segment<const N: usize, const M: usize, S: EndogenousSystem<
     // found by the property tests, `endogenous_refinement_at_the_iteration_cap`.)
     let mut it = 0;
     loop {
-        let q_end = integ.run(sys, q0, lambda.as_slice(), Some(&mut jac));
-        let e = q_end - target;
+        let q_end = DVector::from_vec(integ.run(sys, q0, lambda.as_slice(), Some(&mut jac)));
+        let e = q_end - &target;
         let norm = e.norm();
         if it == 0 {
             initial = norm;
@@ -201,13 +206,13 @@ pub(super) fn solve_segment<const N: usize, const M: usize, S: EndogenousSystem<
             // rad off while this grid read 1e-8 (found by the property
             // tests). A grid twice as fine (16× smaller RK4 error) must
             // agree; otherwise refine and iterate on from the current λ.
-            let fine = Integrator::<N, M>::new(duration, 2 * steps, terms).run(
+            let fine = Integrator::new(d, duration, 2 * steps, terms).run(
                 sys,
                 q0,
                 lambda.as_slice(),
                 None,
             );
-            let e_fine = (fine - target).norm();
+            let e_fine = (DVector::from_column_slice(&fine) - &target).norm();
             if e_fine <= 2.0 * set.tolerance {
                 return Ok(SegmentOutcome {
                     lambda: lambda.as_slice().to_vec(),
@@ -215,7 +220,7 @@ pub(super) fn solve_segment<const N: usize, const M: usize, S: EndogenousSystem<
                         iterations: it,
                         initial_error: initial,
                         final_error: norm,
-                        endpoint: fine.as_slice().to_vec(),
+                        endpoint: fine.clone(),
                         rk4_steps: steps,
                         constraints,
                         error_history: history,
@@ -227,7 +232,7 @@ pub(super) fn solve_segment<const N: usize, const M: usize, S: EndogenousSystem<
                 return Err(no_conv(
                     label,
                     format!(
-                        "on {steps} RK4 steps the endpoint meets {:.1e} rad, on {} it is {e_fine:.3e} rad off: \
+                        "on {steps} RK4 steps the endpoint meets {:.1e}{unit}, on {} it is {e_fine:.3e}{unit} off: \
                          the controls are too fast for the integration grid (shorten the task or lengthen segment_time)",
                         set.tolerance,
                         2 * steps
@@ -239,7 +244,7 @@ pub(super) fn solve_segment<const N: usize, const M: usize, S: EndogenousSystem<
                     label,
                     format!(
                         "iteration cap {it} reached while refining the integration grid: on {steps} RK4 steps \
-                         the endpoint meets {:.1e} rad, on {} it is {e_fine:.3e} rad off and needs further \
+                         the endpoint meets {:.1e}{unit}, on {} it is {e_fine:.3e}{unit} off and needs further \
                          iterations (the controls are too fast for the grid: shorten the task, lengthen \
                          segment_time or raise max_iterations)",
                         set.tolerance,
@@ -250,7 +255,7 @@ pub(super) fn solve_segment<const N: usize, const M: usize, S: EndogenousSystem<
             // Refine and iterate on from the current λ; the re-evaluation on
             // the finer grid is the next iteration.
             steps *= 2;
-            integ = Integrator::<N, M>::new(duration, steps, terms);
+            integ = Integrator::new(d, duration, steps, terms);
             best = f64::INFINITY;
             best_it = it;
             it += 1;
@@ -259,7 +264,7 @@ pub(super) fn solve_segment<const N: usize, const M: usize, S: EndogenousSystem<
         if it == set.max_iterations {
             return Err(no_conv(
                 label,
-                format!("iteration cap {it} reached with error {norm:.3e} rad"),
+                format!("iteration cap {it} reached with error {norm:.3e}{unit}"),
             ));
         }
         if norm < best * (1.0 - 1e-3) {
@@ -269,7 +274,7 @@ pub(super) fn solve_segment<const N: usize, const M: usize, S: EndogenousSystem<
             return Err(no_conv(
                 label,
                 format!(
-                    "error stalled at {best:.3e} rad for {} iterations (singular configuration?)",
+                    "error stalled at {best:.3e}{unit} for {} iterations: the controls do not move the state towards the goal to first order (a singular configuration, or a goal reached from rest only through brackets of the inputs: a control point or via point away from it helps)",
                     it - best_it
                 ),
             ));
@@ -277,7 +282,7 @@ pub(super) fn solve_segment<const N: usize, const M: usize, S: EndogenousSystem<
         if norm > 1e3 * (1.0 + initial) {
             return Err(no_conv(
                 label,
-                format!("diverged: error {norm:.3e} rad after {it} iterations"),
+                format!("diverged: error {norm:.3e}{unit} after {it} iterations"),
             ));
         }
         let step = if norm < set.newton_below {

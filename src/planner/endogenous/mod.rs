@@ -20,6 +20,11 @@
 //! J^T (J J^T)^-1 is singular. Where J_ext has full row rank the SVD
 //! pseudo-inverse equals J^T (J J^T)^-1 (tested).
 //!
+//! The planner knows a system only through [`EndogenousSystem`] (q' = f(q,
+//! u) with A = ∂f/∂q and B = ∂f/∂u): each robot implements it next to its
+//! model, the space manipulator in `systems::space_robot` (analytic), a
+//! declared model in `robots::declared::plan` (automatic differentiation).
+//!
 //! Multi-segment tasks (q0 → y1 at T → … → yf at kT, §5) are planned segment
 //! after segment, as the paper's "sequence of two subtasks": segment j starts
 //! from the state actually reached by segment j−1 and, with C0 (C1)
@@ -51,11 +56,9 @@
 //! which cancel at the end (q(T) itself still carries ≈ dt/12·jump: the S1
 //! test therefore simulates with dt = 1e-4).
 
-use crate::model::{Input, KinematicModel, State};
+use crate::model::Input;
 use crate::plan::{ControlLaw, Limits, Plan, Segment};
 use crate::planner::PlanError;
-use crate::robots::space_robot::manipulator::SpaceManipulator;
-use nalgebra::{SVector, Vector3};
 use std::sync::Arc;
 
 mod expansion;
@@ -66,7 +69,7 @@ mod solver;
 mod tests;
 
 pub use expansion::{legendre, ControlExpansion};
-pub use integrator::{EndogenousSystem, Linearization};
+pub use integrator::{Dims, EndogenousSystem, Fixed, Linearization, Sizes};
 pub use params::{Continuity, ControlConstraint, ControlPoint, EndogenousParams, Order};
 pub use solver::{extended_step, pinv_solve, SegmentReport, Solution};
 
@@ -92,7 +95,7 @@ fn check_vec(name: &str, v: &Option<Vec<f64>>, m: usize) -> Result<(), PlanError
     Ok(())
 }
 
-fn validate<const N: usize, const M: usize>(p: &EndogenousParams) -> Result<(), PlanError> {
+fn validate(p: &EndogenousParams, n: usize, m: usize) -> Result<(), PlanError> {
     let positive = [
         ("segment_time", p.segment_time),
         ("gamma", p.gamma),
@@ -136,17 +139,17 @@ fn validate<const N: usize, const M: usize>(p: &EndogenousParams) -> Result<(), 
         return Err(invalid("stall_iterations", "must be at least 1"));
     }
     for (i, v) in p.via_deg.iter().enumerate() {
-        if v.len() != N || v.iter().any(|x| !x.is_finite()) {
+        if v.len() != n || v.iter().any(|x| !x.is_finite()) {
             return Err(invalid(
                 "via_deg",
-                format!("via point {i} needs {N} finite entries"),
+                format!("via point {i} needs {n} finite entries"),
             ));
         }
     }
-    check_vec("u_start", &p.u_start, M)?;
-    check_vec("du_start", &p.du_start, M)?;
-    check_vec("u_end", &p.u_end, M)?;
-    check_vec("du_end", &p.du_end, M)?;
+    check_vec("u_start", &p.u_start, m)?;
+    check_vec("du_start", &p.du_start, m)?;
+    check_vec("u_end", &p.u_end, m)?;
+    check_vec("du_end", &p.du_end, m)?;
     let total = p.segment_time * (p.via_deg.len() + 1) as f64;
     for cp in &p.control_points {
         if !(cp.time.is_finite() && (0.0..=total).contains(&cp.time)) {
@@ -159,25 +162,39 @@ fn validate<const N: usize, const M: usize>(p: &EndogenousParams) -> Result<(), 
                 ),
             ));
         }
-        check_vec("control_points.value", &cp.value, M)?;
-        check_vec("control_points.derivative", &cp.derivative, M)?;
+        check_vec("control_points.value", &cp.value, m)?;
+        check_vec("control_points.derivative", &cp.derivative, m)?;
     }
     Ok(())
 }
 
-/// Plans q0 → targets[0] at T → targets[1] at 2T → … for any fixed-size system.
-pub fn solve<const N: usize, const M: usize, S: EndogenousSystem<N, M>>(
+/// Plans q0 → targets[0] at T → targets[1] at 2T → … for any system
+/// (states in the system's units).
+pub fn solve<S: EndogenousSystem>(
     sys: &S,
-    start: &SVector<f64, N>,
-    targets: &[SVector<f64, N>],
+    start: &[f64],
+    targets: &[Vec<f64>],
     params: &EndogenousParams,
 ) -> Result<Solution, PlanError> {
-    validate::<N, M>(params)?;
+    let (n, m) = (sys.dims().n(), sys.dims().m());
+    validate(params, n, m)?;
     if targets.is_empty() {
         return Err(invalid("goal", "at least one target is needed"));
     }
+    if let Some(bad) = std::iter::once(start)
+        .chain(targets.iter().map(Vec::as_slice))
+        .find(|v| v.len() != n || v.iter().any(|x| !x.is_finite()))
+    {
+        return Err(invalid(
+            "goal",
+            format!(
+                "start and targets need {n} finite coordinates, got {}",
+                bad.len()
+            ),
+        ));
+    }
     let t_seg = params.segment_time;
-    let terms = vec![params.basis_terms; M];
+    let terms = vec![params.basis_terms; m];
     let set = Settings {
         step: params.gamma * params.dtheta,
         newton_below: params.newton_below,
@@ -188,7 +205,7 @@ pub fn solve<const N: usize, const M: usize, S: EndogenousSystem<N, M>>(
         stall_iterations: params.stall_iterations,
     };
     let n_seg = targets.len();
-    let mut q = *start;
+    let mut q = start.to_vec();
     let mut segments: Vec<ControlExpansion> = Vec::new();
     let mut reports = Vec::new();
     for (k, target) in targets.iter().enumerate() {
@@ -248,17 +265,17 @@ pub fn solve<const N: usize, const M: usize, S: EndogenousSystem<N, M>>(
             }
         }
         let s: usize = terms.iter().sum();
-        if N + cons.len() * M > s {
+        if n + cons.len() * m > s {
             return Err(invalid(
                 "basis_terms",
                 format!(
                     "{label}: {} task + {} constraint rows exceed the {s} parameters; raise basis_terms",
-                    N,
-                    cons.len() * M
+                    n,
+                    cons.len() * m
                 ),
             ));
         }
-        let out = solve_segment::<N, M, S>(sys, &q, target, t_seg, &terms, cons, &set, &label)?;
+        let out = solve_segment(sys, &q, target, t_seg, &terms, cons, &set, &label)?;
         q = out.endpoint;
         segments.push(ControlExpansion {
             start: t0,
@@ -273,9 +290,10 @@ pub fn solve<const N: usize, const M: usize, S: EndogenousSystem<N, M>>(
     Ok(Solution { segments, reports })
 }
 
-/// Peak |u_i| of a solution, sampled at the RK4 nodes of `steps` per segment.
-fn peak_rate<const M: usize>(sol: &Solution, steps: usize) -> Vec<f64> {
-    let mut peak = vec![0.0f64; M];
+/// Peak |u_i| of a solution's `m` inputs, sampled at the RK4 nodes of
+/// `steps` per segment.
+pub fn peak_rate(sol: &Solution, steps: usize, m: usize) -> Vec<f64> {
+    let mut peak = vec![0.0f64; m];
     for seg in &sol.segments {
         for n in 0..=2 * steps {
             let t = seg.start + seg.duration * n as f64 / (2 * steps) as f64;
@@ -287,10 +305,35 @@ fn peak_rate<const M: usize>(sol: &Solution, steps: usize) -> Vec<f64> {
     peak
 }
 
-/// Wraps a solution into an open-loop [`Plan`] (labels "segment 1", …).
-pub fn into_plan<const M: usize>(
+/// `Unreachable` when `enforce_rate_limits` is set and a planned |u_i|
+/// peaks above `limits.max_rate[i]` (`inputs` names them, `unit` their unit).
+pub fn check_rate_limits(
+    sol: &Solution,
+    params: &EndogenousParams,
+    limits: &Limits,
+    inputs: &[&str],
+    unit: &str,
+) -> Result<(), PlanError> {
+    if !params.enforce_rate_limits {
+        return Ok(());
+    }
+    let peak = peak_rate(sol, params.rk4_steps, inputs.len());
+    for ((p, lim), name) in peak.iter().zip(&limits.max_rate).zip(inputs) {
+        if p > lim {
+            return Err(PlanError::Unreachable(format!(
+                "planned |{name}| peaks at {p:.4}{unit} above the rate limit {lim:.4}; lengthen segment_time"
+            )));
+        }
+    }
+    Ok(())
+}
+
+/// Wraps a solution for `m` inputs into an open-loop [`Plan`] (labels
+/// "segment 1", …).
+pub fn into_plan(
     sol: Solution,
     params: &EndogenousParams,
+    m: usize,
     extra: serde_json::Value,
 ) -> Plan {
     let n = sol.segments.len();
@@ -318,7 +361,7 @@ pub fn into_plan<const M: usize>(
         "planner": "endogenous",
         "segment_time": t_seg,
         "basis_terms": params.basis_terms,
-        "parameters_per_segment": params.basis_terms * M,
+        "parameters_per_segment": params.basis_terms * m,
         "gamma": params.gamma,
         "dtheta": params.dtheta,
         "rk4_steps": params.rk4_steps,
@@ -339,13 +382,13 @@ pub fn into_plan<const M: usize>(
             "lambda": s.lambda,
         })).collect::<Vec<_>>(),
         "joins": joins,
-        "peak_rate": peak_rate::<M>(&sol, params.rk4_steps),
+        "peak_rate": peak_rate(&sol, params.rk4_steps, m),
         "extra": extra,
     });
     let sol = Arc::new(sol);
     let law = ControlLaw::OpenLoop(Arc::new(move |t: f64| {
         if !(-1e-9..=duration + 1e-9).contains(&t) {
-            return (Input::zeros(M), if t < 0.0 { 0 } else { n - 1 });
+            return (Input::zeros(m), if t < 0.0 { 0 } else { n - 1 });
         }
         let t = t.clamp(0.0, duration);
         // At a join u may jump (no continuity imposed); the ideal run splits
@@ -361,54 +404,4 @@ pub fn into_plan<const M: usize>(
         law,
         details,
     }
-}
-
-/// Entry point for the space manipulator: start → via points (`params.via_deg`)
-/// → goal, one segment of `segment_time` each. States are (φ, θ1, θ2) in rad.
-pub fn plan(
-    model: &SpaceManipulator,
-    start: &State,
-    goal: &State,
-    params: &EndogenousParams,
-    limits: &Limits,
-) -> Result<Plan, PlanError> {
-    model.validate().map_err(|r| invalid("model", r))?;
-    let to3 = |name: &str, v: &State| -> Result<Vector3<f64>, PlanError> {
-        if v.len() != 3 || v.iter().any(|x| !x.is_finite()) {
-            return Err(invalid(
-                name,
-                "needs 3 finite coordinates (phi, theta1, theta2)",
-            ));
-        }
-        Ok(Vector3::new(v[0], v[1], v[2]))
-    };
-    let q0 = to3("start", start)?;
-    let mut targets: Vec<Vector3<f64>> = Vec::new();
-    for v in &params.via_deg {
-        if v.len() != 3 || v.iter().any(|x| !x.is_finite()) {
-            return Err(invalid("via_deg", "each via point needs 3 finite angles"));
-        }
-        targets.push(Vector3::new(v[0], v[1], v[2]).map(f64::to_radians));
-    }
-    targets.push(to3("goal", goal)?);
-    if !limits.max_rate.is_empty() && limits.max_rate.len() != 2 {
-        return Err(invalid("limits.max_rate", "needs one entry per input (2)"));
-    }
-    let sol = solve::<3, 2, _>(model, &q0, &targets, params)?;
-    let peak = peak_rate::<2>(&sol, params.rk4_steps);
-    if params.enforce_rate_limits {
-        for (i, (p, lim)) in peak.iter().zip(&limits.max_rate).enumerate() {
-            if p > lim {
-                return Err(PlanError::Unreachable(format!(
-                    "planned |u{}| peaks at {p:.4} rad/s above the rate limit {lim:.4}; lengthen segment_time",
-                    i + 1
-                )));
-            }
-        }
-    }
-    Ok(into_plan::<2>(
-        sol,
-        params,
-        serde_json::json!({ "model": model.name() }),
-    ))
 }

@@ -41,25 +41,27 @@ pub enum Continuity {
 pub struct ControlPoint {
     /// Global time, s.
     pub time: f64,
-    /// u(time), rad/s per input.
+    /// u(time), per input (rad/s for the space robot).
     #[serde(default)]
     pub value: Option<Vec<f64>>,
-    /// du/dt(time), rad/s² per input.
+    /// du/dt(time), per input (rad/s² for the space robot).
     #[serde(default)]
     pub derivative: Option<Vec<f64>>,
 }
 
 /// Seed 001 endogenous-configuration-space planner: Legendre-series controls
 /// iterated on the end-point map (Eq. 26). Control constraints are in model units (rad/s,
-/// rad/s²) like the paper's du/dt(0) = 0.01; only waypoints are in degrees.
+/// rad/s², or a declared model's input units) like the paper's du/dt(0) = 0.01; only
+/// waypoints' angles are in degrees.
 #[derive(Debug, Clone, serde::Deserialize, serde::Serialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct EndogenousParams {
     /// Duration T of every segment, s (paper: 20).
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub segment_time: f64,
-    /// Intermediate targets y1, y2, … (full states, degrees), reached at T, 2T, …;
-    /// the goal is reached at (len + 1) T.
+    /// Intermediate targets y1, y2, … (full states: angles in degrees, a declared
+    /// model's other states in their units), reached at T, 2T, …; the goal is
+    /// reached at (len + 1) T.
     pub via_deg: Vec<Vec<f64>>,
     /// Legendre terms per input (s = m · basis_terms parameters per segment); the
     /// parameters must at least match the segment's task and constraint rows.
@@ -71,7 +73,7 @@ pub struct EndogenousParams {
     /// Euler step Δϑ of the ϑ-integration of Eq. 26 (γΔϑ ≤ 1; 1 = Newton step).
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub dtheta: f64,
-    /// Below this error (rad) the step becomes a full Gauss–Newton step
+    /// Below this error (rad, or the model's units) the step becomes a full Gauss–Newton step
     /// (γΔϑ = 1) to finish quickly; 0 follows Eq. 26 to the end.
     #[schemars(range(min = 0))]
     pub newton_below: f64,
@@ -81,7 +83,7 @@ pub struct EndogenousParams {
     /// Iteration cap per segment.
     #[schemars(range(min = 1))]
     pub max_iterations: usize,
-    /// Stop when ‖q(T) − y‖ ≤ tolerance (rad).
+    /// Stop when ‖q(T) − y‖ ≤ tolerance (rad, or the model's units).
     #[schemars(extend("exclusiveMinimum" = 0))]
     pub tolerance: f64,
     /// Relative SVD cut-off of the pseudo-inverse.
@@ -90,13 +92,13 @@ pub struct EndogenousParams {
     /// Give up when the best error has not dropped by 0.1 % for this many iterations.
     #[schemars(range(min = 1))]
     pub stall_iterations: usize,
-    /// u(0), rad/s per input.
+    /// u(0), per input (rad/s for the space robot).
     pub u_start: Option<Vec<f64>>,
-    /// du/dt(0), rad/s² per input.
+    /// du/dt(0), per input (rad/s² for the space robot).
     pub du_start: Option<Vec<f64>>,
-    /// u at the final time, rad/s per input.
+    /// u at the final time, per input.
     pub u_end: Option<Vec<f64>>,
-    /// du/dt at the final time, rad/s² per input.
+    /// du/dt at the final time, per input.
     pub du_end: Option<Vec<f64>>,
     /// Continuity at the joins.
     pub continuity: Continuity,

@@ -1,6 +1,6 @@
 //! The Legendre basis and one segment's control expansion (Eq. 15).
 
-use crate::robots::space_robot::endogenous::params::Order;
+use crate::planner::endogenous::params::Order;
 
 /// Legendre polynomials P_0..P_{p−1}(s) and their derivatives d/ds (p = vals.len()).
 pub fn legendre(s: f64, vals: &mut [f64], ders: &mut [f64]) {

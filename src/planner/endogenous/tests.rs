@@ -1,10 +1,14 @@
 //! Unit tests of the endogenous planner (basis, Jacobian, pseudo-inverse,
 //! the three scenarios of §5, parameter checks).
 use crate::integrate::simulate;
-use crate::robots::space_robot::endogenous::integrator::Integrator;
-use crate::robots::space_robot::endogenous::solver::{constraint_rows, null_space};
-use crate::robots::space_robot::endogenous::*;
+use crate::model::State;
+use crate::planner::endogenous::integrator::Integrator;
+use crate::planner::endogenous::solver::{constraint_rows, null_space};
+use crate::planner::endogenous::*;
+use crate::robots::space_robot::manipulator::SpaceManipulator;
 use crate::robots::space_robot::manipulator::SpaceManipulatorParams;
+use crate::robots::space_robot::plan_endogenous as plan;
+use nalgebra::Vector3;
 use nalgebra::{DMatrix, DVector};
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -110,17 +114,18 @@ fn jacobian_matches_finite_differences() {
         let terms = [6, 5];
         let s = 11;
         let lambda: Vec<f64> = (0..s).map(|_| rng.random_range(-0.2..0.2)).collect();
-        let mut integ = Integrator::<3, 2>::new(T, 100, &terms);
+        let mut integ = Integrator::new(Fixed::<3, 2>, T, 100, &terms);
         let mut jac = DMatrix::zeros(3, s);
-        let q_end = integ.run(&model, &q0(), &lambda, Some(&mut jac));
-        let q_plain = integ.run(&model, &q0(), &lambda, None);
+        let q_end = integ.run(&model, q0().as_slice(), &lambda, Some(&mut jac));
+        let q_plain = integ.run(&model, q0().as_slice(), &lambda, None);
         assert_eq!(q_end, q_plain);
         let h = 1e-6;
         for j in 0..s {
             let (mut lp, mut lm) = (lambda.clone(), lambda.clone());
             lp[j] += h;
             lm[j] -= h;
-            let fd = (integ.run(&model, &q0(), &lp, None) - integ.run(&model, &q0(), &lm, None))
+            let fd = (DVector::from_vec(integ.run(&model, q0().as_slice(), &lp, None))
+                - DVector::from_vec(integ.run(&model, q0().as_slice(), &lm, None)))
                 / (2.0 * h);
             for r in 0..3 {
                 assert!(
@@ -140,9 +145,9 @@ fn jacobian_matches_finite_differences() {
 fn rank_deficient_at_zero_control_and_safe_inverse() {
     let model = SpaceManipulator::default();
     let terms = [8, 8];
-    let mut integ = Integrator::<3, 2>::new(T, 50, &terms);
+    let mut integ = Integrator::new(Fixed::<3, 2>, T, 50, &terms);
     let mut jac = DMatrix::zeros(3, 16);
-    integ.run(&model, &q0(), &[0.0; 16], Some(&mut jac));
+    integ.run(&model, q0().as_slice(), &[0.0; 16], Some(&mut jac));
     let sv = jac.clone().singular_values();
     assert!(sv.min() < 1e-12 * sv.max(), "singular values {sv}");
     let cons = vec![
@@ -178,9 +183,9 @@ fn pseudo_inverse_is_the_right_inverse_at_full_rank() {
     let mut rng = ChaCha8Rng::seed_from_u64(7);
     let terms = [7, 7];
     let lambda: Vec<f64> = (0..14).map(|_| rng.random_range(-0.3..0.3)).collect();
-    let mut integ = Integrator::<3, 2>::new(T, 100, &terms);
+    let mut integ = Integrator::new(Fixed::<3, 2>, T, 100, &terms);
     let mut jac = DMatrix::zeros(3, 14);
-    integ.run(&model, &q0(), &lambda, Some(&mut jac));
+    integ.run(&model, q0().as_slice(), &lambda, Some(&mut jac));
     let cons = vec![
         ControlConstraint {
             time: 0.0,
@@ -225,8 +230,14 @@ struct Checked {
 fn run_scenario(k: usize, dt: f64) -> Checked {
     let model = SpaceManipulator::default();
     let params = scenario(k);
-    let sol = solve::<3, 2, _>(&model, &q0(), &[y1(), yf()], &params).unwrap();
-    let plan = into_plan::<2>(sol.clone(), &params, serde_json::Value::Null);
+    let sol = solve(
+        &model,
+        q0().as_slice(),
+        &[y1().as_slice().to_vec(), yf().as_slice().to_vec()],
+        &params,
+    )
+    .unwrap();
+    let plan = into_plan(sol.clone(), &params, 2, serde_json::Value::Null);
     let traj = simulate(&model, &plan, &dv(&q0()), dt);
     let i_t = (T / dt).round() as usize;
     assert!((traj.t[i_t] - T).abs() < 1e-9);
@@ -350,7 +361,13 @@ fn error_decays_exponentially() {
         tolerance: 1e-3,
         ..scenario(2)
     };
-    let sol = solve::<3, 2, _>(&SpaceManipulator::default(), &q0(), &[y1()], &params).unwrap();
+    let sol = solve(
+        &SpaceManipulator::default(),
+        q0().as_slice(),
+        &[y1().as_slice().to_vec()],
+        &params,
+    )
+    .unwrap();
     let h = params.gamma * params.dtheta;
     let hist = &sol.reports[0].error_history;
     for k in 20..hist.len() - 1 {
@@ -402,7 +419,13 @@ fn via_point_control_constraint_inside_a_segment() {
         }],
         ..Default::default()
     };
-    let sol = solve::<3, 2, _>(&model, &q0(), &[y1()], &params).unwrap();
+    let sol = solve(
+        &model,
+        q0().as_slice(),
+        &[y1().as_slice().to_vec()],
+        &params,
+    )
+    .unwrap();
     let u = sol.eval(7.5, Order::Value).0;
     let du = sol.eval(7.5, Order::Derivative).0;
     assert!((u[0] - 0.05).abs() < 1e-9 && (u[1] + 0.02).abs() < 1e-9);
@@ -522,7 +545,13 @@ fn grid_refinement_at_the_iteration_cap_is_refused() {
         rk4_steps: 4,
         ..Default::default()
     };
-    let free = solve::<3, 2, _>(&model, &q0(), &[yf()], &params).unwrap();
+    let free = solve(
+        &model,
+        q0().as_slice(),
+        &[yf().as_slice().to_vec()],
+        &params,
+    )
+    .unwrap();
     let rep = &free.reports[0];
     assert!(rep.rk4_steps > 4, "no refinement: {}", rep.rk4_steps);
     // The first iteration whose error met the tolerance on the 4-step grid.
@@ -536,7 +565,12 @@ fn grid_refinement_at_the_iteration_cap_is_refused() {
         max_iterations: first,
         ..params.clone()
     };
-    match solve::<3, 2, _>(&model, &q0(), &[yf()], &capped) {
+    match solve(
+        &model,
+        q0().as_slice(),
+        &[yf().as_slice().to_vec()],
+        &capped,
+    ) {
         Err(PlanError::NoConvergence(why)) => {
             assert!(
                 why.contains("iteration cap") && why.contains("refining"),
@@ -549,7 +583,13 @@ fn grid_refinement_at_the_iteration_cap_is_refused() {
         max_iterations: rep.iterations,
         ..params
     };
-    let sol = solve::<3, 2, _>(&model, &q0(), &[yf()], &enough).unwrap();
+    let sol = solve(
+        &model,
+        q0().as_slice(),
+        &[yf().as_slice().to_vec()],
+        &enough,
+    )
+    .unwrap();
     assert_eq!(sol.segments[0].lambda, free.segments[0].lambda);
 }
 
