@@ -329,18 +329,20 @@ fn run_plan(
                 fed = traj.t.len();
             }
         };
-        let mut observer = Observer {
-            after_step: |out: &SimTrajectory| send(&out.traj),
-            bar: &mut bar,
-            cancel: &opts.cancel,
+        // The observer borrows `send` and the bar for the replay only.
+        let sim = {
+            let mut observer = Observer {
+                after_step: |out: &SimTrajectory| send(&out.traj),
+                bar: &mut bar,
+                cancel: &opts.cancel,
+            };
+            replay(
+                sys.as_mut(),
+                plan,
+                &replay_options(prep, opts),
+                &mut observer,
+            )
         };
-        let sim = replay(
-            sys.as_mut(),
-            plan,
-            &replay_options(prep, opts),
-            &mut observer,
-        );
-        drop(observer);
         drop(bar);
         let sim = sim.map_err(|e| replay_error(prep, e))?;
         send(&sim.traj);

@@ -102,7 +102,7 @@ pub trait EndogenousSystem: Sync {
 /// they compile to the unrolled loops of fixed-size arrays, and they are
 /// far faster than nalgebra's types when the crate itself is built without
 /// optimisation (tests).
-pub(super) struct Integrator<D: Dims> {
+pub(crate) struct Integrator<D: Dims> {
     d: D,
     h: f64,
     steps: usize,
@@ -125,7 +125,7 @@ pub(super) struct Integrator<D: Dims> {
 const ON_STACK: usize = 16;
 
 impl<D: Dims> Integrator<D> {
-    pub(super) fn new(d: D, duration: f64, steps: usize, terms: &[usize]) -> Self {
+    pub(crate) fn new(d: D, duration: f64, steps: usize, terms: &[usize]) -> Self {
         let (n, m) = (d.n(), d.m());
         let pmax = terms.iter().copied().max().unwrap_or(0);
         let nodes = 2 * steps + 1;
@@ -161,7 +161,7 @@ impl<D: Dims> Integrator<D> {
     }
 
     /// u(t) of λ at the start (node 0).
-    pub(super) fn u_start(&mut self, lambda: &[f64]) -> Vec<f64> {
+    pub(crate) fn u_start(&mut self, lambda: &[f64]) -> Vec<f64> {
         self.controls(lambda);
         self.u[..self.d.m()].to_vec()
     }
@@ -179,7 +179,7 @@ impl<D: Dims> Integrator<D> {
     }
 
     /// Integrates from q0 under λ; fills `jac` (n × s) with ∂q(T)/∂λ when given.
-    pub(super) fn run<S: EndogenousSystem<Dims = D>>(
+    pub(crate) fn run<S: EndogenousSystem<Dims = D>>(
         &mut self,
         sys: &S,
         q0: &[f64],

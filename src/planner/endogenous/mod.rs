@@ -62,11 +62,9 @@ use crate::planner::PlanError;
 use std::sync::Arc;
 
 mod expansion;
-mod integrator;
+pub(crate) mod integrator;
 mod params;
-mod solver;
-#[cfg(test)]
-mod tests;
+pub(crate) mod solver;
 
 pub use expansion::{legendre, ControlExpansion};
 pub use integrator::{Dims, EndogenousSystem, Fixed, Linearization, Sizes};

@@ -65,7 +65,7 @@ pub fn pinv_solve(a: &DMatrix<f64>, b: &DVector<f64>, rcond: f64) -> DVector<f64
 }
 
 /// Ψ (one row per constrained input component) and its target vector.
-pub(super) fn constraint_rows(
+pub(crate) fn constraint_rows(
     terms: &[usize],
     duration: f64,
     cons: &[ControlConstraint],
@@ -86,7 +86,7 @@ pub(super) fn constraint_rows(
 }
 
 /// Orthonormal basis (columns) of the null space of `psi` (s × s identity when empty).
-pub(super) fn null_space(psi: &DMatrix<f64>, s: usize) -> DMatrix<f64> {
+pub(crate) fn null_space(psi: &DMatrix<f64>, s: usize) -> DMatrix<f64> {
     if psi.nrows() == 0 {
         return DMatrix::identity(s, s);
     }
@@ -120,15 +120,15 @@ pub fn extended_step(
     pinv_solve(&jext, &rhs, rcond)
 }
 
-pub(super) struct SegmentOutcome {
-    pub(super) lambda: Vec<f64>,
-    pub(super) report: SegmentReport,
-    pub(super) endpoint: Vec<f64>,
+pub(crate) struct SegmentOutcome {
+    pub(crate) lambda: Vec<f64>,
+    pub(crate) report: SegmentReport,
+    pub(crate) endpoint: Vec<f64>,
 }
 
 /// Most RK4 steps per segment the grid refinement may reach (the
 /// `rk4_steps` parameter's own bound).
-pub(super) const MAX_RK4_STEPS: usize = 1_000_000;
+pub(crate) const MAX_RK4_STEPS: usize = 1_000_000;
 
 fn no_conv(label: &str, why: String) -> PlanError {
     PlanError::NoConvergence(format!("{label}: {why}"))

@@ -879,7 +879,11 @@ mod tests {
     #[test]
     fn parsing_any_text_is_ok_or_one_line_never_a_crash() {
         const CHILD: &str = "ANHOLONOMY_EXPR_PROPERTY_CHILD";
-        let name = "model::expr::tests::parsing_any_text_is_ok_or_one_line_never_a_crash";
+        // This test's path below the crate (it moves with the module).
+        let name = format!(
+            "{}::parsing_any_text_is_ok_or_one_line_never_a_crash",
+            module_path!().trim_start_matches("anholonomy::")
+        );
         if std::env::var_os(CHILD).is_some() {
             let t = std::thread::Builder::new()
                 .stack_size(512 * 1024)
@@ -893,7 +897,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let (so, se) = (dir.path().join("out"), dir.path().join("err"));
         let mut child = std::process::Command::new(std::env::current_exe().unwrap())
-            .args([name, "--exact", "--nocapture", "--test-threads=1"])
+            .args([name.as_str(), "--exact", "--nocapture", "--test-threads=1"])
             .env(CHILD, "1")
             .stdout(std::fs::File::create(&so).unwrap())
             .stderr(std::fs::File::create(&se).unwrap())

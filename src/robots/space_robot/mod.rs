@@ -23,6 +23,9 @@ pub mod manipulator;
 pub mod physics;
 pub mod stokes;
 
+#[cfg(test)]
+mod endogenous_tests;
+
 use crate::compare::{coord_error, sample};
 use crate::engine::perturb::Exposure;
 use crate::engine::PhysicsSettings;

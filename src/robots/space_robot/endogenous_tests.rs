@@ -1,10 +1,13 @@
-//! Unit tests of the endogenous planner (basis, Jacobian, pseudo-inverse,
-//! the three scenarios of §5, parameter checks).
+//! Unit tests of the endogenous planner on seed 001's space manipulator
+//! (basis, Jacobian, pseudo-inverse, the three scenarios of §5, parameter
+//! checks).
 use crate::integrate::simulate;
 use crate::model::State;
+use crate::plan::{Limits, Plan};
 use crate::planner::endogenous::integrator::Integrator;
 use crate::planner::endogenous::solver::{constraint_rows, null_space};
 use crate::planner::endogenous::*;
+use crate::planner::PlanError;
 use crate::robots::space_robot::manipulator::SpaceManipulator;
 use crate::robots::space_robot::manipulator::SpaceManipulatorParams;
 use crate::robots::space_robot::plan_endogenous as plan;
