@@ -131,26 +131,6 @@ pub struct BeamOptions {
     /// Beam length, m, from each attached end over which the beam's segments
     /// never touch the attached body (contacts disabled pairwise).
     pub grip_clearance: Real,
-    /// How the segments are joined ([`Chain`]).
-    pub chain: Chain,
-}
-
-/// How the segments of the chain are joined.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
-pub enum Chain {
-    /// One Rapier multibody (reduced coordinates), springs and dampers
-    /// integrated implicitly in its articulated mass matrix: converged
-    /// whatever the stiffness/inertia ratio, at the cost of a dense mass
-    /// matrix assembled and factorised at every substep (module docs).
-    #[default]
-    Multibody,
-    /// Impulse joints whose force-based motors are the springs and dampers
-    /// ([`impulse`]): each motor row is an implicit spring–damper, swept
-    /// Gauss–Seidel with the rest of the world. Converges where every
-    /// segment's spring is soft against its own inertia at the substep
-    /// (ω·dt_sub well below 1), as on a few long segments; a fraction of the
-    /// multibody's cost.
-    Impulse,
 }
 
 impl Default for BeamOptions {
@@ -159,7 +139,6 @@ impl Default for BeamOptions {
             segments: 10,
             damping_time: 2e-3,
             grip_clearance: 0.25,
-            chain: Chain::Multibody,
         }
     }
 }
@@ -196,19 +175,11 @@ struct Seg {
 /// One spring joint: handle and its frames' x offsets on both bodies.
 #[derive(Debug, Clone, Copy)]
 struct SpringJoint {
-    handle: JointHandle,
+    handle: MultibodyJointHandle,
     at1: Real,
     at2: Real,
     /// Whether the joint slides axially (the two end joints).
     axial: bool,
-}
-
-/// A spring joint of either [`Chain`] (an impulse joint is read from its
-/// bodies' poses).
-#[derive(Debug, Clone, Copy)]
-enum JointHandle {
-    Multibody(MultibodyJointHandle),
-    Impulse,
 }
 
 /// A beam inserted in a [`PhysicsWorld`].
@@ -226,90 +197,6 @@ pub struct PhysicsBeam {
     /// Velocities after the last step and the accelerations over it.
     last: Vec<(Vector, Vector)>,
     accel: Vec<(Vector, Vector)>,
-}
-
-/// The multibody chain ([`Chain::Multibody`]): N spring joints between the
-/// placed segments, bent to the centreline's joint rotations.
-fn multibody_chain(
-    world: &mut PhysicsWorld,
-    segs: &[Seg],
-    l: Real,
-    frame_s: &dyn Fn(usize) -> Real,
-    centreline: &dyn Fn(Real) -> Pose,
-    stiffness: [Real; 3],
-    beta: Real,
-) -> Result<Vec<SpringJoint>, SetupError> {
-    let n = segs.len() - 1;
-    let [ka, kt, kb] = stiffness;
-    let mut joints = Vec::with_capacity(n);
-    let mut first = None;
-    for k in 1..=n {
-        let s = (k as Real - 0.5) * l;
-        let (at1, at2) = (s - frame_s(k - 1), s - frame_s(k));
-        let axial = k == 1 || k == n;
-        let locked = if axial {
-            JointAxesMask::LIN_Y | JointAxesMask::LIN_Z
-        } else {
-            JointAxesMask::LIN_AXES
-        };
-        let mut j = GenericJoint::new(locked);
-        j.set_local_frame1(Pose::from_translation(Vector::new(at1, 0.0, 0.0)))
-            .set_local_frame2(Pose::from_translation(Vector::new(at2, 0.0, 0.0)))
-            .set_contacts_enabled(false);
-        let handle = world
-            .insert_multibody_joint(segs[k - 1].handle, segs[k].handle, j)
-            .ok_or("beam: Rapier refused a multibody joint of the chain")?;
-        first = first.or(Some(handle));
-        joints.push(SpringJoint {
-            handle: JointHandle::Multibody(handle),
-            at1,
-            at2,
-            axial,
-        });
-    }
-    // Springs and joint-space dampers on the free DOFs, in Rapier's order
-    // ([LinX,] AngX, AngY, AngZ), both integrated implicitly.
-    let (mb, _) = first
-        .and_then(|h| world.multibody_joints.get_mut(h))
-        .ok_or("beam: chain multibody missing")?;
-    let mut dofs = Vec::new();
-    for (link, sj) in mb.links_mut().skip(1).zip(&joints) {
-        let axes: &[(usize, Real)] = if sj.axial {
-            &[(0, ka), (3, kt), (4, kb), (5, kb)]
-        } else {
-            &[(3, kt), (4, kb), (5, kb)]
-        };
-        let a = link.assembly_id();
-        for (i, &(axis, stiff)) in axes.iter().enumerate() {
-            link.joint.set_spring(axis, stiff, 0.0);
-            dofs.push((a + i, stiff));
-        }
-    }
-    for (i, stiff) in dofs {
-        mb.damping_mut()[i] = beta * stiff;
-    }
-    // A curved initial centreline: joint coordinates from the placed
-    // bodies (Rapier otherwise snaps the chain straight at the first step).
-    let mut disp = vec![0.0; mb.ndofs()];
-    for (j, sj) in joints.iter().enumerate() {
-        let f = |k: usize, at: Real| {
-            centreline(frame_s(k)) * Pose::from_translation(Vector::new(at, 0.0, 0.0))
-        };
-        // Rotations only: the chain starts at its rest length (the gaps
-        // between neighbouring tangents of a curved centreline are its
-        // discretisation, not a stretch).
-        let rel = f(j, sj.at1).inverse() * f(j + 1, sj.at2);
-        let rot = rel.rotation.to_scaled_axis();
-        let a = mb.link(j + 1).map_or(0, |l| l.assembly_id()) + usize::from(sj.axial);
-        disp[a..a + 3].copy_from_slice(&[rot.x, rot.y, rot.z]);
-    }
-    mb.apply_displacements(&disp);
-    mb.forward_kinematics(&world.bodies, true);
-    let poses: Vec<Pose> = mb.links().map(|l| *l.local_to_world()).collect();
-    for (seg, pose) in segs.iter().zip(poses) {
-        world.bodies[seg.handle].set_position(pose, true);
-    }
-    Ok(joints)
 }
 
 fn real(v: f64) -> Real {
@@ -375,15 +262,7 @@ impl PhysicsBeam {
             let mass = rho_a * seg_len;
             let com = 0.5 * (a + b) - s0;
             let it = mass * (r2 + seg_len * seg_len / 12.0);
-            // The impulse chain sweeps its torsion rows Gauss–Seidel: a thin
-            // rod's own roll inertia (10⁻⁶ kg m²) against GJ/l would be a
-            // stiff row that does not converge ([`impulse`]); the segment
-            // rolls with its transverse inertia instead.
-            let roll = match opts.chain {
-                Chain::Multibody => 2.0 * mass * r2,
-                Chain::Impulse => it,
-            };
-            let inertia = Vector::new(roll, it, it);
+            let inertia = Vector::new(2.0 * mass * r2, it, it);
             let props = MassProperties::new(Vector::new(com, 0.0, 0.0), mass, inertia);
             let body = RigidBodyBuilder::dynamic()
                 .pose(centreline(s0))
@@ -403,14 +282,74 @@ impl PhysicsBeam {
             });
         }
         let beta = opts.damping_time;
-        let joints = match opts.chain {
-            Chain::Multibody => {
-                multibody_chain(world, &segs, l, &frame_s, centreline, stiffness, beta)?
+        let [ka, kt, kb] = stiffness;
+        let mut joints = Vec::with_capacity(n);
+        for k in 1..=n {
+            let s = (k as Real - 0.5) * l;
+            let (at1, at2) = (s - frame_s(k - 1), s - frame_s(k));
+            let axial = k == 1 || k == n;
+            let locked = if axial {
+                JointAxesMask::LIN_Y | JointAxesMask::LIN_Z
+            } else {
+                JointAxesMask::LIN_AXES
+            };
+            let mut j = GenericJoint::new(locked);
+            j.set_local_frame1(Pose::from_translation(Vector::new(at1, 0.0, 0.0)))
+                .set_local_frame2(Pose::from_translation(Vector::new(at2, 0.0, 0.0)))
+                .set_contacts_enabled(false);
+            let handle = world
+                .insert_multibody_joint(segs[k - 1].handle, segs[k].handle, j)
+                .ok_or("beam: Rapier refused a multibody joint of the chain")?;
+            joints.push(SpringJoint {
+                handle,
+                at1,
+                at2,
+                axial,
+            });
+        }
+        // Springs and joint-space dampers on the free DOFs, in Rapier's order
+        // ([LinX,] AngX, AngY, AngZ), both integrated implicitly.
+        let (mb, _) = world
+            .multibody_joints
+            .get_mut(joints[0].handle)
+            .ok_or("beam: chain multibody missing")?;
+        let mut dofs = Vec::new();
+        for (link, sj) in mb.links_mut().skip(1).zip(&joints) {
+            let axes: &[(usize, Real)] = if sj.axial {
+                &[(0, ka), (3, kt), (4, kb), (5, kb)]
+            } else {
+                &[(3, kt), (4, kb), (5, kb)]
+            };
+            let a = link.assembly_id();
+            for (i, &(axis, stiff)) in axes.iter().enumerate() {
+                link.joint.set_spring(axis, stiff, 0.0);
+                dofs.push((a + i, stiff));
             }
-            Chain::Impulse => {
-                impulse::chain(world, &segs, l, &frame_s, centreline, stiffness, beta)
-            }
-        };
+        }
+        for (i, stiff) in dofs {
+            mb.damping_mut()[i] = beta * stiff;
+        }
+        // A curved initial centreline: joint coordinates from the placed
+        // bodies (Rapier otherwise snaps the chain straight at the first step).
+        let mut disp = vec![0.0; mb.ndofs()];
+        for (j, sj) in joints.iter().enumerate() {
+            let f = |k: usize, at: Real| {
+                centreline(frame_s(k)) * Pose::from_translation(Vector::new(at, 0.0, 0.0))
+            };
+            // Rotations only: the chain starts at its rest length (the gaps
+            // between neighbouring tangents of a curved centreline are its
+            // discretisation, not a stretch).
+            let rel = f(j, sj.at1).inverse() * f(j + 1, sj.at2);
+            let rot = rel.rotation.to_scaled_axis();
+            let a = mb.link(j + 1).map_or(0, |l| l.assembly_id()) + usize::from(sj.axial);
+            disp[a..a + 3].copy_from_slice(&[rot.x, rot.y, rot.z]);
+        }
+        mb.apply_displacements(&disp);
+        mb.forward_kinematics(&world.bodies, true);
+        let poses: Vec<Pose> = mb.links().map(|l| *l.local_to_world()).collect();
+        for (seg, pose) in segs.iter().zip(poses) {
+            world.bodies[seg.handle].set_position(pose, true);
+        }
         let mut end_joints = [None, None];
         for (e, att) in ends.iter().enumerate() {
             let Some(att) = att else { continue };
@@ -554,14 +493,9 @@ impl PhysicsBeam {
         // The multibody's own joint coordinates: what its springs act on, and
         // exact where a difference of world positions would lose the axial
         // stretch (nm) to rounding.
-        let q = match sj.handle {
-            JointHandle::Multibody(h) => match world.multibody_joints.get(h) {
-                Some((mb, link)) => mb.link(link).map_or([0.0; 6], |l| l.joint().coords()),
-                None => [0.0; 6],
-            },
-            // What the motors act on: the stretch along x1 and each axis's
-            // angle, 2 asin of the relative rotation's quaternion component.
-            JointHandle::Impulse => impulse::coords(&f1, &f2),
+        let q = match world.multibody_joints.get(sj.handle) {
+            Some((mb, link)) => mb.link(link).map_or([0.0; 6], |l| l.joint().coords()),
+            None => [0.0; 6],
         };
         // Interior joints are axially rigid: their force is a reaction, not a spring's.
         let axial = if sj.axial {
@@ -628,22 +562,12 @@ impl PhysicsBeam {
     }
 
     /// The wrench each end attachment exerts on the beam (force, and torque
-    /// about the end frame's origin; world frame), `None` for a free end
-    /// and for both ends of a [`Chain::Impulse`]. The holder feels the
-    /// opposite. Needs [`PhysicsBeam::after_step`] after every step for the
-    /// inertial terms.
+    /// about the end frame's origin; world frame), `None` for a free end.
+    /// The holder feels the opposite. Needs [`PhysicsBeam::after_step`]
+    /// after every step for the inertial terms.
     pub fn grasp_wrenches(&self, world: &PhysicsWorld) -> [Option<Wrench>; 2] {
         let n = self.segments();
         let mut out = [None, None];
-        // The impulse chain is axially rigid: its axial reactions follow no
-        // spring law this balance could close with (read the holders').
-        if self
-            .joints
-            .iter()
-            .any(|j| matches!(j.handle, JointHandle::Impulse))
-        {
-            return out;
-        }
         if self.ends[0].is_some() {
             // Body 0: F_A − F_1 = fi, M_A + (p0 − c) × F_A − M_1 − (p1 − c) × F_1 = ti.
             let (fi, ti, c) = self.inertial(world, 0);
@@ -672,8 +596,5 @@ impl PhysicsBeam {
     }
 }
 
-mod impulse;
-#[cfg(test)]
-mod impulse_tests;
 #[cfg(test)]
 mod tests;

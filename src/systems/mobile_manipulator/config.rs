@@ -130,29 +130,6 @@ pub struct BeamConfig {
     #[serde(default = "default_physics_segments")]
     #[schemars(range(min = 2, max = 40))]
     pub physics_segments: usize,
-    /// How the physics chain's segments are joined: `"impulse"` (impulse
-    /// joints whose motors are the springs, swept with the world; a
-    /// fraction of the cost), `"multibody"` (one multibody, its springs
-    /// converged in its mass matrix), or `"auto"` (default): impulse
-    /// through compliant wrists, whose balance reads the grasp wrenches,
-    /// multibody with rigid wrists, where only the chain's own springs do.
-    #[serde(default)]
-    pub physics_chain: PhysicsChain,
-}
-
-/// `[model.beam] physics_chain`: how the physics beam's segments are joined
-/// ([`crate::physics::beam::Chain`]).
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Deserialize, Serialize, JsonSchema)]
-#[serde(rename_all = "snake_case")]
-pub enum PhysicsChain {
-    /// Impulse joints with compliant wrists, a multibody with rigid ones.
-    #[default]
-    Auto,
-    /// Impulse joints (needs compliant wrists: the grasp wrenches are read
-    /// from the grippers' balance through them).
-    Impulse,
-    /// One Rapier multibody.
-    Multibody,
 }
 
 fn default_physics_segments() -> usize {

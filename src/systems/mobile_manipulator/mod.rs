@@ -29,8 +29,8 @@ mod grasp;
 mod overlay;
 
 pub use config::{
-    ArmServoConfig, BeamConfig, BoundKind, MobileManipulatorConfig, ObstacleConfig, PhysicsChain,
-    WristConfig, DEFAULT_MAX_FORCE, DEFAULT_MAX_MOMENT,
+    ArmServoConfig, BeamConfig, BoundKind, MobileManipulatorConfig, ObstacleConfig, WristConfig,
+    DEFAULT_MAX_FORCE, DEFAULT_MAX_MOMENT,
 };
 
 use super::{EarlyAnalysis, SimFollower, System};
@@ -39,7 +39,7 @@ use crate::integrate::Trajectory;
 use crate::model::ellipsoid::Superellipsoid;
 use crate::model::mobile_manipulator::{self as mm, MobileManipulator, Wrist};
 use crate::model::{KinematicModel, State};
-use crate::physics::beam::{BeamOptions, Chain};
+use crate::physics::beam::BeamOptions;
 use crate::physics::mobile_manipulator::{
     link_visuals, robot_link_name, ArmServo, CarriedBeam, MobileManipulatorPhysics, ObstacleShape,
     Setup,
@@ -121,15 +121,6 @@ fn dilf(cfg: &MobileManipulatorConfig, params: &DilfParams) -> Result<Dilf, Setu
             "model.wrist",
             "a compliant wrist holds the carried beam (robots = 2)",
         ));
-    }
-    if let Some(b) = cfg.beam.as_ref() {
-        if b.physics_chain == PhysicsChain::Impulse && wrist == Wrist::Rigid {
-            return Err(SetupError::key(
-                "model.beam.physics_chain",
-                "\"impulse\" reads the grasp wrenches through compliant wrists: set \
-                 [model.wrist] kind = \"compliant\", or physics_chain = \"multibody\"",
-            ));
-        }
     }
     let mut obstacles = Vec::new();
     for (i, o) in cfg.obstacles.iter().enumerate() {
@@ -229,14 +220,6 @@ impl Dilf {
             grasp: c.grasp,
             options: BeamOptions {
                 segments: cfg.physics_segments,
-                chain: match (cfg.physics_chain, self.wrist) {
-                    (PhysicsChain::Multibody, _) | (PhysicsChain::Auto, Wrist::Rigid) => {
-                        Chain::Multibody
-                    }
-                    (PhysicsChain::Impulse, _) | (PhysicsChain::Auto, Wrist::Compliant(_)) => {
-                        Chain::Impulse
-                    }
-                },
                 ..BeamOptions::default()
             },
         })

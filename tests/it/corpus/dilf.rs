@@ -137,27 +137,6 @@ pub fn cases(c: &mut Corpus) {
         Some("planner.sequence.mode"),
     );
     c.sc(
-        "unknown physics chain",
-        edit(
-            &po,
-            "physics_segments = 4",
-            "physics_segments = 4\nphysics_chain = \"springy\"",
-        ),
-        Some("physics_chain = \"springy\""),
-        Some("model.beam.physics_chain"),
-    );
-    let printed = shipped("dilf_pair_open_printed.toml");
-    c.sc(
-        "impulse chain with rigid wrists",
-        edit(
-            &printed,
-            "[model.beam]\nmax_deformation = 0.3",
-            "[model.beam]\nmax_deformation = 0.3\nphysics_chain = \"impulse\"",
-        ),
-        Some("physics_chain = \"impulse\""),
-        Some("model.beam.physics_chain"),
-    );
-    c.sc(
         "unknown grasps source",
         edit(&po, "grasps = \"measured\"", "grasps = \"sensed\""),
         Some("grasps = \"sensed\""),

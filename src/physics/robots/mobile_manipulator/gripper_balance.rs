@@ -1,24 +1,23 @@
 //! The wrench each gripper exerts on the carried beam, read from the
-//! gripper's own balance.
+//! gripper's own balance through its compliant wrist.
 //!
 //! Between the flange and the gripper sits the compliant wrist
-//! (`joints::compliant_wrist_joint`): six force-based motor rows, each an
-//! implicit spring–damper that Rapier solves as f = −k x⁺ − c v⁺ (x⁺, v⁺
-//! the row's deflection and rate at the end of the substep), about the
-//! grasp point in the flange's axes. What the wrist, gravity and the
+//! (`joints::compliant_wrist_joint`): six force-based motor rows with
+//! limits and no locked row, so Rapier solves each on its own axis and the
+//! impulse it keeps per row (`motors[i].impulse`, `limits[i].impulse`, over
+//! the last substep) is the wrist's force along that axis of the flange's
+//! grasp frame, or its moment about it. What the wrist, gravity and the
 //! gripper's inertia leave over is what the beam exerts on the gripper
 //! (Newton–Euler of the gripper, its accelerations from velocity
 //! differences over the step), and the gripper exerts the opposite on the
-//! beam. Unlike the beam's own balance ([`PhysicsBeam::grasp_wrenches`],
-//! which needs the chain's spring laws to hold), this reads what the
-//! simulated world did whatever joins the beam's segments, so it serves
-//! both chains ([`Chain`]); it needs the wrists' spring laws, so a rigid
-//! wrist has none. While a wrist axis sits on its hard stop the stop's
-//! force is missing from it (the gate `sim_wrist_travel_used` ≤ 1 fails
-//! first).
+//! beam: what a force–torque sensor in the wrist, compensated for the
+//! gripper, reads. The beam's own balance ([`PhysicsBeam::grasp_wrenches`])
+//! also counts the solver's correction of the start poses in the first
+//! step (some 170 N for one step, which no part of the rod feels: the
+//! seed-004 note); the grippers' balance does not. A rigid wrist has no
+//! such rows, and there the beam's balance is read.
 //!
 //! [`PhysicsBeam::grasp_wrenches`]: crate::physics::beam::PhysicsBeam::grasp_wrenches
-//! [`Chain`]: crate::physics::beam::Chain
 
 use super::joints::grasp_frame;
 use crate::physics::beam::Wrench;
@@ -69,11 +68,8 @@ impl GripperBalance {
     pub(super) fn after_step(&mut self, world: &PhysicsWorld) {
         let dt = world.integration_parameters.dt;
         let now = self.velocities(world);
-        for k in 0..2 {
-            self.accel[k] = (
-                (now[k].0 - self.last[k].0) / dt,
-                (now[k].1 - self.last[k].1) / dt,
-            );
+        for ((acc, new), old) in self.accel.iter_mut().zip(&now).zip(&self.last) {
+            *acc = ((new.0 - old.0) / dt, (new.1 - old.1) / dt);
         }
         self.last = now;
     }
