@@ -1,15 +1,19 @@
 //! Seed 004 benchmarks: the feedback policy (V, ∂V/∂q by dual numbers, and
 //! Eq. 18) for the door scenario, V and ∂V/∂q of the two robots with the
-//! beam, and the door scenario's full run.
+//! beam, the pair's physics step (two robots carrying the beam) and the
+//! door scenario's full run.
 //!
-//! `cargo bench --bench dilf`. Medians are quoted in the README.
+//! `cargo bench --bench dilf`; the pair's step alone: `cargo bench --bench
+//! dilf -- dilf_pair_physics`. Medians are quoted in the README and in
+//! docs/src/performance.md.
 
+use anholonomy::engine::{replay, ReplayOptions};
 use anholonomy::integrate::simulate;
 use anholonomy::runner::{run, RunOptions};
 mod common;
 use anholonomy::scenario::{ModelConfig, PlannerConfig};
-use common::prepared;
-use criterion::{criterion_group, criterion_main, BatchSize, Criterion};
+use common::{bench_driven_steps, prepared, STEPS};
+use criterion::{criterion_group, criterion_main, BatchSize, Criterion, Throughput};
 
 /// The policy (V, ∂V/∂q, Eq. 18 and the hold guard) on the states of the
 /// scenario's ideal run: the single robot at the door, and the pair with the
@@ -156,5 +160,49 @@ fn full_run(c: &mut Criterion) {
     g.finish();
 }
 
-criterion_group!(benches, policy, pair_field, full_run);
+/// The pair carrying the beam (`dilf_pair_open`'s world: two robots, the
+/// rod through compliant wrists, dt = 4 ms, 4 solver iterations): 1000
+/// physics steps driving both platforms forward at 0.1 m/s with the arms
+/// held (after 250 steps, 1 s, of settling), and the physics replay of the
+/// scenario's plan (its feedback law on the simulated state every 20 ms,
+/// 3005 steps: the `steps/s` of `anholonomy run`).
+fn pair_physics(c: &mut Criterion) {
+    let prep = prepared("dilf_pair_open");
+    let mut g = c.benchmark_group("dilf_pair_physics");
+    g.sample_size(10);
+    g.throughput(Throughput::Elements(STEPS));
+    let mut u = vec![0.0; 16];
+    u[0] = 0.1;
+    u[8] = 0.1;
+    bench_driven_steps(&mut g, "1000_steps_driving", &prep, &u, 250);
+    let plan = prep.plan().expect("plan");
+    let dt = prep.scenario.sim.dt;
+    let opts = ReplayOptions {
+        link_pose_every: None,
+        ..ReplayOptions::new(dt, prep.scenario.sim.settle)
+    };
+    let steps = replay(
+        &mut *prep.physics().expect("physics"),
+        &plan,
+        &opts,
+        &mut (),
+    )
+    .expect("replay")
+    .steps;
+    g.throughput(Throughput::Elements(steps as u64));
+    g.bench_function("replay_with_law", |b| {
+        b.iter_batched(
+            || prep.physics().expect("physics"),
+            |mut sys| {
+                replay(&mut *sys, &plan, &opts, &mut ())
+                    .expect("replay")
+                    .steps
+            },
+            BatchSize::LargeInput,
+        )
+    });
+    g.finish();
+}
+
+criterion_group!(benches, policy, pair_field, pair_physics, full_run);
 criterion_main!(benches);

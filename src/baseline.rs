@@ -440,6 +440,7 @@ mod tests {
             timings: Default::default(),
             log_dir: None,
             notes: Vec::new(),
+            plan_note: None,
         }
     }
 

@@ -151,6 +151,10 @@ pub struct RunOutcome {
     /// What the result column adds to the verdict: each `[margins]` gate
     /// that held (`command_latency holds at 0.02 s`).
     pub notes: Vec<String>,
+    /// What the planner says about its plan when it matters to the
+    /// verdict (the plan's `details.note`: e.g. that no sequence
+    /// converged, and what each candidate did), shown after the verdict.
+    pub plan_note: Option<String>,
 }
 
 impl RunOutcome {
@@ -564,6 +568,7 @@ pub fn finish(
         timings,
         log_dir: None,
         notes: Vec::new(),
+        plan_note: plan.details["note"].as_str().map(String::from),
     };
     let log_error = |message: String| Error::Log {
         path: sc.path.clone(),

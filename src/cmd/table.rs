@@ -29,11 +29,13 @@ fn fmt_tracking(o: &RunOutcome, name: &str) -> String {
 
 /// The result column: the verdict, and the `[margins]` gates that held.
 fn result(o: &RunOutcome) -> String {
-    let v = o.verdict.describe(&o.failures, o.expect_reason.as_deref());
-    if o.notes.is_empty() {
-        v
-    } else {
-        format!("{v} ({})", o.notes.join("; "))
+    let mut v = o.verdict.describe(&o.failures, o.expect_reason.as_deref());
+    if !o.notes.is_empty() {
+        v = format!("{v} ({})", o.notes.join("; "));
+    }
+    match &o.plan_note {
+        Some(n) => format!("{v} [{n}]"),
+        None => v,
     }
 }
 

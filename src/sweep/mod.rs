@@ -467,6 +467,7 @@ pub fn run_sweep_report(
         },
         log_dir: dir,
         notes: Vec::new(),
+        plan_note: None,
     };
     Ok((outcome, table))
 }

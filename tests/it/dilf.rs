@@ -719,7 +719,11 @@ fn the_hold_guard_keeps_long_holds_off_the_wall() {
     let text = |guard: bool| {
         dilf_text(start, goal, &wall).replace(
             "horizon = 5.0",
-            &format!("horizon = 60.0\nperiod = 0.25\nhold_guard = {guard}"),
+            // Eq. 18 as printed: its holds are what the guard is about.
+            &format!(
+                "horizon = 60.0\nperiod = 0.25\nhold_guard = {guard}\nspeed = \"sign\"\n\
+                 align_joint_gain = 0.0\nsequence = {{ mode = \"off\" }}"
+            ),
         )
     };
     let metric = |m: &[(String, f64)], n: &str| m.iter().find(|(k, _)| k == n).unwrap().1;

@@ -263,6 +263,10 @@ exponent = 4.0
 
 [planner]
 kind = "dilf"
+# The paper's law, whose stalls this test is about.
+speed = "sign"
+align_joint_gain = 0.0
+sequence = {{ mode = "off" }}
 heading_deadzone = 0.15
 field_power = 1.75
 horizon = 60.0
@@ -328,10 +332,7 @@ fn random_door_tasks_converge_or_stall_early() {
                         &format!("start = [{}]", again.join(", ")),
                         1,
                     )
-                    .replace(
-                        "horizon = 60.0",
-                        "horizon = 30.0\n[planner.stall]\ntime = 0.0",
-                    );
+                    .replace("horizon = 60.0", "horizon = 30.0\nstall = { time = 0.0 }");
                 let cont = Run::text(&more);
                 assert_ne!(
                     cont.ended(),
@@ -374,7 +375,7 @@ fn the_pair_is_handed_over_to_the_alignment_within_the_tolerance() {
     assert!(run.exact_gap() < 1e-6);
     let without = Run::text(&text.replace(
         "horizon = 40.0",
-        "horizon = 40.0\n[planner.stall]\ntime = 0.0\nhandover_time = 1e9",
+        "horizon = 40.0\nstall = { time = 0.0, handover_time = 1e9 }",
     ));
     assert!(without.ended().contains("hold"), "{}", without.ended());
     assert!((without.end_time() - 40.0).abs() < 1e-9);

@@ -149,7 +149,8 @@ fn beam_wrenches(
     }
     let r0 = &st.end0.r;
     let (mut f, mut m) = ([0.0; 3], [0.0; 3]);
-    for (j, (e, (cb, rb))) in segs.iter().zip(seg_bar).enumerate() {
+    let frames = o.segment_frames(&q_f, &grav);
+    for (frame, (e, (cb, rb))) in frames.iter().zip(segs.iter().zip(seg_bar)) {
         // Rigid: ⟨R̄, [ω]× R⟩ = ω · vee(R̄Rᵀ − RR̄ᵀ).
         let mm: M3<f64> =
             std::array::from_fn(|i| std::array::from_fn(|l| spatial::dot(rb[i], e.rot[l])));
@@ -161,7 +162,6 @@ fn beam_wrenches(
         f = spatial::add(f, *cb);
         m = spatial::add(m, spatial::add(spatial::cross(e.center, *cb), tau));
         // Deformation: the adjoints in end-0 coordinates, R₀ᵀ c̄ and R₀ᵀ R̄.
-        let frame = o.segment_frame(&q_f, &grav, j);
         let cl = spatial::mul_mtv(r0, *cb);
         for (x, w) in frame.p.iter().zip(cl) {
             add_eps(&mut a, x, w);

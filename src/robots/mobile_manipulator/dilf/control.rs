@@ -108,11 +108,12 @@ pub enum SpeedLaw {
     /// Eq. 18a: v = k_v sign(f·h) ‖f‖. Where the field is nearly
     /// perpendicular to the heading, f·h changes sign from sample to sample
     /// and v jumps between ±the speed limit.
-    #[default]
     Sign,
-    /// Ours: v = k_v (f·h), the field's component along the heading h =
-    /// (cos θ, sin θ). Continuous, zero where the field is perpendicular to
-    /// the heading; the platform's V̇ term k_v (f·h)² stays ≥ 0.
+    /// Ours (the default): v = k_v (f·h), the field's component along the
+    /// heading h = (cos θ, sin θ). Continuous, zero where the field is
+    /// perpendicular to the heading; the platform's V̇ term k_v (f·h)² stays
+    /// ≥ 0.
+    #[default]
     Projection,
 }
 

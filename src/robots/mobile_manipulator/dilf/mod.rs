@@ -129,8 +129,9 @@ pub struct DilfParams {
     /// While a platform turns in place to its goal heading (the final
     /// alignment, ours), its arm joints go to their goal angles at this
     /// gain, 1/s (rate = gain × error, within `max_joint_rate`), instead of
-    /// Eq. 18c's rates, which vanish there; 0 (default): Eq. 18c throughout.
-    #[serde(default)]
+    /// Eq. 18c's rates, which vanish there (default 1); 0: Eq. 18c
+    /// throughout, the paper's law.
+    #[serde(default = "default_align_joint_gain")]
     #[schemars(range(min = 0))]
     pub align_joint_gain: f64,
     /// The policy is evaluated every `period` seconds and held in between.
@@ -176,11 +177,13 @@ pub struct DilfParams {
     /// default, the paper's law).
     #[serde(default)]
     pub approach: Approach,
-    /// The platform's speed law; both saturate at `max_speed`.
+    /// The platform's speed law, `"projection"` (default, ours) or
+    /// `"sign"` (Eq. 18a); both saturate at `max_speed`.
     #[serde(default)]
     pub speed: SpeedLaw,
-    /// Intermediate goals: turn, translate, turn (ours; off by default,
-    /// the paper's law straight to the goal; [`sequence`]).
+    /// Intermediate goals: turn, translate, turn (ours; by default where the
+    /// law alone does not converge or strains a carried object;
+    /// `mode = "off"` is the paper's law straight to the goal; [`sequence`]).
     #[serde(default)]
     pub sequence: SequenceParams,
 }
@@ -264,6 +267,13 @@ fn default_period() -> f64 {
 }
 fn default_deadzone() -> f64 {
     0.0
+}
+/// The arm's joints go to their goal angles in the final alignment at 1/s:
+/// on random single-robot goals behind a wall Eq. 18c alone left a wrist
+/// joint 2.1°–2.8° off in 5 of 20 physics runs, at 1/s none
+/// (docs/src/research/seed-004.md).
+fn default_align_joint_gain() -> f64 {
+    1.0
 }
 fn default_field_power() -> f64 {
     2.0
@@ -457,6 +467,32 @@ fn open_scene(params: &DilfParams, goal: Vec<f64>) -> Arc<Scene> {
     };
     let parts = crate::robots::mobile_manipulator::kinematics::default_parts();
     Arc::new(Scene::new(1, parts, Vec::new(), goal, potential).unwrap())
+}
+
+/// Two robots in the open carrying the default rod grasped at `start`,
+/// with `params`' potential and `goal` (tests).
+#[cfg(test)]
+fn pair_scene(params: &DilfParams, start: &[f64], goal: Vec<f64>) -> Arc<Scene> {
+    use crate::robots::mobile_manipulator::beam::{Beam, GFRP_ROD_10MM};
+    use potential::PotentialParams;
+    let potential = PotentialParams {
+        lambda: params.lambda,
+        kv: params.kv_exponent,
+        goal_frame: params.goal_frame,
+        dipole: params.dipole,
+        singularity: params.singularity,
+        field_power: params.field_power,
+    };
+    let (material, section) = GFRP_ROD_10MM;
+    let rod = Beam {
+        material,
+        section,
+        length: 1.0,
+    };
+    let carried = object::Carried::at_rest(&rod, None, start, 4.0, 8, 0.02).unwrap();
+    let parts = crate::robots::mobile_manipulator::kinematics::default_parts();
+    let scene = Scene::new(2, parts, Vec::new(), goal, potential).unwrap();
+    Arc::new(scene.with_object(carried))
 }
 
 struct DilfController {
@@ -754,8 +790,11 @@ pub fn plan(
     let policy = |phases: Vec<Arc<Scene>>| Policy::new(scene.clone(), phases, params, false);
     let mut chosen = Arc::new(policy(Vec::new()));
     if params.sequence.mode != SequenceMode::Off {
-        let run = |p: &Arc<Policy>| sequence::ideal_time_to_goal(p, start, params, step);
+        let run = |p: &Arc<Policy>| sequence::ideal_outcome(p, start, params, step);
         let (picked, found) = sequence::choose_sequence(&scene, q, params, &chosen, policy, run);
+        if let Some(note) = found.get("note") {
+            details["note"] = note.clone();
+        }
         details["sequence"] = found;
         if let Some(p) = picked {
             // The candidate reached every intermediate goal in the ideal
@@ -766,11 +805,13 @@ pub fn plan(
     Ok(feedback_plan(chosen, params, details))
 }
 
+/// The plan of `policy`: its law for its budget (the horizon per phase,
+/// [`sequence::budget`]).
 fn feedback_plan(policy: Arc<Policy>, params: &DilfParams, details: serde_json::Value) -> Plan {
     Plan {
         labels: labels(policy.scene.robots),
         segments: Vec::new(),
-        duration: params.horizon,
+        duration: sequence::budget(params, &policy),
         law: ControlLaw::Feedback {
             factory: Arc::new(Factory(policy)),
             period: params.period,

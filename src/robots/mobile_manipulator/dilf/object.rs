@@ -318,14 +318,21 @@ impl Carried {
     /// The beam's ellipsoids (world), segment j centred at s = (j + ½) L / N
     /// on the deformed centreline, its long axis along the tangent.
     pub fn ellipsoids<T: Scalar>(&self, st: &BeamState<T>) -> Vec<PlacedEllipsoid<T>> {
-        (0..self.segments).map(|j| self.segment(st, j)).collect()
+        self.segment_frames(&st.q_f, &st.gravity)
+            .iter()
+            .map(|f| self.placed(&st.end0.then(f)))
+            .collect()
     }
 
     /// Segment `j` of [`Carried::ellipsoids`].
     pub fn segment<T: Scalar>(&self, st: &BeamState<T>, j: usize) -> PlacedEllipsoid<T> {
+        self.placed(&st.end0.then(&self.segment_frame(&st.q_f, &st.gravity, j)))
+    }
+
+    /// A segment's ellipsoid at its world frame `f`.
+    fn placed<T: Scalar>(&self, f: &Pose<T>) -> PlacedEllipsoid<T> {
         let l = self.fe.beam().length;
         let n = self.segments;
-        let f = st.end0.then(&self.segment_frame(&st.q_f, &st.gravity, j));
         PlacedEllipsoid {
             center: f.p,
             rot: f.r,
@@ -344,6 +351,25 @@ impl Carried {
             }
             None => self.fe.centerline(q_f, s),
         }
+    }
+
+    /// Every segment's frame, as [`Carried::segment_frame`] gives them (the
+    /// same arithmetic, bit for bit), the chain's statics solved once.
+    pub fn segment_frames<T: Scalar>(&self, q_f: &[T; 12], g: &[T; 3]) -> Vec<Pose<T>> {
+        let (l, n) = (self.fe.beam().length, self.segments as f64);
+        let nodes = self.compliant().map(|st| {
+            let xi: [T; 6] = std::array::from_fn(|i| q_f[i]);
+            st.nodes(&xi, g)
+        });
+        (0..self.segments)
+            .map(|j| {
+                let s = (j as f64 + 0.5) * l / n;
+                match &nodes {
+                    Some(nodes) => self.fe.centerline_of_nodes(nodes, s),
+                    None => self.fe.centerline(q_f, s),
+                }
+            })
+            .collect()
     }
 
     /// Whether robot `r`'s part `part` carries segment `seg`: robot r's arm,

@@ -10,12 +10,10 @@
 //! where V has a spurious maximum (`seed-004-stall.md`), which depends on
 //! the dipole's axis.
 //!
-//! With `[planner.sequence] mode = "auto"` the planner first runs the
-//! paper's law from the start (the ideal run, exact holds); if it converges
-//! that is the plan. Otherwise it tries approach headings ψ, from the
-//! direction of travel τ (start centroid to goal centroid) outwards in
-//! steps of `step_deg` to both sides, and keeps the first whose phases all
-//! converge in the ideal run:
+//! With `[planner.sequence] mode = "auto"` (the default) the planner tries
+//! approach headings ψ, from the direction of travel τ (start centroid to
+//! goal centroid) outwards in steps of `step_deg` to both sides, and keeps
+//! the first whose phases all converge in the ideal run (exact holds):
 //!
 //! 1. (two robots) turn the formation in place, about its centroid, to face
 //!    ψ, in turns of at most `max_turn_deg`;
@@ -29,11 +27,20 @@
 //! monotone along a sequenced run). An intermediate goal counts as reached
 //! when every platform is within the task's position tolerance and
 //! `heading_deg` of its heading (the arm joints converge on the way: every
-//! phase's goal has the task goal's joints). If no candidate converges the
-//! plan is the paper's law, which then stalls and says so. With
-//! `mode = "always"` the sequences are tried first even where the law
-//! converges by itself (its simultaneous turn and drive strains the object
-//! and tilts the platforms more in physics), the law last.
+//! phase's goal has the task goal's joints).
+//!
+//! Where the law alone goes first: `auto` runs the paper's law first for
+//! robots that carry no object (if it converges that is the plan) and the
+//! sequences first for a pair carrying one (the law's simultaneous turn
+//! and drive strains the object and tilts the platforms more in physics
+//! than rigid phases do), the law last; `always` tries the sequences first
+//! for every task. If nothing converges the plan is the paper's law, which
+//! then stalls and says so, and the plan's details say what each candidate
+//! did and when (`note`).
+//!
+//! **Time.** Each phase gets the task's `horizon`: a plan of n phases (the
+//! task's goal included) runs for n × `horizon`, its candidates too, so a
+//! sequence is never cut short by a horizon sized for the law alone.
 //!
 //! The candidates' ideal runs must reach every intermediate goal. The plan
 //! itself treats an intermediate goal as a waypoint: where the law stalls
@@ -58,14 +65,16 @@ use std::sync::Arc;
 #[serde(rename_all = "snake_case")]
 pub enum SequenceMode {
     /// The paper's law straight to the goal.
-    #[default]
     Off,
-    /// The paper's law when its ideal run converges, else the first
-    /// converging turn–translate–turn sequence (ours).
+    /// The sequence where the law alone does not converge or strains the
+    /// object (ours, the default): robots carrying no object get the
+    /// paper's law when its ideal run converges, else the first converging
+    /// sequence; a pair carrying an object gets the first converging
+    /// sequence, the law only if none converges.
+    #[default]
     Auto,
-    /// The first converging turn–translate–turn sequence even where the
-    /// paper's law converges by itself (ours): the law's simultaneous turn
-    /// and drive strains the object more than rigid phases do.
+    /// The first converging turn–translate–turn sequence for every task,
+    /// the law only if none converges (ours).
     Always,
 }
 
@@ -74,15 +83,18 @@ pub enum SequenceMode {
 #[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields, default)]
 pub struct SequenceParams {
-    /// `"off"` (default, the paper's law), `"auto"` or `"always"`. A plan
-    /// that is a sequence moves on to the next phase when the law stalls
-    /// short of an intermediate goal (the candidates must reach each one).
+    /// `"auto"` (default: the law first without a carried object, the
+    /// sequences first with one), `"always"` (the sequences first) or
+    /// `"off"` (the paper's law). A plan that is a sequence moves on to the
+    /// next phase when the law stalls short of an intermediate goal (the
+    /// candidates must reach each one); each phase gets the task's horizon.
     pub mode: SequenceMode,
     /// An intermediate goal is reached when every platform is within the
     /// task's position tolerance and this heading error, degrees.
     #[schemars(extend("exclusiveMinimum" = 0), range(max = 180))]
     pub heading_deg: f64,
-    /// Largest turn in place of one phase, degrees; larger turns are split.
+    /// Largest turn in place of one phase, degrees; larger turns are split
+    /// (default 30: a pair's rod follows smaller turns with less strain).
     #[schemars(extend("exclusiveMinimum" = 0), range(max = 180))]
     pub max_turn_deg: f64,
     /// Approach headings are tried from the direction of travel outwards in
@@ -94,9 +106,9 @@ pub struct SequenceParams {
 impl Default for SequenceParams {
     fn default() -> Self {
         SequenceParams {
-            mode: SequenceMode::Off,
+            mode: SequenceMode::Auto,
             heading_deg: 5.0,
-            max_turn_deg: 90.0,
+            max_turn_deg: 30.0,
             step_deg: 15.0,
         }
     }
@@ -233,51 +245,149 @@ pub fn candidate_headings(start: &[f64], goal: &[f64], step: f64, position: f64)
     out
 }
 
-/// When the ideal run of `policy` from `start` converges (s; the harness's
-/// ideal run: [`crate::integrate::simulate`] with step `step`), or `None` if
-/// it stops otherwise or reaches the horizon.
-pub(super) fn ideal_time_to_goal(
+/// How a candidate's ideal run ended.
+#[derive(Debug, Clone, PartialEq)]
+pub(super) struct Outcome {
+    /// When it converged on the task's goal, s (`None`: it did not).
+    pub converged: Option<f64>,
+    /// The plan label it ended with (`converged`, `stalled`, a stop), or
+    /// `horizon` when it used its whole budget.
+    pub ended: String,
+    /// When it ended, s.
+    pub at: f64,
+    /// The phases it reached (intermediate goals and the task's) of all.
+    pub reached: usize,
+    pub phases: usize,
+    /// The worse platform's distance from the goal of the phase it was in, m.
+    pub distance: f64,
+}
+
+impl Outcome {
+    /// One line: "converged at 41.2 s", "stalled at 30.1 s in phase 2 of
+    /// 5, 0.41 m from its goal", "used its 150 s in phase 5 of 5, ...".
+    pub fn describe(&self) -> String {
+        if let Some(t) = self.converged {
+            return format!("converged at {t:.1} s");
+        }
+        let how = match self.ended.as_str() {
+            "horizon" => format!("used its {:.0} s", self.at),
+            e => format!("{e} at {:.1} s", self.at),
+        };
+        format!(
+            "{how} in phase {} of {}, {:.2} m from its goal",
+            (self.reached + 1).min(self.phases),
+            self.phases,
+            self.distance
+        )
+    }
+}
+
+/// The ideal run of `policy` from `start` (the harness's ideal run:
+/// [`crate::integrate::simulate`] with step `step`, for the policy's
+/// budget, [`crate::robots::mobile_manipulator::dilf::feedback_plan`]) and how it ended.
+pub(super) fn ideal_outcome(
     policy: &Arc<Policy>,
     start: &State,
     params: &DilfParams,
     step: f64,
-) -> Option<f64> {
+) -> Outcome {
     let robots = policy.scene.robots;
     let plan = feedback_plan(policy.clone(), params, serde_json::Value::Null);
     let tr = crate::integrate::simulate(&mm::MobileManipulator { robots }, &plan, start, step);
-    let converged = 2 * 3usize.pow(robots as u32);
-    (tr.label.last() == Some(&converged)).then(|| *tr.t.last().unwrap_or(&f64::NAN))
+    let converged_label = 2 * 3usize.pow(robots as u32);
+    let last = *tr.label.last().unwrap_or(&0);
+    let at = *tr.t.last().unwrap_or(&f64::NAN);
+    // The phases passed, as the controller advances through them (a
+    // candidate's run does not move past a stalled waypoint).
+    let goals: Vec<&[f64]> = policy
+        .phases
+        .iter()
+        .map(|s| s.goal.as_slice())
+        .chain([policy.scene.goal.as_slice()])
+        .collect();
+    let mut reached = 0;
+    for q in &tr.q {
+        while reached + 1 < goals.len()
+            && policy
+                .sequence
+                .reached(&policy.tolerance, q.as_slice(), goals[reached])
+        {
+            reached += 1;
+        }
+    }
+    let end = tr.last();
+    let goal = goals[reached];
+    let distance = (0..robots)
+        .map(|r| {
+            let i = DOF * r;
+            (end[i] - goal[i]).hypot(end[i + 1] - goal[i + 1])
+        })
+        .fold(0.0, f64::max);
+    let converged = (last == converged_label).then_some(at);
+    let label = plan.label_name(last).to_string();
+    let stops = [
+        "converged",
+        "collision",
+        "singular",
+        "solver failure",
+        "overstrained",
+        "stalled",
+    ];
+    Outcome {
+        converged,
+        ended: if stops.contains(&label.as_str()) {
+            label
+        } else {
+            "horizon".into()
+        },
+        at,
+        reached: if converged.is_some() {
+            goals.len()
+        } else {
+            reached
+        },
+        phases: goals.len(),
+        distance,
+    }
 }
 
-/// `[planner.sequence] mode = "auto"` (the module docs): the paper's law if its
-/// ideal run converges (`Ok(None)`: keep `direct`), else the first approach
-/// heading whose sequence converges, with what was tried (for the plan's
-/// details).
+/// `[planner.sequence]` (the module docs): the first converging candidate
+/// in the mode's order (`Some`: a sequence; `None`: keep `direct`, the
+/// paper's law), with what was tried (for the plan's details: each
+/// candidate's outcome, and a `note` when none converged).
 pub(super) fn choose_sequence(
     scene: &Arc<Scene>,
     start: &[f64],
     params: &DilfParams,
     direct: &Arc<Policy>,
     policy: impl Fn(Vec<Arc<Scene>>) -> Policy,
-    run: impl Fn(&Arc<Policy>) -> Option<f64>,
+    run: impl Fn(&Arc<Policy>) -> Outcome,
 ) -> (Option<Arc<Policy>>, serde_json::Value) {
-    if params.sequence.mode == SequenceMode::Always {
-        // Tried last, below.
-    } else if let Some(t) = run(direct) {
-        return (
-            None,
-            serde_json::json!({"chosen": "direct", "tried": 1, "ideal_time": t}),
-        );
-    }
     let sq = &params.sequence;
+    let law_first = sq.mode == SequenceMode::Auto && scene.object.is_none();
+    let deg = |x: f64| (x.to_degrees() * 1e3).round() / 1e3;
+    let mut tried: Vec<serde_json::Value> = Vec::new();
+    let mut notes: Vec<String> = Vec::new();
+    let law = |tried: &mut Vec<serde_json::Value>, notes: &mut Vec<String>| {
+        let o = run(direct);
+        tried.push(serde_json::json!({"candidate": "direct", "outcome": o.describe()}));
+        notes.push(format!("the paper's law {}", o.describe()));
+        o.converged
+    };
+    if law_first {
+        if let Some(t) = law(&mut tried, &mut notes) {
+            return (
+                None,
+                serde_json::json!({"chosen": "direct", "tried": 1, "ideal_time": t, "candidates": tried}),
+            );
+        }
+    }
     let headings = candidate_headings(
         start,
         &scene.goal,
         sq.step_deg.to_radians(),
         params.tolerance.position,
     );
-    // The direct run counts as tried unless the mode skips it.
-    let mut tried = usize::from(sq.mode != SequenceMode::Always);
     for psi in headings {
         let goals = phase_goals(start, &scene.goal, psi, sq.max_turn_deg.to_radians());
         let phases: Option<Vec<Arc<Scene>>> = goals[..goals.len() - 1]
@@ -293,10 +403,14 @@ pub(super) fn choose_sequence(
         let Some(phases) = phases else {
             continue;
         };
-        tried += 1;
         let p = Arc::new(policy(phases));
-        if let Some(t) = run(&p) {
-            let deg = |x: f64| (x.to_degrees() * 1e3).round() / 1e3;
+        let o = run(&p);
+        tried.push(serde_json::json!({
+            "candidate": format!("ψ {:+.0}°", psi.to_degrees()),
+            "outcome": o.describe(),
+        }));
+        notes.push(format!("ψ {:+.0}° {}", psi.to_degrees(), o.describe()));
+        if let Some(t) = o.converged {
             let goals: Vec<Vec<f64>> = goals
                 .iter()
                 .map(|g| {
@@ -306,28 +420,57 @@ pub(super) fn choose_sequence(
                 })
                 .collect();
             return (
-                Some(p),
+                Some(p.clone()),
                 serde_json::json!({
                     "chosen": "sequence",
                     "approach_heading_deg": deg(psi),
                     "goals_x_y_theta_deg": goals,
-                    "tried": tried,
+                    "tried": tried.len(),
                     "ideal_time": t,
+                    "budget_s": budget(params, &p),
+                    "candidates": tried,
                 }),
             );
         }
     }
-    let converged = match sq.mode {
-        SequenceMode::Always => run(direct),
-        _ => None,
+    let converged = if law_first {
+        None
+    } else {
+        law(&mut tried, &mut notes)
     };
-    (
-        None,
-        match converged {
-            Some(t) => serde_json::json!({"chosen": "direct", "tried": tried + 1, "ideal_time": t}),
-            None => serde_json::json!({"chosen": "direct", "tried": tried, "converged": false}),
-        },
-    )
+    let found = match converged {
+        Some(t) => serde_json::json!({
+            "chosen": "direct", "tried": tried.len(), "ideal_time": t, "candidates": tried,
+        }),
+        None => {
+            // Say what each candidate did with its time, the first few in
+            // full (the details list all).
+            let shown = 4;
+            let mut note = format!(
+                "sequence: no candidate converged ({} tried, each phase {} s): {}",
+                tried.len(),
+                params.horizon,
+                notes[..notes.len().min(shown)].join("; ")
+            );
+            if notes.len() > shown {
+                note.push_str(&format!(
+                    "; {} more in the plan's details",
+                    notes.len() - shown
+                ));
+            }
+            serde_json::json!({
+                "chosen": "direct", "tried": tried.len(), "converged": false,
+                "candidates": tried, "note": note,
+            })
+        }
+    };
+    (None, found)
+}
+
+/// The run time a policy gets: the task's horizon per phase (its
+/// intermediate goals and the task's own).
+pub(super) fn budget(params: &DilfParams, policy: &Policy) -> f64 {
+    params.horizon * (policy.phases.len() + 1) as f64
 }
 
 #[cfg(test)]
@@ -390,9 +533,23 @@ mod tests {
         assert_eq!(phases[1], goal.to_vec());
     }
 
-    /// `auto` keeps the paper's law when its ideal run converges; `always`
-    /// tries the sequences first and falls back to the law only when none
-    /// converges (the run closure stands in for the ideal run).
+    /// An outcome for the stand-in ideal runs below.
+    fn outcome(converges: bool) -> Outcome {
+        Outcome {
+            converged: converges.then_some(10.0),
+            ended: if converges { "converged" } else { "stalled" }.into(),
+            at: 10.0,
+            reached: 0,
+            phases: 1,
+            distance: 1.0,
+        }
+    }
+
+    /// Without a carried object `auto` keeps the paper's law when its ideal
+    /// run converges; `always` tries the sequences first and falls back to
+    /// the law only when none converges (the run closure stands in for the
+    /// ideal run). When nothing converges the details say what each
+    /// candidate did (`note`).
     #[test]
     fn always_tries_the_sequence_before_the_paper_law() {
         let goal = vec![2.0, 1.0, 0.5, 0.0, -1.2, 2.2, 0.0, -0.6, 0.0];
@@ -406,29 +563,60 @@ mod tests {
             let calls = std::cell::RefCell::new(Vec::new());
             let run = |p: &Arc<Policy>| {
                 calls.borrow_mut().push(p.phases.len());
-                converges(p.phases.len()).then_some(10.0)
+                outcome(converges(p.phases.len()))
             };
             let (picked, details) = choose_sequence(&scene, &start, &params, &direct, policy, run);
-            (
-                picked.is_some(),
-                details["chosen"].clone(),
-                calls.into_inner(),
-            )
+            (picked.is_some(), details, calls.into_inner())
         };
         let everything = |_: usize| true;
+        let (picked, details, calls) = choose("auto", &everything);
         assert_eq!(
-            choose("auto", &everything),
+            (picked, details["chosen"].clone(), calls),
             (false, "direct".into(), vec![0])
         );
+        let (picked, details, calls) = choose("always", &everything);
         assert_eq!(
-            choose("always", &everything),
+            (picked, details["chosen"].clone(), calls),
             (true, "sequence".into(), vec![1])
         );
         // No sequence converges: `always` falls back to the law, run last.
-        let (picked, chosen, calls) = choose("always", &|phases| phases == 0);
+        let (picked, details, calls) = choose("always", &|phases| phases == 0);
         assert!(!picked);
-        assert_eq!(chosen, "direct");
+        assert_eq!(details["chosen"], "direct");
         assert_eq!(calls.first(), Some(&1));
+        assert_eq!(calls.last(), Some(&0));
+        assert!(details.get("note").is_none());
+        // Nothing converges: the note names each candidate's outcome.
+        let (picked, details, calls) = choose("auto", &|_| false);
+        assert!(!picked);
+        assert_eq!(details["converged"], false);
+        assert_eq!(details["candidates"].as_array().unwrap().len(), calls.len());
+        let note = details["note"].as_str().unwrap();
+        assert!(note.contains("the paper's law stalled at 10.0 s"), "{note}");
+        assert!(note.contains("ψ"), "{note}");
+    }
+
+    /// With a carried object `auto` tries the sequences first (as `always`)
+    /// and the paper's law last.
+    #[test]
+    fn auto_tries_the_sequence_first_when_the_robots_carry_an_object() {
+        let start = table_i_start();
+        let (c, _) = formation(&start);
+        let goal = rigid(&start, c, 0.5, [1.0, 0.5]);
+        let params: DilfParams = toml::from_str("").unwrap();
+        let scene = crate::robots::mobile_manipulator::dilf::pair_scene(&params, &start, goal);
+        let policy = |phases| Policy::new(scene.clone(), phases, &params, false);
+        let direct = Arc::new(policy(Vec::new()));
+        let calls = std::cell::RefCell::new(Vec::new());
+        let run = |p: &Arc<Policy>| {
+            calls.borrow_mut().push(p.phases.len());
+            outcome(p.phases.is_empty())
+        };
+        let (picked, details) = choose_sequence(&scene, &start, &params, &direct, policy, run);
+        let calls = calls.into_inner();
+        assert!(picked.is_none());
+        assert_eq!(details["chosen"], "direct");
+        assert!(calls[0] > 0, "{calls:?}");
         assert_eq!(calls.last(), Some(&0));
     }
 

@@ -25,6 +25,7 @@ use crate::record::{LinkVisual, Pose, Shape, Visual};
 use crate::robots::mobile_manipulator::beam::physics::{Attachment, BeamOptions, PhysicsBeam};
 use crate::robots::mobile_manipulator::beam::se3_log;
 use crate::robots::mobile_manipulator::beam::{Beam, FeBeam};
+use crate::robots::mobile_manipulator::physics::gripper_balance::GripperBalance;
 
 /// The beam as the physics needs it (plain data, from the planner's grasp).
 #[derive(Debug, Clone)]
@@ -69,6 +70,9 @@ pub const PAIR_CHANNELS: [&str; 17] = [
 /// The beam in the world, held by two tools.
 pub(super) struct Held {
     beam: PhysicsBeam,
+    /// The grippers' balance through compliant wrists (the grasp wrenches
+    /// from it); `None` with rigid wrists (from the beam's own balance).
+    balance: Option<GripperBalance>,
     /// The segments' colliders.
     colliders: Vec<ColliderHandle>,
     fe: FeBeam,
@@ -102,6 +106,7 @@ impl Held {
         world: &mut PhysicsWorld,
         spec: &CarriedBeam,
         tools: [RigidBodyHandle; 2],
+        wrists: Option<([RigidBodyHandle; 2], [ImpulseJointHandle; 2])>,
         groups: InteractionGroups,
     ) -> Result<Held, SetupError> {
         let fe = FeBeam::new(&spec.beam)?;
@@ -126,8 +131,18 @@ impl Held {
             .iter()
             .flat_map(|b| world.bodies[*b].colliders().iter().copied())
             .collect();
+        let balance = wrists.map(|(flanges, joints)| {
+            GripperBalance::new(
+                world,
+                tools,
+                flanges,
+                joints,
+                spec.grasp.map(|g| from_spatial(&g)),
+            )
+        });
         Ok(Held {
             beam,
+            balance,
             colliders,
             fe,
             grasp: spec.grasp,
@@ -138,6 +153,9 @@ impl Held {
     /// Record the step's velocities (for the grasp wrenches).
     pub(super) fn after_step(&mut self, world: &PhysicsWorld) {
         self.beam.after_step(world);
+        if let Some(b) = &mut self.balance {
+            b.after_step(world);
+        }
     }
 
     /// The segments' colliders.
@@ -174,7 +192,10 @@ impl Held {
         let q = self.measured(world);
         let m = fe_deformation(&self.fe, &self.grasp, self.tools, world);
         let inf = |v: &[f64; 12]| v.iter().fold(0.0f64, |a, x| a.max(x.abs()));
-        let w = self.beam.grasp_wrenches(world);
+        let w = match &self.balance {
+            Some(b) => b.wrenches(world).map(Some),
+            None => self.beam.grasp_wrenches(world),
+        };
         let mag = |k: usize| w[k].map_or([f64::NAN; 2], |w| [norm(w.force), norm(w.torque)]);
         let ([f1, t1], [f2, t2]) = (mag(0), mag(1));
         [

@@ -32,6 +32,7 @@
 #[cfg(test)]
 mod armature_tests;
 mod carried;
+mod gripper_balance;
 mod joints;
 mod urdf;
 #[cfg(test)]
@@ -406,6 +407,13 @@ impl MobileManipulatorPhysics {
                 &mut sw.world,
                 spec,
                 [robots[0].tool, robots[1].tool],
+                match &setup.wrist {
+                    Wrist::Compliant(_) => Some((
+                        [robots[0].arm[5], robots[1].arm[5]],
+                        [robots[0].tool_joint, robots[1].tool_joint],
+                    )),
+                    Wrist::Rigid => None,
+                },
                 InteractionGroups::new(
                     BEAM,
                     GROUND | OBSTACLE | PLATFORM,
