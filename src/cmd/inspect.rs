@@ -159,13 +159,13 @@ pub fn keys_cmd(name: Option<&str>, markdown: bool, out: Option<&Path>) -> Resul
                     message: e.to_string(),
                 }]
             })?;
-            anholonomy::log::atomic::write_atomic(path, |w| {
+            anholonomy::log::atomic::write_file(path, |w| {
                 std::io::Write::write_all(w, text.as_bytes())
             })
-            .map_err(|message| {
+            .map_err(|e| {
                 vec![Error::Log {
                     path: path.clone(),
-                    message,
+                    message: e.to_string(),
                 }]
             })?;
         }
