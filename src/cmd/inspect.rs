@@ -148,7 +148,9 @@ pub fn keys_cmd(name: Option<&str>, markdown: bool, out: Option<&Path>) -> Resul
         }
         let mut pages = Vec::new();
         for p in Page::all() {
-            let text = p.markdown().map_err(|m| vec![Error::input("keys", m)])?;
+            let text = p
+                .markdown()
+                .map_err(|e| vec![Error::input("keys", e.to_string())])?;
             pages.push((dir.join(p.file()), text));
         }
         for (path, text) in &pages {
@@ -195,7 +197,7 @@ pub fn keys_cmd(name: Option<&str>, markdown: bool, out: Option<&Path>) -> Resul
     } else {
         page.text()
     }
-    .map_err(|m| vec![Error::input("keys", m)])?;
+    .map_err(|e| vec![Error::input("keys", e.to_string())])?;
     crate::emit(&text);
     Ok(0)
 }
