@@ -37,21 +37,58 @@ fn kind_of(meta: &std::fs::Metadata) -> &'static str {
     "not a regular file"
 }
 
+/// Why a user's file cannot be read (see [`check_regular`]); `what` names it
+/// ("scenario", "URDF", "plan file").
+#[derive(Debug, thiserror::Error)]
+pub enum FileCheckError {
+    /// Its metadata cannot be read (absent, no permission).
+    #[error("cannot read {what}: {source}")]
+    Unreadable {
+        /// What the file is to the harness.
+        what: String,
+        /// Underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// A directory, FIFO, device or socket.
+    #[error("{what} must be a regular file, this is {kind}")]
+    NotRegular {
+        /// What the file is to the harness.
+        what: String,
+        /// What it is instead ("a directory", "a FIFO", ...).
+        kind: &'static str,
+    },
+    /// Larger than the harness reads.
+    #[error("{what} is {size} bytes, more than the {max} bytes a {what} may have")]
+    TooLarge {
+        /// What the file is to the harness.
+        what: String,
+        /// Its size, bytes.
+        size: u64,
+        /// The cap, bytes.
+        max: u64,
+    },
+}
+
 /// Check that `path` (after following symlinks) is a regular file of at most
 /// `max` bytes; `what` names it in messages ("scenario", "URDF").
-pub fn check_regular(path: &Path, what: &str, max: u64) -> Result<(), String> {
-    let meta = std::fs::metadata(path).map_err(|e| format!("cannot read {what}: {e}"))?;
+pub fn check_regular(path: &Path, what: &str, max: u64) -> Result<(), FileCheckError> {
+    let meta = std::fs::metadata(path).map_err(|source| FileCheckError::Unreadable {
+        what: what.into(),
+        source,
+    })?;
     if !meta.is_file() {
-        return Err(format!(
-            "{what} must be a regular file, this is {}",
-            kind_of(&meta)
-        ));
+        return Err(FileCheckError::NotRegular {
+            what: what.into(),
+            kind: kind_of(&meta),
+        });
     }
     if meta.len() > max {
-        return Err(format!(
-            "{what} is {} bytes, more than the {max} bytes a {what} may have",
-            meta.len()
-        ));
+        return Err(FileCheckError::TooLarge {
+            what: what.into(),
+            size: meta.len(),
+            max,
+        });
     }
     Ok(())
 }
@@ -59,7 +96,7 @@ pub fn check_regular(path: &Path, what: &str, max: u64) -> Result<(), String> {
 /// Read a regular file of at most `max` bytes as UTF-8 text. Errors name the
 /// file (and the line of the first invalid byte for non-UTF-8 text).
 pub fn read_text(path: &Path, what: &str, max: u64) -> Result<String, Error> {
-    check_regular(path, what, max).map_err(|m| Error::input(path, m))?;
+    check_regular(path, what, max).map_err(|m| Error::input(path, m.to_string()))?;
     let mut bytes = Vec::new();
     std::fs::File::open(path)
         // Cap the read too: the file may grow after the check.

@@ -216,11 +216,31 @@ fn tempfile_in(dir: &Path) -> std::io::Result<std::path::PathBuf> {
     Ok(p)
 }
 
+/// Why the JUnit report could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum JunitWriteError {
+    /// Its directory could not be created.
+    #[error("cannot create {}: {source}", crate::echo::path(dir))]
+    CreateDir {
+        /// The directory.
+        dir: std::path::PathBuf,
+        /// Underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The file could not be written.
+    #[error(transparent)]
+    Write(#[from] crate::log::LogError),
+}
+
 /// Write the report atomically (creating its directory, see [`check_writable`]).
-pub fn write(path: &Path, report: &Report) -> Result<(), String> {
+pub fn write(path: &Path, report: &Report) -> Result<(), JunitWriteError> {
     if let Some(d) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-        std::fs::create_dir_all(d)
-            .map_err(|e| format!("cannot create {}: {e}", crate::echo::path(d)))?;
+        std::fs::create_dir_all(d).map_err(|source| JunitWriteError::CreateDir {
+            dir: d.to_path_buf(),
+            source,
+        })?;
     }
-    crate::log::atomic::write_atomic(path, |w| report.serialize(w).map_err(std::io::Error::other))
+    crate::log::atomic::write_file(path, |w| report.serialize(w).map_err(std::io::Error::other))?;
+    Ok(())
 }

@@ -16,6 +16,47 @@ use toml::Spanned;
 /// pages of [`Page::all`]: `keys.md`, `scenario-keys.md`, `models/`, `planners/`).
 pub const REGENERATE: &str = "anholonomy keys --markdown --out docs/src/reference";
 
+/// Why a reference page cannot be made: every case is a kind whose
+/// declarations in the code are incomplete (the message says where to add
+/// what), never a problem of the user's input.
+#[derive(Debug, thiserror::Error)]
+pub enum ReferenceError {
+    /// A page's kind has no schema.
+    #[error("{page}: no schema (add the kind to `schema()` in src/scenario/config.rs)")]
+    NoSchema {
+        /// The page's title (``Model `car` ``).
+        page: String,
+    },
+    /// A model kind has no schema (for its placeholder table).
+    #[error("model `{0}`: no schema")]
+    NoModelSchema(String),
+    /// A required key of a model has a type no placeholder is made for.
+    #[error("model `{kind}`: cannot make a placeholder for required key `{key}`")]
+    Placeholder {
+        /// The model kind.
+        kind: String,
+        /// The required key.
+        key: String,
+    },
+    /// A placeholder table is not TOML, or its model or planner refuses it.
+    #[error(transparent)]
+    Toml(#[from] toml::de::Error),
+    /// The model kind is not one.
+    #[error("unknown model `{0}`")]
+    UnknownModel(String),
+    /// The `file` planner is missing.
+    #[error("unknown planner `file`")]
+    NoFilePlanner,
+    /// The model cannot be built from its placeholders.
+    #[error(transparent)]
+    Setup(#[from] crate::error::SetupError),
+    /// A model kind has no URDF declaration.
+    #[error(
+        "model `{0}`: no URDF declaration (add it to `required_urdf()` in src/scenario/config.rs)"
+    )]
+    NoUrdf(String),
+}
+
 /// One reference page.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
 pub enum Page {
@@ -76,13 +117,8 @@ impl Page {
     }
 
     /// The rows of its keys (`model.*`, `planner.*`, or the file's own).
-    pub fn rows(&self) -> Result<Vec<Row>, String> {
-        let missing = || {
-            format!(
-                "{}: no schema (add the kind to `schema()` in src/scenario/config.rs)",
-                self.title()
-            )
-        };
+    pub fn rows(&self) -> Result<Vec<Row>, ReferenceError> {
+        let missing = || ReferenceError::NoSchema { page: self.title() };
         Ok(match self {
             Page::Index => Vec::new(),
             Page::Scenario => {
@@ -122,7 +158,7 @@ impl Page {
     }
 
     /// The page as Markdown (mdBook).
-    pub fn markdown(&self) -> Result<String, String> {
+    pub fn markdown(&self) -> Result<String, ReferenceError> {
         let mut b = String::new();
         let _ = writeln!(b, "# {}\n", self.title());
         let _ = writeln!(
@@ -195,7 +231,7 @@ impl Page {
     }
 
     /// The page as plain text for a terminal.
-    pub fn text(&self) -> Result<String, String> {
+    pub fn text(&self) -> Result<String, ReferenceError> {
         let mut b = String::new();
         let _ = writeln!(b, "{}", self.title().replace('`', ""));
         if let Some(d) = self.schema().map(Schema::description) {
@@ -300,8 +336,8 @@ fn index(b: &mut String) {
 const DECLARED: &str = "declared";
 
 /// A `[model]` table of `kind` with only its required keys (placeholders), as TOML.
-fn minimal_table(kind: &str) -> Result<String, String> {
-    let s = ModelConfig::schema(kind).ok_or_else(|| format!("model `{kind}`: no schema"))?;
+fn minimal_table(kind: &str) -> Result<String, ReferenceError> {
+    let s = ModelConfig::schema(kind).ok_or_else(|| ReferenceError::NoModelSchema(kind.into()))?;
     let mut t = String::new();
     for r in s.rows("") {
         if r.default != "required" || r.key.contains(['.', '[']) {
@@ -316,10 +352,10 @@ fn minimal_table(kind: &str) -> Result<String, String> {
         } else if r.allowed.starts_with("true") {
             "false".into()
         } else {
-            return Err(format!(
-                "model `{kind}`: cannot make a placeholder for required key `{}`",
-                r.key
-            ));
+            return Err(ReferenceError::Placeholder {
+                kind: kind.into(),
+                key: r.key,
+            });
         };
         let _ = writeln!(t, "{} = {v}", r.key);
     }
@@ -327,26 +363,22 @@ fn minimal_table(kind: &str) -> Result<String, String> {
 }
 
 /// A TOML document as the table value the config parsers take.
-fn toml_table(text: &str) -> Result<Spanned<DeValue<'_>>, String> {
-    let t = DeTable::parse(text)
-        .map_err(|e| e.to_string())?
-        .into_inner();
+fn toml_table(text: &str) -> Result<Spanned<DeValue<'_>>, ReferenceError> {
+    let t = DeTable::parse(text)?.into_inner();
     Ok(Spanned::new(0..0, DeValue::Table(t)))
 }
 
 /// The file coordinates of `start`/`goal` (name, unit) and the input names of a model.
 #[allow(clippy::type_complexity)]
-pub fn states_of(kind: &str) -> Result<(Vec<(String, String)>, Vec<String>), String> {
+pub fn states_of(kind: &str) -> Result<(Vec<(String, String)>, Vec<String>), ReferenceError> {
     let text = minimal_table(kind)?;
-    let model = ModelConfig::parse(kind, toml_table(&text)?)
-        .map_err(|e| e.to_string())?
-        .ok_or_else(|| format!("unknown model `{kind}`"))?;
+    let model = ModelConfig::parse(kind, toml_table(&text)?)?
+        .ok_or_else(|| ReferenceError::UnknownModel(kind.into()))?;
     // A plan from outside fits every model, and leaves its states and
     // inputs as they are (a model's own planners are built at defaults).
-    let planner = PlannerConfig::parse("file", toml_table("path = \"plan.csv\"")?)
-        .map_err(|e| e.to_string())?
-        .ok_or("unknown planner `file`")?;
-    let system = model_system(&model, &planner).map_err(|e| e.to_string())?;
+    let planner = PlannerConfig::parse("file", toml_table("path = \"plan.csv\"")?)?
+        .ok_or(ReferenceError::NoFilePlanner)?;
+    let system = model_system(&model, &planner)?;
     let chart = system.file_model();
     let angular = chart.angular_states();
     let position = chart.position_states();
@@ -374,7 +406,7 @@ pub fn states_of(kind: &str) -> Result<(Vec<(String, String)>, Vec<String>), Str
     Ok((states, inputs))
 }
 
-fn model_intro(b: &mut String, kind: &str) -> Result<(), String> {
+fn model_intro(b: &mut String, kind: &str) -> Result<(), ReferenceError> {
     let planners: Vec<String> = planners_for(kind)
         .iter()
         .map(|p| format!("[`{p}`](../planners/{p}.md)"))
@@ -409,10 +441,9 @@ As declared: `start` and `goal` list `model.states` in order (the `model.angles`
 
 /// The URDF links and joints the model looks up by name (its physics
 /// module's declaration, which the validation pass checks every URDF against).
-fn urdf_table(b: &mut String, kind: &str) -> Result<(), String> {
-    let table = ModelConfig::required_urdf(kind).ok_or_else(|| {
-        format!("model `{kind}`: no URDF declaration (add it to `required_urdf()` in src/scenario/config.rs)")
-    })?;
+fn urdf_table(b: &mut String, kind: &str) -> Result<(), ReferenceError> {
+    let table =
+        ModelConfig::required_urdf(kind).ok_or_else(|| ReferenceError::NoUrdf(kind.into()))?;
     b.push_str(
         "## URDF links and joints
 

@@ -584,7 +584,8 @@ pub fn finish(
                 cmp: &cmp,
                 series: &series,
             };
-            write_logs(prep, &run, &outcome, unit.dir(), &goal, opts.keep).map_err(log_error)?;
+            write_logs(prep, &run, &outcome, unit.dir(), &goal, opts.keep)
+                .map_err(|e| log_error(e.to_string()))?;
             Some(unit)
         }
         None => None,
@@ -601,10 +602,10 @@ pub fn finish(
         // The summary carries the final timings, so it is written last; then
         // the three files replace the previous run's as one unit.
         summary["logs_kept"] = json!(opts.keep.as_str());
-        crate::log::atomic::write_atomic(&unit.dir().join("summary.json"), |w| {
+        crate::log::atomic::write_file(&unit.dir().join("summary.json"), |w| {
             serde_json::to_writer_pretty(w, &summary).map_err(std::io::Error::other)
         })
-        .map_err(log_error)?;
+        .map_err(|e| log_error(e.to_string()))?;
         outcome.log_dir = Some(unit.commit().map_err(|e| log_error(e.to_string()))?);
     }
     Ok(Finished {
@@ -633,7 +634,7 @@ fn write_logs(
     dir: &Path,
     goal: &State,
     keep: Keep,
-) -> Result<(), String> {
+) -> Result<(), crate::log::LogError> {
     if keep == Keep::Summary {
         return Ok(());
     }
@@ -676,10 +677,10 @@ fn write_logs(
         return crate::log::series::write(&dir.join("series.json"), &rec);
     }
     let (mcap, rest) = rayon::join(
-        || crate::log::mcap::write_mcap(&dir.join("run.mcap"), &rec).map_err(|e| e.to_string()),
+        || crate::log::mcap::write_mcap(&dir.join("run.mcap"), &rec),
         || {
             crate::log::series::write(&dir.join("series.json"), &rec)?;
-            crate::log::rerun::write_rrd(&dir.join("run.rrd"), &rec).map_err(|e| e.to_string())
+            crate::log::rerun::write_rrd(&dir.join("run.rrd"), &rec)
         },
     );
     mcap.and(rest)

@@ -148,7 +148,9 @@ pub fn keys_cmd(name: Option<&str>, markdown: bool, out: Option<&Path>) -> Resul
         }
         let mut pages = Vec::new();
         for p in Page::all() {
-            let text = p.markdown().map_err(|m| vec![Error::input("keys", m)])?;
+            let text = p
+                .markdown()
+                .map_err(|e| vec![Error::input("keys", e.to_string())])?;
             pages.push((dir.join(p.file()), text));
         }
         for (path, text) in &pages {
@@ -159,13 +161,13 @@ pub fn keys_cmd(name: Option<&str>, markdown: bool, out: Option<&Path>) -> Resul
                     message: e.to_string(),
                 }]
             })?;
-            anholonomy::log::atomic::write_atomic(path, |w| {
+            anholonomy::log::atomic::write_file(path, |w| {
                 std::io::Write::write_all(w, text.as_bytes())
             })
-            .map_err(|message| {
+            .map_err(|e| {
                 vec![Error::Log {
                     path: path.clone(),
-                    message,
+                    message: e.to_string(),
                 }]
             })?;
         }
@@ -199,7 +201,7 @@ pub fn keys_cmd(name: Option<&str>, markdown: bool, out: Option<&Path>) -> Resul
     } else {
         page.text()
     }
-    .map_err(|m| vec![Error::input("keys", m)])?;
+    .map_err(|e| vec![Error::input("keys", e.to_string())])?;
     crate::emit(&text);
     Ok(0)
 }

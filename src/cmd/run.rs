@@ -123,10 +123,10 @@ fn record_regression(o: &RunOutcome, deltas: Option<&[Delta]>) -> Result<(), Err
         message,
     };
     match deltas {
-        Some(d) => anholonomy::log::atomic::write_atomic(&path, |w| {
+        Some(d) => anholonomy::log::atomic::write_file(&path, |w| {
             serde_json::to_writer_pretty(w, d).map_err(std::io::Error::other)
         })
-        .map_err(log_err),
+        .map_err(|e| log_err(e.to_string())),
         None => match std::fs::remove_file(&path) {
             Err(e) if e.kind() != std::io::ErrorKind::NotFound => Err(log_err(e.to_string())),
             _ => Ok(()),
@@ -233,14 +233,14 @@ fn shard_of(args: &RunArgs) -> Result<Option<anholonomy::sweep::Shard>, Vec<Erro
     match &args.shard {
         Some(s) => anholonomy::sweep::Shard::parse(s)
             .map(Some)
-            .map_err(|m| vec![Error::input("--shard", m)]),
+            .map_err(|e| vec![Error::input("--shard", e.to_string())]),
         None => match anholonomy::sweep::Shard::from_env(|k| std::env::var(k).ok(), args.shards) {
             Ok(Some((s, from))) => {
                 eprintln!("{from}");
                 Ok(Some(s))
             }
             Ok(None) => Ok(None),
-            Err(m) => Err(vec![Error::input("--shard", m)]),
+            Err(e) => Err(vec![Error::input("--shard", e.to_string())]),
         },
     }
 }
@@ -385,9 +385,9 @@ fn write_junit(
         })
         .collect();
     let rep = junit::report(&cases, t_all.elapsed().as_secs_f64());
-    junit::write(path, &rep).err().map(|m| Error::Log {
+    junit::write(path, &rep).err().map(|e| Error::Log {
         path: path.to_path_buf(),
-        message: m,
+        message: e.to_string(),
     })
 }
 

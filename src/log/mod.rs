@@ -53,14 +53,22 @@ impl Keep {
     }
 }
 
+/// A `--keep` level that is none of `summary`, `report`, `all`.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("`{given}`: expected summary, report or all")]
+pub struct KeepParseError {
+    /// What was written.
+    pub given: String,
+}
+
 impl std::str::FromStr for Keep {
-    type Err = String;
-    fn from_str(s: &str) -> Result<Keep, String> {
+    type Err = KeepParseError;
+    fn from_str(s: &str) -> Result<Keep, KeepParseError> {
         match s {
             "summary" => Ok(Keep::Summary),
             "report" => Ok(Keep::Report),
             "all" => Ok(Keep::All),
-            _ => Err(format!("`{s}`: expected summary, report or all")),
+            _ => Err(KeepParseError { given: s.into() }),
         }
     }
 }
@@ -111,6 +119,15 @@ pub enum LogError {
         #[source]
         source: serde_json::Error,
     },
+    /// Writing a whole file through a temporary one failed.
+    #[error("{}: {source}", crate::echo::path(path))]
+    Write {
+        /// The file that was to be written.
+        path: PathBuf,
+        /// Underlying error.
+        #[source]
+        source: std::io::Error,
+    },
     /// The writer finished but the file is not complete (e.g. missing footer).
     #[error("incomplete log file {path}: {reason}")]
     Incomplete {
@@ -138,6 +155,9 @@ pub(crate) fn validate(path: &Path, rec: &RunRecord<'_>) -> Result<(), LogError>
     })
 }
 
+// The record is built by the harness, never from user input: a failure here
+// is a harness bug, and its `String` is a message for the developer (a debug
+// path), not a case a caller tells apart.
 fn check(rec: &RunRecord<'_>) -> Result<(), String> {
     let ns = rec.state_names.len();
     let ni = rec.input_names.len();

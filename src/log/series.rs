@@ -315,9 +315,9 @@ impl SeriesFile {
 }
 
 /// Write `series.json` for a run (compact JSON, atomically).
-pub fn write(path: &Path, rec: &RunRecord<'_>) -> Result<(), String> {
+pub fn write(path: &Path, rec: &RunRecord<'_>) -> Result<(), crate::log::LogError> {
     let data = SeriesFile::from_record(rec);
-    crate::log::atomic::write_atomic(path, |w| {
+    crate::log::atomic::write_file(path, |w| {
         serde_json::to_writer(w, &data).map_err(std::io::Error::other)
     })
 }

@@ -4,7 +4,7 @@
 
 use crate::log::series::{Series, SeriesFile};
 use crate::report::markup::{esc, num, tracking_meaningful};
-use crate::report::plots::{self, HLine, Line, Marker, Path2, Shade};
+use crate::report::plots::{self, HLine, Line, Marker, Path2, PlotError, Shade};
 use serde_json::Value;
 use std::fmt::Write as _;
 
@@ -129,7 +129,7 @@ fn unit_suffix(u: &str) -> String {
     }
 }
 
-pub(super) fn single_figures(summary: &Value, sf: &SeriesFile) -> Result<String, String> {
+pub(super) fn single_figures(summary: &Value, sf: &SeriesFile) -> Result<String, PlotError> {
     let t_end = end_time(sf);
     let (sh, legend) = shades(sf);
     let th = |k: &str| summary["thresholds"][k].as_f64();
@@ -339,7 +339,7 @@ fn one_series(
     step: bool,
     sh: &[Shade],
     t_end: f64,
-) -> Result<String, String> {
+) -> Result<String, PlotError> {
     let line = Line {
         name: c.name.clone(),
         t: &c.t,
@@ -350,7 +350,7 @@ fn one_series(
     plots::time_chart(title, &c.name, &[line], &[], sh, t_end)
 }
 
-pub(super) fn sweep_figures(s: &Value) -> Result<String, String> {
+pub(super) fn sweep_figures(s: &Value) -> Result<String, PlotError> {
     let results = s["results"].as_array().cloned().unwrap_or_default();
     let f = |r: &Value, k: &str| r[k].as_f64().unwrap_or(f64::NAN);
     let cfg = &s["sweep"];

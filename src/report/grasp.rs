@@ -5,6 +5,7 @@
 
 use crate::log::series::{Series, SeriesFile};
 use crate::report::markup::{esc, num};
+use crate::report::plots::PlotError;
 use crate::report::plots::{self, HLine, Line};
 use serde_json::Value;
 use std::fmt::Write as _;
@@ -89,7 +90,7 @@ fn stretches(v: &[(f64, f64)]) -> String {
 }
 
 /// The section, or nothing when the run has no wrench bound.
-pub(super) fn section(summary: &Value, sf: &SeriesFile) -> Result<String, String> {
+pub(super) fn section(summary: &Value, sf: &SeriesFile) -> Result<String, PlotError> {
     let Some(ratio) = summary["metrics"]["sim_grasp_wrench_ratio"].as_f64() else {
         return Ok(String::new());
     };

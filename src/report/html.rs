@@ -299,8 +299,21 @@ fn paper_table(rows: &Value) -> String {
     b
 }
 
+/// Why a scenario's page could not be made.
+#[derive(Debug, thiserror::Error)]
+pub enum PageError {
+    /// A chart could not be drawn.
+    #[error(transparent)]
+    Plot(#[from] crate::report::plots::PlotError),
+    /// The margins section refused: `src/report/margins.rs` still reports
+    /// its problems as text (it is being edited elsewhere; it converts to a
+    /// typed error after that work merges).
+    #[error("{0}")]
+    Margins(String),
+}
+
 /// `LOGDIR/<scenario>/report.html`.
-pub fn scenario_page(l: &Loaded) -> Result<String, String> {
+pub fn scenario_page(l: &Loaded) -> Result<String, PageError> {
     let mut b = String::from("<p><a href=\"../index.html\">← all scenarios</a></p>");
     match &l.data {
         RunData::Single { summary, series } => {
@@ -332,7 +345,7 @@ pub fn scenario_page(l: &Loaded) -> Result<String, String> {
             b.push_str(&metrics_table(summary, &l.regression));
             b.push_str(&crate::report::robot::section(summary));
             if let Some(m) = &l.margins {
-                b.push_str(&crate::report::margins::section(m)?);
+                b.push_str(&crate::report::margins::section(m).map_err(PageError::Margins)?);
             }
         }
         RunData::Sweep(s) => {

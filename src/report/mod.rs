@@ -224,26 +224,26 @@ pub fn write_report(root: &Path, this_run: Option<&[String]>) -> Result<Written,
     let pages: Vec<String> = loaded
         .par_iter()
         .map(|l| {
-            html::scenario_page(l).map_err(|message| Error::Log {
+            html::scenario_page(l).map_err(|e| Error::Log {
                 path: l.dir.join("report.html"),
-                message,
+                message: e.to_string(),
             })
         })
         .collect::<Result<_, _>>()?;
     for (l, page) in loaded.iter().zip(&pages) {
         let path = l.dir.join("report.html");
-        crate::log::atomic::write_atomic(&path, |w| std::io::Write::write_all(w, page.as_bytes()))
-            .map_err(|message| Error::Log {
+        crate::log::atomic::write_file(&path, |w| std::io::Write::write_all(w, page.as_bytes()))
+            .map_err(|e| Error::Log {
                 path: path.clone(),
-                message,
+                message: e.to_string(),
             })?;
     }
     let index = root.join("index.html");
     let text = html::index_page(&loaded, &skipped);
-    crate::log::atomic::write_atomic(&index, |w| std::io::Write::write_all(w, text.as_bytes()))
-        .map_err(|message| Error::Log {
+    crate::log::atomic::write_file(&index, |w| std::io::Write::write_all(w, text.as_bytes()))
+        .map_err(|e| Error::Log {
             path: index.clone(),
-            message,
+            message: e.to_string(),
         })?;
     Ok(Written {
         scenarios: loaded.len(),

@@ -65,12 +65,25 @@ pub struct HLine {
 /// A shaded time span (plan segment) with its label index.
 pub type Shade = (f64, f64, usize);
 
-type Res<T> = Result<T, String>;
+/// A chart could not be drawn (plotters refused; drawing into a string has
+/// no I/O, so this is an internal failure).
+#[derive(Debug, thiserror::Error)]
+// The message has always shown plotters' own description of the failure,
+// which is its `Debug` form (its `Display` drops the backend's detail).
+#[error("plot failed: {source}")]
+pub struct PlotError {
+    /// What plotters reported.
+    #[source]
+    source: Box<dyn std::error::Error + Send + Sync>,
+}
+
+type Res<T> = Result<T, PlotError>;
 
 /// The legend every chart uses: upper right, translucent white box.
 fn legend<'a, DB, CT>(chart: &mut ChartContext<'a, DB, CT>) -> Res<()>
 where
     DB: DrawingBackend + 'a,
+    DB::ErrorType: 'static,
     CT: CoordTranslate,
 {
     chart
@@ -83,8 +96,10 @@ where
         .map_err(err)
 }
 
-fn err<E: std::fmt::Display>(e: E) -> String {
-    format!("plot failed: {e}")
+fn err<E: std::error::Error + Send + Sync + 'static>(e: E) -> PlotError {
+    PlotError {
+        source: Box::new(e),
+    }
 }
 
 /// Finite [min, max] of values, padded; never empty.
@@ -466,7 +481,7 @@ pub fn scatter_log_x(
     y_desc: &str,
     pts: &[(f64, f64, bool)],
     hline: Option<(f64, &str)>,
-) -> Res<String> {
+) -> Result<String, String> {
     let on_axis = |x: f64| x > 0.0 && x.is_finite();
     let xs = pts.iter().map(|p| p.0).filter(|x| on_axis(*x));
     let (lo, hi) = xs.fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)));
@@ -487,7 +502,9 @@ pub fn scatter_log_x(
         .log_scale()
         .with_key_points(bold)
         .with_light_points(light);
-    scatter_on(&axes, x, (x0, x1), on_axis, pts, hline)
+    // Text for `src/report/margins.rs`, its only caller, whose errors are
+    // still `String` (it is being edited elsewhere; typed after that merges).
+    scatter_on(&axes, x, (x0, x1), on_axis, pts, hline).map_err(|e| e.to_string())
 }
 
 /// Labelled ticks 1, 2, 5 × 10^k within [x0, x1] (every 1..9 × 10^k when

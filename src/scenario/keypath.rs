@@ -26,11 +26,68 @@ pub enum Segment {
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct KeyPath(pub Vec<Segment>);
 
+/// What is wrong with the text of a key path.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, thiserror::Error)]
+pub enum Malformed {
+    /// `[0].a`.
+    #[error("it must start with a key")]
+    StartsWithIndex,
+    /// `a[0`.
+    #[error("unclosed `[`")]
+    Unclosed,
+    /// `a[x]`, `a[-1]`.
+    #[error("an index must be a non-negative integer")]
+    BadIndex,
+    /// `a[0]b`, `a b`.
+    #[error("expected `.` or `[` after a key or index")]
+    NoStep,
+    /// `a..b`, `a.`.
+    #[error("empty key")]
+    EmptyKey,
+    /// The empty string.
+    #[error("empty")]
+    Empty,
+}
+
+/// Why a key path cannot be parsed or set.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum KeyPathError {
+    /// The text is not a key path.
+    #[error("`{text}` is not a key path ({why}; e.g. `sim.friction`, `start[2]`)")]
+    Syntax {
+        /// What was written.
+        text: String,
+        /// What is wrong with it.
+        why: Malformed,
+    },
+    /// A path that starts with an index.
+    #[error("`{0}` starts with an index")]
+    StartsWithIndex(KeyPath),
+    /// Inserting would need an array element that is not written.
+    #[error("`{0}`: cannot insert an array element")]
+    InsertElement(KeyPath),
+    /// An index past the end of a written array.
+    #[error("`{path}`: index {index} past the {len} elements")]
+    PastEnd {
+        /// The whole path.
+        path: KeyPath,
+        /// The index.
+        index: usize,
+        /// The array's length.
+        len: usize,
+    },
+    /// A step into a value that is neither a table nor an array.
+    #[error("`{0}`: a step is not a table or array")]
+    NotContainer(KeyPath),
+}
+
 impl KeyPath {
     /// Parse `a.b[2].c`; keys are bare TOML keys (letters, digits, `_`, `-`).
-    pub fn parse(s: &str) -> Result<KeyPath, String> {
-        let bad =
-            |why: &str| format!("`{s}` is not a key path ({why}; e.g. `sim.friction`, `start[2]`)");
+    pub fn parse(s: &str) -> Result<KeyPath, KeyPathError> {
+        let bad = |why: Malformed| KeyPathError::Syntax {
+            text: s.into(),
+            why,
+        };
         let is_key = |c: char| c.is_ascii_alphanumeric() || c == '_' || c == '-';
         let mut segs = Vec::new();
         let mut rest = s;
@@ -38,12 +95,10 @@ impl KeyPath {
         while !rest.is_empty() {
             if let Some(r) = rest.strip_prefix('[') {
                 if first {
-                    return Err(bad("it must start with a key"));
+                    return Err(bad(Malformed::StartsWithIndex));
                 }
-                let end = r.find(']').ok_or_else(|| bad("unclosed `[`"))?;
-                let i: usize = r[..end]
-                    .parse()
-                    .map_err(|_| bad("an index must be a non-negative integer"))?;
+                let end = r.find(']').ok_or_else(|| bad(Malformed::Unclosed))?;
+                let i: usize = r[..end].parse().map_err(|_| bad(Malformed::BadIndex))?;
                 segs.push(Segment::Index(i));
                 rest = &r[end + 1..];
             } else {
@@ -51,11 +106,11 @@ impl KeyPath {
                     rest
                 } else {
                     rest.strip_prefix('.')
-                        .ok_or_else(|| bad("expected `.` or `[` after a key or index"))?
+                        .ok_or_else(|| bad(Malformed::NoStep))?
                 };
                 let end = r.find(|c: char| !is_key(c)).unwrap_or(r.len());
                 if end == 0 {
-                    return Err(bad("empty key"));
+                    return Err(bad(Malformed::EmptyKey));
                 }
                 segs.push(Segment::Key(r[..end].to_string()));
                 rest = &r[end..];
@@ -63,7 +118,7 @@ impl KeyPath {
             first = false;
         }
         if segs.is_empty() {
-            return Err(bad("empty"));
+            return Err(bad(Malformed::Empty));
         }
         Ok(KeyPath(segs))
     }
@@ -111,18 +166,29 @@ pub enum Found {
     Unreachable(String),
 }
 
+/// Why a step of a path finds nothing to step into (after the path so far).
+#[derive(Debug, thiserror::Error)]
+enum StepError {
+    #[error("has {0} elements")]
+    PastEnd(usize),
+    #[error("is a table, not an array")]
+    TableNotArray,
+    #[error("is {}, not a table", article(.0))]
+    NotTable(&'static str),
+}
+
 fn child<'a, 'i>(
     v: &'a DeValue<'i>,
     seg: &Segment,
-) -> Result<Option<&'a Spanned<DeValue<'i>>>, String> {
+) -> Result<Option<&'a Spanned<DeValue<'i>>>, StepError> {
     match (v, seg) {
         (DeValue::Table(t), Segment::Key(k)) => Ok(t.get(k.as_str())),
         (DeValue::Array(a), Segment::Index(i)) => match a.get(*i) {
             Some(x) => Ok(Some(x)),
-            None => Err(format!("has {} elements", a.len())),
+            None => Err(StepError::PastEnd(a.len())),
         },
-        (DeValue::Table(_), Segment::Index(_)) => Err("is a table, not an array".into()),
-        (other, _) => Err(format!("is {}, not a table", article(other.type_str()))),
+        (DeValue::Table(_), Segment::Index(_)) => Err(StepError::TableNotArray),
+        (other, _) => Err(StepError::NotTable(other.type_str())),
     }
 }
 
@@ -234,10 +300,10 @@ pub fn set<'i>(
     path: &KeyPath,
     value: DeValue<'i>,
     span: Range<usize>,
-) -> Result<(), String> {
+) -> Result<(), KeyPathError> {
     match &path.0[0] {
         Segment::Key(k) => set_key(root, k, &path.0[1..], value, span, path),
-        Segment::Index(_) => Err(format!("`{path}` starts with an index")),
+        Segment::Index(_) => Err(KeyPathError::StartsWithIndex(path.clone())),
     }
 }
 
@@ -248,7 +314,7 @@ fn set_key<'i>(
     value: DeValue<'i>,
     span: Range<usize>,
     path: &KeyPath,
-) -> Result<(), String> {
+) -> Result<(), KeyPathError> {
     if let Some(x) = t.get_mut(k) {
         return set_in(x, rest, value, span, path);
     }
@@ -256,7 +322,7 @@ fn set_key<'i>(
     let mut v = respan(value, &span);
     for seg in rest.iter().rev() {
         let Segment::Key(k2) = seg else {
-            return Err(format!("`{path}`: cannot insert an array element"));
+            return Err(KeyPathError::InsertElement(path.clone()));
         };
         let mut inner = DeTable::new();
         inner.insert(
@@ -322,7 +388,7 @@ fn set_in<'i>(
     value: DeValue<'i>,
     span: Range<usize>,
     path: &KeyPath,
-) -> Result<(), String> {
+) -> Result<(), KeyPathError> {
     let Some((seg, rest)) = rest.split_first() else {
         // The written value's span: errors point at its line.
         let span = v.span();
@@ -333,12 +399,14 @@ fn set_in<'i>(
         (DeValue::Table(t), Segment::Key(k)) => set_key(t, k, rest, value, span, path),
         (DeValue::Array(a), Segment::Index(i)) => {
             let len = a.len();
-            let x = a
-                .get_mut(*i)
-                .ok_or_else(|| format!("`{path}`: index {i} past the {len} elements"))?;
+            let x = a.get_mut(*i).ok_or_else(|| KeyPathError::PastEnd {
+                path: path.clone(),
+                index: *i,
+                len,
+            })?;
             set_in(x, rest, value, span, path)
         }
-        _ => Err(format!("`{path}`: a step is not a table or array")),
+        _ => Err(KeyPathError::NotContainer(path.clone())),
     }
 }
 

@@ -467,7 +467,7 @@ impl Scenario {
     pub fn replace(&self, changes: &[(String, String)]) -> Result<Scenario, Error> {
         let mut edits: Vec<Edit> = self.edits.to_vec();
         for (key, value) in changes {
-            let kp = KeyPath::parse(key).map_err(|m| Error::keyed(&self.path, None, key, m))?;
+            let kp = KeyPath::parse(key).map_err(|e| Error::keyed(&self.path, None, key, e))?;
             edits.push((kp, value.clone()));
         }
         let sc = Self::parse_with(&self.path, &self.text, &edits, &[])?;
@@ -487,7 +487,7 @@ impl Scenario {
             .map(|(k, x)| {
                 KeyPath::parse(k)
                     .map(|p| (p, *x))
-                    .map_err(|m| self.error_at(k, m))
+                    .map_err(|e| self.error_at(k, e))
             })
             .collect::<Result<_, _>>()?;
         let mut sc = if overrides.is_empty() {
@@ -515,7 +515,7 @@ impl Scenario {
         for (path, dist) in &sw.vary {
             let key = vary_key(path);
             let err = |m: String| self.error_at(&key, m);
-            let kp = KeyPath::parse(path).map_err(&err)?;
+            let kp = KeyPath::parse(path).map_err(|e| err(e.to_string()))?;
             match keypath::find(root.get_ref(), &kp) {
                 keypath::Found::Number { integer } => {
                     if integer && dist.continuous() {
@@ -580,7 +580,7 @@ impl Scenario {
                     ))
                 })?
                 .into_inner();
-            keypath::set(t, kp, v, anchor.clone()).map_err(err)?;
+            keypath::set(t, kp, v, anchor.clone()).map_err(|e| err(e.to_string()))?;
         }
         Ok(())
     }
@@ -609,7 +609,8 @@ impl Scenario {
                 let v = DeValue::parse(n)
                     .map_err(|e| Error::keyed(path, None, &kp.to_string(), format!("{n}: {e}")))?
                     .into_inner();
-                keypath::set(t, kp, v, span.clone()).map_err(|m| Error::input(path, m))?;
+                keypath::set(t, kp, v, span.clone())
+                    .map_err(|e| Error::input(path, e.to_string()))?;
             }
         }
         let keys = KeyIndex::new(text, root.get_ref());

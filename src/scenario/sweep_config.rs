@@ -12,6 +12,7 @@
 //! seeded per variant.
 
 use crate::error::SetupError;
+use crate::numfmt::readable;
 use crate::scenario::keypath::KeyPath;
 use rand::{Rng, SeedableRng};
 use rand_chacha::ChaCha8Rng;
@@ -78,24 +79,44 @@ pub enum Dist {
     Grid(Vec<f64>),
 }
 
+/// Why a `[sweep.vary]` distribution's parameters are unusable (the
+/// message without the key).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum DistError {
+    /// `uniform = [lo, hi]` with a non-finite end or lo > hi.
+    #[error("uniform [{}, {}]: need finite lo ≤ hi", readable(*.lo), readable(*.hi))]
+    Uniform {
+        /// Lower end.
+        lo: f64,
+        /// Upper end.
+        hi: f64,
+    },
+    /// `normal = [mean, sigma]` with a non-finite one or σ < 0.
+    #[error("normal [{}, {}]: need a finite mean and σ ≥ 0", readable(*.mean), readable(*.sigma))]
+    Normal {
+        /// Mean.
+        mean: f64,
+        /// Standard deviation.
+        sigma: f64,
+    },
+    /// `values` or `grid` empty or with a non-finite value.
+    #[error("needs at least one value, all finite")]
+    Values,
+}
+
 impl Dist {
-    /// Checks the parameters (message without the key).
-    fn check(&self) -> Result<(), String> {
+    /// Checks the parameters.
+    fn check(&self) -> Result<(), DistError> {
         let finite = |v: &[f64]| v.iter().all(|x| x.is_finite());
         match self {
-            Dist::Uniform([lo, hi]) if !(finite(&[*lo, *hi]) && lo <= hi) => Err(format!(
-                "uniform [{}, {}]: need finite lo ≤ hi",
-                crate::numfmt::readable(*lo),
-                crate::numfmt::readable(*hi)
-            )),
-            Dist::Normal([m, s]) if !(finite(&[*m, *s]) && *s >= 0.0) => Err(format!(
-                "normal [{}, {}]: need a finite mean and σ ≥ 0",
-                crate::numfmt::readable(*m),
-                crate::numfmt::readable(*s)
-            )),
-            Dist::Values(v) | Dist::Grid(v) if v.is_empty() || !finite(v) => {
-                Err("needs at least one value, all finite".into())
+            Dist::Uniform([lo, hi]) if !(finite(&[*lo, *hi]) && lo <= hi) => {
+                Err(DistError::Uniform { lo: *lo, hi: *hi })
             }
+            Dist::Normal([m, s]) if !(finite(&[*m, *s]) && *s >= 0.0) => Err(DistError::Normal {
+                mean: *m,
+                sigma: *s,
+            }),
+            Dist::Values(v) | Dist::Grid(v) if v.is_empty() || !finite(v) => Err(DistError::Values),
             _ => Ok(()),
         }
     }
@@ -180,8 +201,8 @@ impl SweepConfig {
         }
         for (path, dist) in &self.vary {
             let key = vary_key(path);
-            let kp = KeyPath::parse(path).map_err(|m| SetupError::key(key.clone(), m))?;
-            dist.check().map_err(|m| SetupError::key(key.clone(), m))?;
+            let kp = KeyPath::parse(path).map_err(|e| SetupError::key(key.clone(), e))?;
+            dist.check().map_err(|e| SetupError::key(key.clone(), e))?;
             if kp.to_string() == "sim.friction" && self.friction.is_some() {
                 return Err(SetupError::key(
                     key.to_string(),

@@ -83,7 +83,7 @@ pub fn run_group(
             Ok(p) => p,
             Err(e) => {
                 let wall = t0.elapsed().as_secs_f64();
-                lines.push((i, record_line(cfg, &v, &Err(e.to_string()), wall)));
+                lines.push((i, record_line(cfg, &v, &Err(e), wall)));
                 continue;
             }
         };
@@ -157,8 +157,7 @@ pub fn run_group(
                     };
                     runner::finish(&m.prep, &m.prep.planned, &opts, false, runs)
                 })
-                .map(|f| f.outcome)
-                .map_err(|e| e.to_string());
+                .map(|f| f.outcome);
             let wall = m.own_s + physics_s + t1.elapsed().as_secs_f64();
             lines.push((m.index, record_line(cfg, &v, &res, wall)));
         }

@@ -59,7 +59,7 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>) -> Result<(Summary, PathBuf
     for (k, f) in files.iter().enumerate() {
         match records::scan(f, k) {
             Ok(s) => scans.push(s),
-            Err(m) => errs.push(Error::input(f, format!("not a readable shard: {m}"))),
+            Err(e) => errs.push(Error::input(f, format!("not a readable shard: {e}"))),
         }
     }
     if !errs.is_empty() {
@@ -135,8 +135,8 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>) -> Result<(Summary, PathBuf
             continue;
         }
         by_index[sh.index] = Some(k);
-        if let Err(m) = s.check_indices() {
-            errs.push(Error::input(f, m));
+        if let Err(e) = s.check_indices() {
+            errs.push(Error::input(f, e.to_string()));
             continue;
         }
         let want = (0..h.count).filter(|&i| sh.contains(i)).count();
@@ -190,10 +190,10 @@ pub fn merge(inputs: &[PathBuf], out: Option<&Path>) -> Result<(Summary, PathBuf
     let out = out
         .map(Path::to_path_buf)
         .unwrap_or_else(|| dir.join("sweep.json"));
-    let sum = finish(&h, &cfg, &entries, &files, Some(&out), wall).map_err(|message| {
+    let sum = finish(&h, &cfg, &entries, &files, Some(&out), wall).map_err(|e| {
         vec![Error::Log {
             path: out.clone(),
-            message,
+            message: e.to_string(),
         }]
     })?;
     Ok((sum, out))

@@ -38,10 +38,53 @@ pub struct Shard {
     pub count: usize,
 }
 
+/// Why a shard (`--shard`, or a scheduler's variables) is not one.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum ShardError {
+    /// `--shard` is not `I/N` with 0 <= I < N.
+    #[error("`{0}`: expected I/N with 0 <= I < N")]
+    Syntax(String),
+    /// An environment variable is not a non-negative integer.
+    #[error("{var}={}: not a non-negative integer", crate::echo::code(value))]
+    NotCount {
+        /// The variable.
+        var: String,
+        /// Its value.
+        value: String,
+    },
+    /// The index is not below the count.
+    #[error("{from}: shard index {index} is not below the shard count {count}")]
+    OutOfRange {
+        /// Where the shard came from (`SLURM_ARRAY_TASK_ID=3 (shard 3/2)`).
+        from: String,
+        /// The shard index.
+        index: usize,
+        /// The shard count.
+        count: usize,
+    },
+    /// A Slurm array with a step other than 1.
+    #[error("SLURM_ARRAY_TASK_STEP={0}: use a contiguous array (--array=0-N or 1-N)")]
+    SlurmStep(usize),
+    /// A Slurm task id without the array's size.
+    #[error("SLURM_ARRAY_TASK_ID is set but neither SLURM_ARRAY_TASK_COUNT nor SLURM_ARRAY_TASK_MIN/MAX")]
+    SlurmCount,
+    /// A Slurm task id below the array's first.
+    #[error("SLURM_ARRAY_TASK_ID={id} is below SLURM_ARRAY_TASK_MIN={min}")]
+    SlurmBelowMin {
+        /// `SLURM_ARRAY_TASK_ID`.
+        id: usize,
+        /// `SLURM_ARRAY_TASK_MIN`.
+        min: usize,
+    },
+    /// A Kubernetes index without a shard count.
+    #[error("JOB_COMPLETION_INDEX is set but the shard count is not: pass --shards N or set ANHOLONOMY_SHARDS")]
+    NoCount,
+}
+
 impl Shard {
     /// Parses `I/N` (0 ≤ I < N).
-    pub fn parse(s: &str) -> Result<Shard, String> {
-        let bad = || format!("`{s}`: expected I/N with 0 <= I < N");
+    pub fn parse(s: &str) -> Result<Shard, ShardError> {
+        let bad = || ShardError::Syntax(s.into());
         let (i, n) = s.split_once('/').ok_or_else(bad)?;
         let (index, count): (usize, usize) = (
             i.trim().parse().map_err(|_| bad())?,
@@ -67,20 +110,23 @@ impl Shard {
     pub fn from_env(
         get: impl Fn(&str) -> Option<String>,
         shards: Option<usize>,
-    ) -> Result<Option<(Shard, String)>, String> {
-        let num = |k: &str| -> Result<Option<usize>, String> {
+    ) -> Result<Option<(Shard, String)>, ShardError> {
+        let num = |k: &str| -> Result<Option<usize>, ShardError> {
             match get(k) {
                 None => Ok(None),
-                Some(v) => v.trim().parse().map(Some).map_err(|_| {
-                    format!("{k}={}: not a non-negative integer", crate::echo::code(&v))
-                }),
+                Some(v) => v
+                    .trim()
+                    .parse()
+                    .map(Some)
+                    .map_err(|_| ShardError::NotCount {
+                        var: k.into(),
+                        value: v,
+                    }),
             }
         };
         let make = |index: usize, count: usize, from: String| {
             if count == 0 || index >= count {
-                Err(format!(
-                    "{from}: shard index {index} is not below the shard count {count}"
-                ))
+                Err(ShardError::OutOfRange { from, index, count })
             } else {
                 Ok(Some((Shard { index, count }, from)))
             }
@@ -88,23 +134,17 @@ impl Shard {
         if let Some(id) = num("SLURM_ARRAY_TASK_ID")? {
             if let Some(step) = num("SLURM_ARRAY_TASK_STEP")? {
                 if step != 1 {
-                    return Err(format!(
-                        "SLURM_ARRAY_TASK_STEP={step}: use a contiguous array (--array=0-N or 1-N)"
-                    ));
+                    return Err(ShardError::SlurmStep(step));
                 }
             }
             let min = num("SLURM_ARRAY_TASK_MIN")?.unwrap_or(0);
             let count = match (num("SLURM_ARRAY_TASK_COUNT")?, num("SLURM_ARRAY_TASK_MAX")?) {
                 (Some(c), _) => c,
                 (None, Some(max)) if max >= min => max - min + 1,
-                _ => {
-                    return Err("SLURM_ARRAY_TASK_ID is set but neither SLURM_ARRAY_TASK_COUNT nor SLURM_ARRAY_TASK_MIN/MAX".into())
-                }
+                _ => return Err(ShardError::SlurmCount),
             };
             let Some(index) = id.checked_sub(min) else {
-                return Err(format!(
-                    "SLURM_ARRAY_TASK_ID={id} is below SLURM_ARRAY_TASK_MIN={min}"
-                ));
+                return Err(ShardError::SlurmBelowMin { id, min });
             };
             return make(
                 index,
@@ -115,9 +155,7 @@ impl Shard {
         if let Some(index) = num("JOB_COMPLETION_INDEX")? {
             let count = match shards {
                 Some(n) => n,
-                None => num("ANHOLONOMY_SHARDS")?.ok_or(
-                    "JOB_COMPLETION_INDEX is set but the shard count is not: pass --shards N or set ANHOLONOMY_SHARDS",
-                )?,
+                None => num("ANHOLONOMY_SHARDS")?.ok_or(ShardError::NoCount)?,
             };
             return make(
                 index,
@@ -156,8 +194,7 @@ fn run_variant(prep: &Prepared, cfg: &SweepConfig, v: &Variant, cancel: &Cancel)
     let t0 = Instant::now();
     let res = prep
         .variant(v)
-        .and_then(|p| run(&p, &variant_options(cancel)))
-        .map_err(|e| e.to_string());
+        .and_then(|p| run(&p, &variant_options(cancel)));
     record_line(cfg, v, &res, t0.elapsed().as_secs_f64())
 }
 
@@ -175,7 +212,7 @@ fn variant_options(cancel: &Cancel) -> RunOptions {
 fn record_line(
     cfg: &SweepConfig,
     v: &Variant,
-    res: &Result<RunOutcome, String>,
+    res: &Result<RunOutcome, Error>,
     wall_s: f64,
 ) -> String {
     let finite = |x: Option<f64>| x.filter(|v| v.is_finite());
@@ -200,7 +237,7 @@ fn record_line(
             final_error: None,
             time_to_goal: None,
             steps: 0,
-            error: Some(e.clone()),
+            error: Some(e.to_string()),
             metrics: Metrics(&empty),
         },
     };
@@ -271,14 +308,14 @@ pub fn resumable(
     if !path.exists() {
         return Ok(None);
     }
-    let bad = |m: String| Error::input(&path, format!("--resume: {m}"));
-    let scan = records::scan(&path, 0).map_err(bad)?;
+    let bad = |m: &dyn std::fmt::Display| Error::input(&path, format!("--resume: {m}"));
+    let scan = records::scan(&path, 0).map_err(|e| bad(&e))?;
     if let Some(why) = scan.mismatch(&want) {
-        return Err(bad(format!(
+        return Err(bad(&format!(
             "{why}; remove the file or run without --resume"
         )));
     }
-    scan.check_indices().map_err(bad)?;
+    scan.check_indices().map_err(|e| bad(&e))?;
     Ok(Some(scan))
 }
 
@@ -292,14 +329,34 @@ const STALE: [&str; 6] = [
     "regression.json",
 ];
 
+/// Why the records file could not be started or continued.
+#[derive(Debug, thiserror::Error)]
+enum OpenRecordsError {
+    /// A file operation on `path` failed.
+    #[error("{}: {source}", crate::echo::path(path))]
+    Io {
+        /// The file or directory.
+        path: PathBuf,
+        /// Underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The header could not be encoded.
+    #[error(transparent)]
+    Header(serde_json::Error),
+}
+
 /// Start (or continue) the records file; the directory keeps only this sweep's files.
 fn open_records(
     dir: &Path,
     shard: Option<Shard>,
     h: &Header,
     resume: Option<&Scan>,
-) -> Result<(std::fs::File, PathBuf), String> {
-    let io = |p: &Path, e: std::io::Error| format!("{}: {e}", crate::echo::path(p));
+) -> Result<(std::fs::File, PathBuf), OpenRecordsError> {
+    let io = |p: &Path, source: std::io::Error| OpenRecordsError::Io {
+        path: p.to_path_buf(),
+        source,
+    };
     std::fs::create_dir_all(dir).map_err(|e| io(dir, e))?;
     let path = dir.join(records::file_name(shard));
     if let Some(scan) = resume {
@@ -330,7 +387,7 @@ fn open_records(
         let _ = std::fs::remove_file(dir.join(f));
     }
     let mut f = std::fs::File::create(&path).map_err(|e| io(&path, e))?;
-    let mut line = serde_json::to_string(h).map_err(|e| e.to_string())?;
+    let mut line = serde_json::to_string(h).map_err(OpenRecordsError::Header)?;
     line.push('\n');
     f.write_all(line.as_bytes()).map_err(|e| io(&path, e))?;
     Ok((f, path))
@@ -354,7 +411,9 @@ pub fn run_sweep_report(
     let h = header(prep, shard)
         .ok_or_else(|| Error::input(&sc.path, "scenario has no [sweep] table"))?;
     let done = match resume {
-        Some(s) => s.check_indices().map_err(|m| Error::input(&sc.path, m))?,
+        Some(s) => s
+            .check_indices()
+            .map_err(|e| Error::input(&sc.path, e.to_string()))?,
         None => vec![false; cfg.count],
     };
     let todo: Vec<usize> = (0..cfg.count)
@@ -366,7 +425,7 @@ pub fn run_sweep_report(
     };
     let dir = opts.log_root.as_ref().map(|r| r.join(&sc.name));
     let file = match &dir {
-        Some(d) => Some(open_records(d, shard, &h, resume).map_err(log_err)?),
+        Some(d) => Some(open_records(d, shard, &h, resume).map_err(|e| log_err(e.to_string()))?),
         None => None,
     };
     let (sink, path) = match file {
@@ -432,7 +491,7 @@ pub fn run_sweep_report(
         Some(p) => {
             drop(sink);
             let scan = records::scan(p, 0)
-                .map_err(|m| log_err(format!("{}: {m}", crate::echo::path(p))))?;
+                .map_err(|e| log_err(format!("{}: {e}", crate::echo::path(p))))?;
             (scan.entries, vec![p.clone()])
         }
         None => (memory.into_inner().unwrap_or_default(), Vec::new()),
@@ -445,7 +504,8 @@ pub fn run_sweep_report(
         })
     });
     let wall = t_all.elapsed().as_secs_f64();
-    let sum = summary::finish(&h, cfg, &entries, &files, out.as_deref(), wall).map_err(log_err)?;
+    let sum = summary::finish(&h, cfg, &entries, &files, out.as_deref(), wall)
+        .map_err(|e| log_err(e.to_string()))?;
     let mut table = sum.table;
     if resumed > 0 {
         table = table.replacen("variants", &format!("variants, {resumed} resumed"), 1);

@@ -133,26 +133,101 @@ fn number(v: &Value) -> Option<f64> {
     v.as_str().and_then(|s| s.parse::<f64>().ok())
 }
 
+/// What is wrong with one record line of a `variants.jsonl`.
+#[derive(Debug, thiserror::Error)]
+pub enum RecordError {
+    /// A field every record has is absent (`wall_s`, `index`, ...).
+    #[error("not a variant record (no `{0}`)")]
+    Missing(String),
+    /// The line is not JSON.
+    #[error(transparent)]
+    Json(#[from] serde_json::Error),
+    /// `index` or `steps` is not a non-negative integer.
+    #[error("`{0}` is not a non-negative integer")]
+    NotCount(String),
+    /// A number field holds something else.
+    #[error("`{0}` is not a number")]
+    NotNumber(String),
+    /// `success` holds something else.
+    #[error("`{0}` is not a boolean")]
+    NotBoolean(String),
+}
+
+/// Why a `variants.jsonl` cannot be used (see [`scan`], [`Scan::check_indices`]).
+#[derive(Debug, thiserror::Error)]
+pub enum RecordsError {
+    /// The file cannot be opened.
+    #[error(transparent)]
+    Open(std::io::Error),
+    /// A line cannot be read (not text, say).
+    #[error("line {line}: {source} (not a variants.jsonl file)")]
+    Read {
+        /// 1-based line number.
+        line: usize,
+        /// Underlying error.
+        #[source]
+        source: std::io::Error,
+    },
+    /// The first line is not a header of this harness.
+    #[error("line 1: not a variants.jsonl header of anholonomy ({0})")]
+    Header(#[source] serde_json::Error),
+    /// The header's format version is not [`FORMAT`].
+    #[error("line 1: format {0} is not supported (expected {FORMAT})", FORMAT = FORMAT)]
+    Format(u32),
+    /// A record line is malformed.
+    #[error("line {line}: {source}")]
+    Record {
+        /// 1-based line number.
+        line: usize,
+        /// What is wrong with it.
+        #[source]
+        source: RecordError,
+    },
+    /// Not even a header line.
+    #[error("empty: no header line (not a variants.jsonl file)")]
+    Empty,
+    /// A record's variant is outside the sweep (or the header's shard).
+    #[error("variant {index} does not belong to this {}", shard_name(*.shard))]
+    Foreign {
+        /// The variant index.
+        index: usize,
+        /// The header's shard, if any.
+        shard: Option<Shard>,
+    },
+    /// A variant has two records.
+    #[error("variant {0} recorded twice")]
+    Twice(usize),
+}
+
+/// `shard I/N`, or `sweep` for a whole one.
+fn shard_name(shard: Option<Shard>) -> String {
+    shard
+        .map(|s| format!("shard {}/{}", s.index, s.count))
+        .unwrap_or("sweep".into())
+}
+
 /// Parse one record line (without its newline) into an entry.
-fn parse_record(line: &str, file: usize, offset: u64) -> Result<Entry, String> {
+fn parse_record(line: &str, file: usize, offset: u64) -> Result<Entry, RecordError> {
     const WALL: &str = ",\"wall_s\":";
     let cut = line
         .rfind(WALL)
-        .ok_or("not a variant record (no `wall_s`)")?;
-    let v: Value = serde_json::from_str(&quote_numbers(line)).map_err(|e| e.to_string())?;
-    let field = |k: &str| v.get(k).ok_or(format!("not a variant record (no `{k}`)"));
-    let int = |k: &str| -> Result<usize, String> {
+        .ok_or_else(|| RecordError::Missing("wall_s".into()))?;
+    let v: Value = serde_json::from_str(&quote_numbers(line))?;
+    let field = |k: &str| v.get(k).ok_or_else(|| RecordError::Missing(k.into()));
+    let int = |k: &str| -> Result<usize, RecordError> {
         field(k)?
             .as_str()
             .and_then(|s| s.parse().ok())
-            .ok_or(format!("`{k}` is not a non-negative integer"))
+            .ok_or_else(|| RecordError::NotCount(k.into()))
     };
-    let opt = |k: &str| -> Result<Option<f64>, String> {
+    let opt = |k: &str| -> Result<Option<f64>, RecordError> {
         let x = field(k)?;
         if x.is_null() {
             return Ok(None);
         }
-        number(x).map(Some).ok_or(format!("`{k}` is not a number"))
+        number(x)
+            .map(Some)
+            .ok_or_else(|| RecordError::NotNumber(k.into()))
     };
     Ok(Entry {
         file,
@@ -161,7 +236,7 @@ fn parse_record(line: &str, file: usize, offset: u64) -> Result<Entry, String> {
         len: cut,
         success: field("success")?
             .as_bool()
-            .ok_or("`success` is not a boolean")?,
+            .ok_or_else(|| RecordError::NotBoolean("success".into()))?,
         final_error: opt("final_error")?,
         time_to_goal: opt("time_to_goal")?,
         steps: int("steps")?,
@@ -171,15 +246,15 @@ fn parse_record(line: &str, file: usize, offset: u64) -> Result<Entry, String> {
 }
 
 /// Parse a record line as written (with its newline).
-pub fn parse_line(line: &str) -> Result<Entry, String> {
+pub fn parse_line(line: &str) -> Result<Entry, RecordError> {
     parse_record(line.trim_end_matches('\n'), 0, 0)
 }
 
 /// Read a `variants.jsonl` (file number `file` of a merge). Errors are one
 /// line naming the line number; a last line without its newline (a killed
 /// writer) is ignored.
-pub fn scan(path: &Path, file: usize) -> Result<Scan, String> {
-    let f = std::fs::File::open(path).map_err(|e| e.to_string())?;
+pub fn scan(path: &Path, file: usize) -> Result<Scan, RecordsError> {
+    let f = std::fs::File::open(path).map_err(RecordsError::Open)?;
     let mut r = BufReader::new(f);
     let mut buf = String::new();
     let mut offset = 0u64;
@@ -188,9 +263,10 @@ pub fn scan(path: &Path, file: usize) -> Result<Scan, String> {
     let mut lineno = 0usize;
     loop {
         buf.clear();
-        let n = r
-            .read_line(&mut buf)
-            .map_err(|e| format!("line {}: {e} (not a variants.jsonl file)", lineno + 1))?;
+        let n = r.read_line(&mut buf).map_err(|source| RecordsError::Read {
+            line: lineno + 1,
+            source,
+        })?;
         if n == 0 || !buf.ends_with('\n') {
             break; // end, or a partial last line
         }
@@ -198,23 +274,22 @@ pub fn scan(path: &Path, file: usize) -> Result<Scan, String> {
         let line = buf.trim_end_matches('\n');
         match &header {
             None => {
-                let h: Header = serde_json::from_str(line).map_err(|e| {
-                    format!("line 1: not a variants.jsonl header of anholonomy ({e})")
-                })?;
+                let h: Header = serde_json::from_str(line).map_err(RecordsError::Header)?;
                 if h.anholonomy_variants != FORMAT {
-                    return Err(format!(
-                        "line 1: format {} is not supported (expected {FORMAT})",
-                        h.anholonomy_variants
-                    ));
+                    return Err(RecordsError::Format(h.anholonomy_variants));
                 }
                 header = Some(h);
             }
-            Some(_) => entries
-                .push(parse_record(line, file, offset).map_err(|m| format!("line {lineno}: {m}"))?),
+            Some(_) => entries.push(parse_record(line, file, offset).map_err(|source| {
+                RecordsError::Record {
+                    line: lineno,
+                    source,
+                }
+            })?),
         }
         offset += n as u64;
     }
-    let header = header.ok_or("empty: no header line (not a variants.jsonl file)")?;
+    let header = header.ok_or(RecordsError::Empty)?;
     Ok(Scan {
         header,
         entries,
@@ -225,21 +300,18 @@ pub fn scan(path: &Path, file: usize) -> Result<Scan, String> {
 impl Scan {
     /// Check every record against the header: index below `count`, in the
     /// shard, recorded once. Returns which indices are done.
-    pub fn check_indices(&self) -> Result<Vec<bool>, String> {
+    pub fn check_indices(&self) -> Result<Vec<bool>, RecordsError> {
         let h = &self.header;
         let mut done = vec![false; h.count];
         for e in &self.entries {
             if e.index >= h.count || h.shard.is_some_and(|s| !s.contains(e.index)) {
-                return Err(format!(
-                    "variant {} does not belong to this {}",
-                    e.index,
-                    h.shard
-                        .map(|s| format!("shard {}/{}", s.index, s.count))
-                        .unwrap_or("sweep".into())
-                ));
+                return Err(RecordsError::Foreign {
+                    index: e.index,
+                    shard: h.shard,
+                });
             }
             if std::mem::replace(&mut done[e.index], true) {
-                return Err(format!("variant {} recorded twice", e.index));
+                return Err(RecordsError::Twice(e.index));
             }
         }
         Ok(done)

@@ -3,7 +3,8 @@
 //! shards gives the same document. `sweep.json` is written streaming: the
 //! records are copied from the `variants.jsonl` files one at a time.
 
-use crate::log::atomic::write_atomic;
+use crate::log::atomic::write_file;
+use crate::log::LogError;
 use crate::scenario::SweepConfig;
 use crate::sweep::distribution;
 use crate::sweep::records::{raw_record, Entry, Header};
@@ -33,7 +34,7 @@ pub fn finish(
     files: &[PathBuf],
     out: Option<&Path>,
     wall: f64,
-) -> Result<Summary, String> {
+) -> Result<Summary, LogError> {
     let n = entries.len();
     let ok = entries.iter().filter(|r| r.success).count();
     let rate = if n == 0 { 0.0 } else { ok as f64 / n as f64 };
@@ -162,13 +163,16 @@ fn write_doc(
     entries: &[Entry],
     files: &[PathBuf],
     walls: &serde_json::Value,
-) -> Result<(), String> {
+) -> Result<(), LogError> {
     let mut readers = files
         .iter()
         .map(|f| std::fs::File::open(f).map(BufReader::new))
         .collect::<std::io::Result<Vec<_>>>()
-        .map_err(|e| format!("{}: {e}", crate::echo::path(out)))?;
-    write_atomic(out, |w| {
+        .map_err(|source| LogError::Write {
+            path: out.to_path_buf(),
+            source,
+        })?;
+    write_file(out, |w| {
         let mut text = serde_json::to_string_pretty(head).map_err(std::io::Error::other)?;
         // Reopen the object: drop the closing "\n}".
         text.truncate(text.trim_end().len() - 1);

@@ -134,7 +134,8 @@ pub struct Inventory {
 /// A file's bytes (a regular file within the MCAP cap).
 pub fn read_bytes(file: &Path) -> Result<Vec<u8>, PlanError> {
     let err = |m: String| PlanError::file(file.to_path_buf(), None, m);
-    crate::input::check_regular(file, "plan file", MCAP_MAX_BYTES).map_err(err)?;
+    crate::input::check_regular(file, "plan file", MCAP_MAX_BYTES)
+        .map_err(|e| err(e.to_string()))?;
     let mut bytes = Vec::new();
     std::fs::File::open(file)
         .and_then(|f| f.take(MCAP_MAX_BYTES + 1).read_to_end(&mut bytes))
