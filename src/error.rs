@@ -3,7 +3,7 @@
 use std::path::PathBuf;
 use thiserror::Error;
 
-/// What the user must do about an [`Error`].
+/// What the user must do about an [`Error`](enum@Error).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord)]
 pub enum ErrorKind {
     /// Fix the input (a scenario, a file it names, a flag).

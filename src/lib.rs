@@ -4,10 +4,10 @@
 //! Pipeline: [`scenario`] (TOML → typed configuration) → [`validate`] (every
 //! scenario of a call checked, planned and its physics built before anything
 //! runs) → [`runner`]: ideal run ([`integrate`], RK4 on a [`model`]) →
-//! physics replay ([`physics`], Rapier with a URDF) → [`compare`] → logs
+//! physics replay ([`engine`], Rapier with a URDF) → [`compare`] → logs
 //! ([`log`]: MCAP, Rerun, summary.json, written as one unit); [`sweep`] runs
-//! Monte Carlo variants. Configuration flows one way: [`systems`],
-//! [`planner`], [`model`] and [`physics`] define their own plain parameter
+//! Monte Carlo variants. Configuration flows one way: [`robots`],
+//! [`planner`], [`model`] and [`engine`] define their own plain parameter
 //! types and never import [`scenario`].
 
 //!

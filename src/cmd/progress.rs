@@ -9,10 +9,13 @@ use std::collections::HashMap;
 use std::sync::Mutex;
 use std::time::{Duration, Instant};
 
+/// An open bar: the bar, when its work started, and whether it is drawn.
+type Open = (ProgressBar, Instant, bool);
+
 /// Progress bars on stderr.
 #[derive(Default)]
 pub struct Bars {
-    open: Mutex<HashMap<(Work, String), (ProgressBar, Instant, bool)>>,
+    open: Mutex<HashMap<(Work, String), Open>>,
 }
 
 fn bar(name: &str, total: u64, template: &str, target: ProgressDrawTarget) -> ProgressBar {

@@ -330,7 +330,7 @@ fn settle_baselines(
                 errors.push(Error::Log { path, message: m });
             }
         } else if let Some(b) = &baselines[*i] {
-            let d = baseline::compare(b, o, &p.scenario.regression, |m| baseline::direction(m));
+            let d = baseline::compare(b, o, &p.scenario.regression, baseline::direction);
             deltas[k] = Some(d);
         }
         if let Err(e) = record_regression(o, deltas[k].as_deref()) {

@@ -119,8 +119,8 @@ pub fn replay(
 
 /// One replay in progress, advanced a step at a time by its caller:
 /// [`Replay::command`] applies the next step's input, the caller steps the
-/// engine, [`Replay::record_step`] reads the result back. [`replay_perturbed`]
-/// drives one system this way; a batched sweep ([`batch`]) drives several
+/// engine, [`Replay::record_step`] reads the result back. `replay_perturbed`
+/// drives one system this way; a batched sweep ([`batch`](crate::engine::batch)) drives several
 /// systems that share one engine world in lockstep with the same code, so
 /// both paths apply the same commands.
 pub struct Replay {

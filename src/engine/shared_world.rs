@@ -40,7 +40,7 @@ impl WorldKey {
 /// The shared world between builds, with its ground.
 pub type Shared = (Box<PhysicsWorld>, RigidBodyHandle, Option<ColliderHandle>);
 
-/// The thread-local slot [`SimWorld::new`](crate::engine::world::SimWorld::new) looks in while [`Host::build`] runs.
+/// The thread-local slot [`SimWorld::new`](crate::engine::world::SimWorld::new) looks in while `Host::build` runs.
 pub struct Slot {
     /// What the world's robots agreed on.
     pub key: Option<WorldKey>,

@@ -3,7 +3,7 @@
 //!
 //! * [`write_mcap`]: Foxglove-flavoured MCAP (JSON topics with JSON schemas,
 //!   `/tf`, `/scene`, `/scene/paths`, metrics as metadata). Topic list in
-//!   [`mcap`](self::mcap) module docs.
+//!   [`mcap`] module docs.
 //! * [`write_rrd`]: Rerun recording with a blueprint (3D view of the robot and
 //!   the paths, time series of state, errors, commands and sim channels).
 //!

@@ -9,7 +9,7 @@
 //! 1. In `src/systems/<name>.rs`, define the system's own plain `[model]`
 //!    parameter struct (`#[derive(Deserialize, Serialize)]`,
 //!    `#[serde(deny_unknown_fields)]`, without `kind`: the scenario layer
-//!    strips it), e.g. [`disk::DiskModelConfig`]. Planner parameters are
+//!    strips it), e.g. [`rolling_disk::DiskModelConfig`]. Planner parameters are
 //!    the planner's own structs (`crate::planner::*::*Params`); a system
 //!    with several planners defines an enum of them (e.g.
 //!    [`space_robot::SpacePlanner`]).

@@ -1,5 +1,5 @@
 //! Plan sources: plans that come from outside the harness's planners, for
-//! any model. Plan files (CSV, JSON, MCAP, rosbag2) in [`file`], feedback
+//! any model. Plan files (CSV, JSON, MCAP, rosbag2) in [`file`](mod@file), feedback
 //! laws in another process in [`external`]; [`own_plan`] wraps a robot's
 //! system so that its plan comes from one of them.
 

@@ -5,7 +5,7 @@
 //!
 //! xacro resolves `$(find PKG)` through ROS 2's package index
 //! (`ament_index_python`), which is not on PyPI. The harness writes a small
-//! module of that name ([`shim`]) first on xacro's `PYTHONPATH`, answering
+//! module of that name (`shim`) first on xacro's `PYTHONPATH`, answering
 //! from the packages the meshes are found in too
 //! ([`crate::engine::mesh::Search`]); absent packages are collected
 //! through the whole expansion and named together, or expanded to nothing

@@ -16,7 +16,7 @@
 //!   model and the controller believe the nominal radius, the simulated
 //!   wheels have the scaled one).
 //!
-//! Each dimension is one row of [`dimensions!`]: its key, its unit, which
+//! Each dimension is one row of `dimensions!`: its key, its unit, which
 //! way reality gets worse, what it reaches and its margin search range; the
 //! `[sim.perturb]` table, [`Dimension`] and the `[margins]` table are
 //! generated from the rows. Which dimensions reach a robot follows from its

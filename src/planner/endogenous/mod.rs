@@ -166,7 +166,7 @@ fn validate(p: &EndogenousParams, n: usize, m: usize) -> Result<(), PlanError> {
     Ok(())
 }
 
-/// Plans q0 → targets[0] at T → targets[1] at 2T → … for any system
+/// Plans q0 → targets\[0\] at T → targets\[1\] at 2T → … for any system
 /// (states in the system's units).
 pub fn solve<S: EndogenousSystem>(
     sys: &S,

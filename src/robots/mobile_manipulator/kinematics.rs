@@ -6,7 +6,7 @@
 //! midpoint of the drive-wheel axle, on the ground.
 //!
 //! Frames (shared with `models/mobile_manipulator.urdf`): `base_link` at
-//! (x, y, 0) turned by θ; the arm's DH frame 0 at [`MobileManipulator::mount`]
+//! (x, y, 0) turned by θ; the arm's DH frame 0 at `MobileManipulator::mount`
 //! in `base_link`; URDF links `link1`…`link6` as in [`crate::robots::mobile_manipulator::puma560`]; `tool`
 //! fixed to the flange (DH frame 6) with the grasp point on its z axis.
 //!

@@ -10,7 +10,7 @@
 //!
 //! Inputs of both: the world-frame angular velocity (ω_x, ω_y), with ω_z = 0 (no spin about
 //! the vertical). No slip at the contact point −a k gives v = a ω × k, i.e.
-//! ẋ = a ω_y, ẏ = −a ω_x, and Ṙ = [ω]× R.
+//! ẋ = a ω_y, ẏ = −a ω_x, and Ṙ = \[ω\]× R.
 //!
 //! The paper writes Eq. 2 with the frame-1 components ω¹ = Rz(−α) ω (frame 1 is the world frame
 //! turned by α about z, sharing its z axis, so ω¹_z = ω_z = 0). Substituting

@@ -95,12 +95,12 @@ impl FeBeam {
         unit_gravity_load(&self.beam) * SVector::<f64, 3>::from(g)
     }
 
-    /// C = −K_oo⁻¹ K_os (row-major, `[i][j]` = ∂q_o[i]/∂q_s[j]).
+    /// C = −K_oo⁻¹ K_os (row-major, `[i][j]` = ∂q_o\[i\]/∂q_s\[j\]).
     pub fn condensation(&self) -> &[[f64; 6]; 6] {
         &self.condensation
     }
 
-    /// K_oo⁻¹ f_o per unit gravity (`[i][j]` = ∂q_o[i]/∂g[j]).
+    /// K_oo⁻¹ f_o per unit gravity (`[i][j]` = ∂q_o\[i\]/∂g\[j\]).
     pub fn gravity_response(&self) -> &[[f64; 3]; 6] {
         &self.gravity_response
     }

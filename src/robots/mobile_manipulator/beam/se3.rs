@@ -2,7 +2,7 @@
 //! numbers carry exact derivatives through them.
 //!
 //! A twist is ξ = (v, ω) ∈ ℝ⁶ (translational part first). `se3_exp(ξ)` is the
-//! pose exp(ξ̂) = (R, p) with R = exp([ω]×) and p = V(ω) v; `se3_log` is its
+//! pose exp(ξ̂) = (R, p) with R = exp(\[ω\]×) and p = V(ω) v; `se3_log` is its
 //! inverse for rotation angles θ = ‖ω‖ ∈ [0, π].
 //!
 //! Robustness: near the identity the θ-dependent coefficients are evaluated

@@ -20,7 +20,7 @@
 //! * the beam: its segments move rigidly with robot 1's tool (a wrench) and
 //!   deform with q_f; ∂/∂q_f of the segments' adjoint-weighted poses and of
 //!   b_f in dual numbers over q_f, chained through q_f's derivatives over
-//!   rigid motions of both tool frames ([`beam_wrenches`]).
+//!   rigid motions of both tool frames (`beam_wrenches`).
 //!
 //! The generic dual-number evaluation stays as the reference; tests compare
 //! the two at random configurations.

@@ -72,7 +72,7 @@ pub struct Carried {
     pub segments: usize,
     /// Cross semi-axes of the beam's ellipsoids, m (the rod's radius plus a margin).
     pub radius: f64,
-    /// Bound on the grasps' axial deformation |q_f[0]| (stretch or
+    /// Bound on the grasps' axial deformation |q_f\[0\]| (stretch or
     /// shortening along the beam), m, if any (ours, see [`Carried::with_max_stretch`]).
     pub max_stretch: Option<f64>,
 }
@@ -220,12 +220,12 @@ impl Carried {
         })
     }
 
-    /// Bound the axial component of q_s, |q_f[0]| ≤ `eps` (m), besides Eq.
+    /// Bound the axial component of q_s, |q_f\[0\]| ≤ `eps` (m), besides Eq.
     /// 5. Eq. 5 bounds every component alike, in m and rad, but a solid rod
     /// is ~10⁵ times stiffer in stretch than in bending: a few millimetres
     /// of stretch are kilonewtons, which a real pair of grippers does not
     /// hold, while Eq. 5's q_F lets the plan stretch the beam's model by
-    /// decimetres. The bound enters b_f as one more factor 1 − (q_f[0]/ε)²
+    /// decimetres. The bound enters b_f as one more factor 1 − (q_f\[0\]/ε)²
     /// (zero at the bound), like the nodes' balls.
     pub fn with_max_stretch(mut self, eps: Option<f64>) -> Carried {
         self.max_stretch = eps;
@@ -265,7 +265,7 @@ impl Carried {
     }
 
     /// The least admissibility factor at (q_f, g)
-    /// ([`Carried::admissible_factors`]): ≤ 0 outside the admissible set.
+    /// (`Carried::admissible_factors`): ≤ 0 outside the admissible set.
     pub fn margin(&self, q_f: &[f64; 12], g: &[f64; 3]) -> f64 {
         let mut m = f64::INFINITY;
         self.admissible_factors(q_f, g, |b| m = m.min(b));

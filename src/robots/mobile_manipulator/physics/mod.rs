@@ -12,7 +12,7 @@
 //! planner avoids). Robot colliders meet the ground, the obstacles and the
 //! other robot's colliders, never their own robot's.
 //!
-//! Two robots may carry a beam ([`CarriedBeam`], see [`carried`]): a
+//! Two robots may carry a beam ([`CarriedBeam`], see `carried`): a
 //! [`PhysicsBeam`](crate::robots::mobile_manipulator::beam::physics::PhysicsBeam) fixed to both tools at the planner's grasp offsets. The
 //! beam meets the ground, the obstacles and both platforms (the platform
 //! boxes); arms, columns and grippers pass it (the planner's
@@ -27,7 +27,7 @@
 //! violated nonholonomic constraint, m/s), `speed_error`, `turn_rate_error`
 //! (measured − commanded platform v, ω) and `joint_rate_error` (largest
 //! |measured − commanded| joint rate, rad/s). With two robots, the channels
-//! of [`carried::PAIR_CHANNELS`] follow.
+//! of `carried::PAIR_CHANNELS` follow.
 
 #[cfg(test)]
 mod armature_tests;
@@ -212,7 +212,7 @@ pub struct MobileManipulatorPhysics {
 #[derive(Debug, Clone, Copy, PartialEq, Default)]
 pub enum ArmServo {
     /// Stiff position servos: the commanded rate plus a pull with time
-    /// constant [`SERVO_TIME`] towards the integral of the commanded rates,
+    /// constant `SERVO_TIME` towards the integral of the commanded rates,
     /// torque-limited at `[sim] motor_max_torque` (default).
     #[default]
     Stiff,

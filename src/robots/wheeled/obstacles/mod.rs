@@ -140,7 +140,7 @@ pub struct WithObstacles {
 impl WithObstacles {
     /// Add `obstacles` to the world of `inner` (which must have a
     /// [`SimWorld`]); `friction` is the robot's (`[sim] friction`). A robot
-    /// that starts inside an obstacle (deeper than [`TOUCH`]) is refused,
+    /// that starts inside an obstacle (deeper than `TOUCH`) is refused,
     /// naming `start` and the obstacle: the contact solver would push it out
     /// at once, and the run would measure that, not the plan.
     pub fn new(
