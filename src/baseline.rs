@@ -308,7 +308,7 @@ pub fn judge(dir: Direction, base: f64, now: f64, rel: f64, abs: f64) -> (Status
 }
 
 /// The change from `base` to `now` as text: relative when the baseline is non-zero.
-pub fn change_text(base: Option<f64>, now: Option<f64>) -> String {
+pub(crate) fn change_text(base: Option<f64>, now: Option<f64>) -> String {
     match (base, now) {
         (None, _) => "new metric".into(),
         (_, None) => "no longer produced".into(),

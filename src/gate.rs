@@ -28,7 +28,7 @@ impl std::fmt::Display for Breach {
 
 /// The gates `metrics` break: thresholds in name order, then minimums. A
 /// metric the run did not produce counts as NaN.
-pub fn breaches(
+pub(crate) fn breaches(
     thresholds: &BTreeMap<String, f64>,
     minimums: &BTreeMap<String, f64>,
     metrics: &[(String, f64)],

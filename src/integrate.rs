@@ -35,7 +35,12 @@ impl Trajectory {
 }
 
 /// One classical RK4 step of q' = f(t, q).
-pub fn rk4_step(f: &mut impl FnMut(f64, &State) -> State, t: f64, q: &State, h: f64) -> State {
+pub(crate) fn rk4_step(
+    f: &mut impl FnMut(f64, &State) -> State,
+    t: f64,
+    q: &State,
+    h: f64,
+) -> State {
     let k1 = f(t, q);
     let k2 = f(t + 0.5 * h, &(q + &k1 * (0.5 * h)));
     let k3 = f(t + 0.5 * h, &(q + &k2 * (0.5 * h)));

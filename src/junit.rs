@@ -49,7 +49,7 @@ fn secs(s: f64) -> Duration {
 }
 
 /// The test case of one result.
-pub fn test_case(r: &CaseResult<'_>) -> TestCase {
+pub(crate) fn test_case(r: &CaseResult<'_>) -> TestCase {
     match r {
         CaseResult::Ran {
             outcome: o,

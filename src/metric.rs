@@ -417,7 +417,7 @@ pub fn matches(pattern: &str, name: &str) -> bool {
 
 /// What each placeholder of `pattern` stands for in `name` (`None`: not an
 /// instance), e.g. `[("run", "sim"), ("coord", "theta_deg")]`.
-pub fn captures<'p, 'n>(pattern: &'p str, name: &'n str) -> Option<Vec<(&'p str, &'n str)>> {
+pub(crate) fn captures<'p, 'n>(pattern: &'p str, name: &'n str) -> Option<Vec<(&'p str, &'n str)>> {
     let Some(open) = pattern.find('{') else {
         return (pattern == name).then(Vec::new);
     };
@@ -440,7 +440,10 @@ pub fn captures<'p, 'n>(pattern: &'p str, name: &'n str) -> Option<Vec<(&'p str,
 
 /// The first row of `rows` whose name or pattern `name` is an instance of
 /// (literal rows come before the patterns that would also match).
-pub fn find_row<'a>(rows: impl IntoIterator<Item = &'a Metric>, name: &str) -> Option<&'a Metric> {
+pub(crate) fn find_row<'a>(
+    rows: impl IntoIterator<Item = &'a Metric>,
+    name: &str,
+) -> Option<&'a Metric> {
     let rows: Vec<&Metric> = rows.into_iter().collect();
     rows.iter()
         .find(|r| !r.name.contains('{') && r.name == name)

@@ -120,7 +120,7 @@ pub fn shorten_long_numbers(text: &str) -> String {
 }
 
 /// A metric value for tables.
-pub fn fmt_value(v: f64) -> String {
+pub(crate) fn fmt_value(v: f64) -> String {
     if v.is_nan() {
         "NaN".into()
     } else if v == 0.0 || (v.abs() >= 1e-3 && v.abs() < 1e6) {

@@ -29,7 +29,7 @@ pub struct PaperRow {
 }
 
 /// Decimal places of a printed number ("0.01808" → 5, "−7.696e-4" → 7, "330" → 0).
-pub fn printed_decimals(printed: &str) -> i32 {
+pub(crate) fn printed_decimals(printed: &str) -> i32 {
     let s = printed.trim().replace('−', "-");
     let (mantissa, exp) = match s.split_once(['e', 'E']) {
         Some((m, e)) => (m.to_string(), e.parse::<i32>().unwrap_or(0)),
@@ -43,7 +43,7 @@ pub fn printed_decimals(printed: &str) -> i32 {
 }
 
 /// Parses a printed number (accepts the typographic minus).
-pub fn printed_value(printed: &str) -> Option<f64> {
+pub(crate) fn printed_value(printed: &str) -> Option<f64> {
     printed.trim().replace('−', "-").parse().ok()
 }
 
@@ -62,7 +62,7 @@ pub fn row(quantity: &str, printed: &str, computed: f64, unit: &str, note: &str)
 }
 
 /// A number inside plan details by JSON pointer (e.g. `/loops/0/b_rad`).
-pub fn detail(details: &Value, pointer: &str) -> Option<f64> {
+pub(crate) fn detail(details: &Value, pointer: &str) -> Option<f64> {
     details.pointer(pointer).and_then(Value::as_f64)
 }
 
@@ -73,7 +73,10 @@ pub fn same(a: &[f64], b: &[f64], tol: f64) -> bool {
 
 /// Builds rows from `(quantity, printed, pointer, scale, unit, note)`; rows whose pointer is
 /// missing from the details are left out. `scale` converts the detail to the printed unit.
-pub fn rows_from(details: &Value, spec: &[(&str, &str, &str, f64, &str, &str)]) -> Vec<PaperRow> {
+pub(crate) fn rows_from(
+    details: &Value,
+    spec: &[(&str, &str, &str, f64, &str, &str)],
+) -> Vec<PaperRow> {
     spec.iter()
         .filter_map(|&(q, printed, ptr, scale, unit, note)| {
             detail(details, ptr).map(|v| row(q, printed, v * scale, unit, note))
@@ -102,7 +105,7 @@ pub fn format_table(rows: &[PaperRow]) -> String {
 }
 
 /// The computed value with two more decimals than printed (at least 2 significant).
-pub fn format_computed(r: &PaperRow) -> String {
+pub(crate) fn format_computed(r: &PaperRow) -> String {
     let d = printed_decimals(&r.printed);
     if d > 6 {
         format!("{:.*e}", 4, r.computed)

@@ -329,7 +329,7 @@ impl Plan {
 
 /// How far from a jump its one-sided limits are read, s: far below any
 /// step, far above round-off of t.
-pub fn jump_offset(t: f64) -> f64 {
+pub(crate) fn jump_offset(t: f64) -> f64 {
     1e-11 * t.abs().max(1.0)
 }
 

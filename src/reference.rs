@@ -370,7 +370,9 @@ fn toml_table(text: &str) -> Result<Spanned<DeValue<'_>>, ReferenceError> {
 
 /// The file coordinates of `start`/`goal` (name, unit) and the input names of a model.
 #[allow(clippy::type_complexity)]
-pub fn states_of(kind: &str) -> Result<(Vec<(String, String)>, Vec<String>), ReferenceError> {
+pub(crate) fn states_of(
+    kind: &str,
+) -> Result<(Vec<(String, String)>, Vec<String>), ReferenceError> {
     let text = minimal_table(kind)?;
     let model = ModelConfig::parse(kind, toml_table(&text)?)?
         .ok_or_else(|| ReferenceError::UnknownModel(kind.into()))?;

@@ -454,7 +454,7 @@ impl<F: FnMut(&SimTrajectory)> ReplayObserver for Observer<'_, '_, F> {
 }
 
 /// How [`run`] replays the plan on the physics.
-pub fn replay_options(prep: &Prepared, opts: &RunOptions) -> ReplayOptions {
+pub(crate) fn replay_options(prep: &Prepared, opts: &RunOptions) -> ReplayOptions {
     let sc = &prep.scenario;
     ReplayOptions {
         dt: sc.sim.dt,
@@ -467,7 +467,7 @@ pub fn replay_options(prep: &Prepared, opts: &RunOptions) -> ReplayOptions {
 }
 
 /// A physics replay's failure as the run's error.
-pub fn replay_error(prep: &Prepared, e: ReplayError) -> Error {
+pub(crate) fn replay_error(prep: &Prepared, e: ReplayError) -> Error {
     let sc = &prep.scenario;
     match e {
         ReplayError::Law(message) => Error::Law {
@@ -778,7 +778,7 @@ fn model_json(prep: &Prepared) -> serde_json::Value {
 }
 
 /// The `wall_time_s` object: stage timings, s, and the physics step rate.
-pub fn timing_json(o: &RunOutcome) -> serde_json::Value {
+pub(crate) fn timing_json(o: &RunOutcome) -> serde_json::Value {
     let mut t = serde_json::to_value(&o.timings).unwrap_or_default();
     t["sim_steps_per_second"] = json!(o.steps as f64 / o.timings.physics.max(1e-9));
     t

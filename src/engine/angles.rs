@@ -14,7 +14,7 @@ pub fn yaw(q: &Rotation) -> f64 {
 
 /// Angle of a rotation about one of its own axes (0 = x, 1 = y, 2 = z), in
 /// (−π, π]; exact when the rotation is about that axis.
-pub fn about_axis(q: &Rotation, axis: usize) -> f64 {
+pub(crate) fn about_axis(q: &Rotation, axis: usize) -> f64 {
     let [x, y, z, w] = quat(q);
     let s = if w < 0.0 { -1.0 } else { 1.0 };
     let v = [x, y, z][axis.min(2)];

@@ -50,7 +50,7 @@ impl Lumping {
 }
 
 /// Whether a link is a frame: no mass.
-pub fn is_frame(l: &urdf_rs::Link) -> bool {
+pub(crate) fn is_frame(l: &urdf_rs::Link) -> bool {
     l.inertial.mass.value == 0.0
 }
 

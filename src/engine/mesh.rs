@@ -259,6 +259,6 @@ fn one_line(s: &str) -> String {
 }
 
 /// The URDF `scale` of a mesh (1, 1, 1 when absent).
-pub fn scale_of(scale: &Option<urdf_rs::Vec3>) -> [f64; 3] {
+pub(crate) fn scale_of(scale: &Option<urdf_rs::Vec3>) -> [f64; 3] {
     scale.as_ref().map_or([1.0; 3], |s| s.0)
 }

@@ -27,7 +27,7 @@ pub const HULL_POINTS: usize = 5_000;
 /// (84 bytes of header and count, 50 bytes per triangle; a trailing newline
 /// is tolerated, as `mesh-loader` does). ASCII STL (`solid ...` in text)
 /// has no count.
-pub fn check_stl_size(path: &Path) -> Result<(), String> {
+pub(crate) fn check_stl_size(path: &Path) -> Result<(), String> {
     let shown = crate::echo::path(path);
     let mut f = std::fs::File::open(path).map_err(|e| format!("{shown}: {e}"))?;
     let len = f.metadata().map_err(|e| format!("{shown}: {e}"))?.len();
@@ -132,7 +132,7 @@ pub fn hull(mesh: &Arc<TriMesh>) -> Option<crate::engine::rapier::prelude::Share
 }
 
 /// [`hull`], and how the mesh was thinned for it.
-pub fn hull_with(mesh: &Arc<TriMesh>) -> Hull {
+pub(crate) fn hull_with(mesh: &Arc<TriMesh>) -> Hull {
     use crate::engine::rapier::prelude::SharedShape;
     static CACHE: OnceLock<HullCache> = OnceLock::new();
     let cache = CACHE.get_or_init(Default::default);

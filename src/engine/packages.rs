@@ -49,7 +49,7 @@ impl MissingPackages {
 pub const ABSENT_ROOT: &str = "/anholonomy-absent-package";
 
 /// The absent package a path under [`ABSENT_ROOT`] names.
-pub fn absent_package(path: &str) -> Option<&str> {
+pub(crate) fn absent_package(path: &str) -> Option<&str> {
     let rest = path.strip_prefix(ABSENT_ROOT)?.strip_prefix("/[")?;
     rest.split_once(']').map(|(pkg, _)| pkg)
 }
@@ -58,7 +58,7 @@ pub fn absent_package(path: &str) -> Option<&str> {
 const PACKAGE_XML_MAX: u64 = 1 << 20;
 
 /// The `<name>` of the ROS package manifest at `path`, if it has one.
-pub fn manifest_name(path: &Path) -> Option<String> {
+pub(crate) fn manifest_name(path: &Path) -> Option<String> {
     use quick_xml::events::Event;
     use std::io::Read;
     let mut text = String::new();
@@ -87,7 +87,7 @@ pub fn manifest_name(path: &Path) -> Option<String> {
 
 /// The package the file at `urdf` belongs to: the `package.xml` in its
 /// directory, or the nearest one above it, with its name.
-pub fn own_package(urdf: &Path) -> Option<(String, PathBuf)> {
+pub(crate) fn own_package(urdf: &Path) -> Option<(String, PathBuf)> {
     let abs = std::path::absolute(urdf).ok()?;
     let mut dir = abs.parent();
     while let Some(d) = dir {
@@ -102,7 +102,7 @@ pub fn own_package(urdf: &Path) -> Option<(String, PathBuf)> {
 
 /// The subdirectories of `dir` by name (none when it cannot be read),
 /// sorted.
-pub fn subdirectories(dir: &Path) -> Vec<(String, PathBuf)> {
+pub(crate) fn subdirectories(dir: &Path) -> Vec<(String, PathBuf)> {
     let mut out: Vec<(String, PathBuf)> = std::fs::read_dir(dir)
         .map(|rd| {
             rd.flatten()

@@ -45,7 +45,7 @@ pub fn rotation(x: f64, y: f64, z: f64, w: f64) -> Rotation {
 
 /// Engine pose → record [`Pose`].
 #[inline]
-pub fn to_pose(p: &RPose) -> Pose {
+pub(crate) fn to_pose(p: &RPose) -> Pose {
     Pose {
         translation: arr(p.translation),
         rotation: quat(&p.rotation),
@@ -53,7 +53,7 @@ pub fn to_pose(p: &RPose) -> Pose {
 }
 
 /// Model pose ([`crate::model::spatial::Pose`]) → engine pose.
-pub fn from_spatial(p: &SPose<f64>) -> RPose {
+pub(crate) fn from_spatial(p: &SPose<f64>) -> RPose {
     let q = p.quaternion();
     RPose::from_parts(
         vector(p.p[0], p.p[1], p.p[2]),
@@ -62,7 +62,7 @@ pub fn from_spatial(p: &SPose<f64>) -> RPose {
 }
 
 /// Engine pose → model pose.
-pub fn to_spatial(p: &RPose) -> SPose<f64> {
+pub(crate) fn to_spatial(p: &RPose) -> SPose<f64> {
     let m = Matrix::from_quat(p.rotation);
     let cols = [m.x_axis, m.y_axis, m.z_axis];
     SPose {

@@ -89,7 +89,7 @@ pub fn join(settings: &PhysicsSettings, ground: bool) -> Option<Option<Shared>> 
 /// group (the ground stays in group 1 and meets everyone), and ground
 /// friction at least the robot's (contacts take the smaller coefficient, so
 /// each robot keeps its own).
-pub fn keep_apart(
+pub(crate) fn keep_apart(
     world: &mut PhysicsWorld,
     colliders: &[ColliderHandle],
     ground: Option<ColliderHandle>,

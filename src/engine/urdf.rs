@@ -46,7 +46,7 @@ pub fn parse(path: &Path) -> Result<Robot, SetupError> {
 }
 
 /// Parse URDF text.
-pub fn parse_text(text: &str) -> Result<Robot, SetupError> {
+pub(crate) fn parse_text(text: &str) -> Result<Robot, SetupError> {
     urdf_rs::read_from_string(text).map_err(|e| {
         SetupError::urdf(format!(
             "URDF does not parse: {}",
@@ -63,7 +63,7 @@ pub fn validate(robot: &Robot) -> Result<(), SetupError> {
 
 /// One tree of uniquely named links with finite, non-negative masses, where
 /// every body that moves has mass: the first problem.
-pub fn validate_tree(robot: &Robot) -> Result<(), SetupError> {
+pub(crate) fn validate_tree(robot: &Robot) -> Result<(), SetupError> {
     match tree_problems(robot).into_iter().next() {
         Some(p) => Err(p),
         None => Ok(()),
@@ -72,7 +72,7 @@ pub fn validate_tree(robot: &Robot) -> Result<(), SetupError> {
 
 /// Every problem of [`validate_tree`]: [`structure_problems`], then (on a
 /// tree) [`mass_problems`].
-pub fn tree_problems(robot: &Robot) -> Vec<SetupError> {
+pub(crate) fn tree_problems(robot: &Robot) -> Vec<SetupError> {
     let out = structure_problems(robot);
     if out.is_empty() {
         mass_problems(robot)
@@ -82,7 +82,7 @@ pub fn tree_problems(robot: &Robot) -> Vec<SetupError> {
 }
 
 /// Why `robot` is not one tree of uniquely named links.
-pub fn structure_problems(robot: &Robot) -> Vec<SetupError> {
+pub(crate) fn structure_problems(robot: &Robot) -> Vec<SetupError> {
     if robot.links.is_empty() {
         return vec![SetupError::urdf("URDF has no links")];
     }
@@ -151,7 +151,7 @@ pub fn structure_problems(robot: &Robot) -> Vec<SetupError> {
 }
 
 /// Masses of a tree: finite and ≥ 0, and every body that moves has some.
-pub fn mass_problems(robot: &Robot) -> Vec<SetupError> {
+pub(crate) fn mass_problems(robot: &Robot) -> Vec<SetupError> {
     let mut out = Vec::new();
     for l in &robot.links {
         let m = l.inertial.mass.value;
@@ -177,7 +177,7 @@ pub fn mass_problems(robot: &Robot) -> Vec<SetupError> {
 }
 
 /// What the loader needs beyond a tree: the first problem of [`loadable_problems`].
-pub fn validate_loadable(robot: &Robot) -> Result<(), SetupError> {
+pub(crate) fn validate_loadable(robot: &Robot) -> Result<(), SetupError> {
     match loadable_problems(robot).into_iter().next() {
         Some(p) => Err(p),
         None => Ok(()),
@@ -186,7 +186,7 @@ pub fn validate_loadable(robot: &Robot) -> Result<(), SetupError> {
 
 /// What the loader needs beyond a tree: finite inertias of the bodies' links
 /// (frames' are ignored), axes on moving joints.
-pub fn loadable_problems(robot: &Robot) -> Vec<SetupError> {
+pub(crate) fn loadable_problems(robot: &Robot) -> Vec<SetupError> {
     let mut out = Vec::new();
     for j in &robot.joints {
         let moving = !matches!(j.joint_type, JointType::Fixed | JointType::Floating);
@@ -231,7 +231,7 @@ pub fn effort(robot: &Robot, joint: &str) -> Option<f64> {
 }
 
 /// Radius of the first sphere or cylinder collision of `link`, if any.
-pub fn collision_radius(robot: &Robot, link: &str) -> Option<f64> {
+pub(crate) fn collision_radius(robot: &Robot, link: &str) -> Option<f64> {
     robot
         .links
         .iter()
@@ -248,7 +248,7 @@ pub fn collision_radius(robot: &Robot, link: &str) -> Option<f64> {
 
 /// The radius of `link`'s first round collision (`what`, e.g. "the wheel",
 /// names it in the error when it has none).
-pub fn round_collision(robot: &Robot, link: &str, what: &str) -> Result<f64, SetupError> {
+pub(crate) fn round_collision(robot: &Robot, link: &str, what: &str) -> Result<f64, SetupError> {
     if !robot.links.iter().any(|l| l.name == link) {
         return Err(SetupError::urdf(format!("URDF lacks link `{link}`")));
     }
@@ -263,7 +263,7 @@ pub fn round_collision(robot: &Robot, link: &str, what: &str) -> Result<f64, Set
 
 /// Check that `link` has a round collision (`what`, e.g. "the wheel") of the
 /// scenario's `radius`; the error names both values.
-pub fn require_radius(
+pub(crate) fn require_radius(
     robot: &Robot,
     link: &str,
     what: &str,
@@ -286,7 +286,7 @@ pub fn require_radius(
 }
 
 /// The tag of a geometry (`box`, `cylinder`, ...).
-pub fn shape_tag(g: &Geometry) -> &'static str {
+pub(crate) fn shape_tag(g: &Geometry) -> &'static str {
     match g {
         Geometry::Box { .. } => "box",
         Geometry::Cylinder { .. } => "cylinder",
@@ -297,7 +297,7 @@ pub fn shape_tag(g: &Geometry) -> &'static str {
 }
 
 /// URDF pose (xyz, rpy) as a [`Pose`].
-pub fn pose_of(p: &urdf_rs::Pose) -> Pose {
+pub(crate) fn pose_of(p: &urdf_rs::Pose) -> Pose {
     let q = UnitQuaternion::from_euler_angles(p.rpy[0], p.rpy[1], p.rpy[2]);
     Pose {
         translation: [p.xyz[0], p.xyz[1], p.xyz[2]],

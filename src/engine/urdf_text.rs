@@ -11,7 +11,7 @@ pub fn numbers(v: &[f64]) -> String {
 }
 
 /// A joint's `type` attribute.
-pub fn joint_type(t: &JointType) -> &'static str {
+pub(crate) fn joint_type(t: &JointType) -> &'static str {
     match t {
         JointType::Revolute => "revolute",
         JointType::Continuous => "continuous",

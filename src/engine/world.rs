@@ -88,7 +88,7 @@ fn collision_shape(g: &Geometry) -> Option<(SharedShape, RPose)> {
 /// `at` (the geometry frame in some frame of reference): the bottom of its
 /// bounding box there, exact for every convex shape. `None` for a mesh that
 /// is not loaded.
-pub fn lowest_point(g: &Geometry, at: &RPose) -> Option<f64> {
+pub(crate) fn lowest_point(g: &Geometry, at: &RPose) -> Option<f64> {
     let (shape, local) = collision_shape(g)?;
     Some(f(shape.compute_aabb(&(*at * local)).mins.z))
 }
@@ -247,7 +247,7 @@ impl RobotHandles {
 /// root link at `root`; every collider gets friction `mu` (combined with the
 /// other side by the minimum). Fixed joints are lumped ([`crate::engine::lump`])
 /// except those named in `keep`.
-pub fn insert_robot(
+pub(crate) fn insert_robot(
     world: &mut PhysicsWorld,
     robot: &Robot,
     root: RPose,

@@ -197,7 +197,7 @@ fn radical_inverse(mut i: usize, b: usize) -> f64 {
 }
 
 /// The scan's points: `count` Halton points in the box (indices from 1).
-pub fn halton(n: usize, count: usize) -> Vec<Vec<f64>> {
+pub(crate) fn halton(n: usize, count: usize) -> Vec<Vec<f64>> {
     const PRIMES: [usize; 12] = [2, 3, 5, 7, 11, 13, 17, 19, 23, 29, 31, 37];
     (1..=count)
         .map(|i| (0..n).map(|d| radical_inverse(i, PRIMES[d % 12])).collect())
@@ -206,7 +206,7 @@ pub fn halton(n: usize, count: usize) -> Vec<Vec<f64>> {
 
 /// Minimise `obj` over the box from `start`, within about `budget`
 /// evaluations.
-pub fn minimize(obj: &Objective<'_>, start: &[f64], budget: usize) -> Outcome {
+pub(crate) fn minimize(obj: &Objective<'_>, start: &[f64], budget: usize) -> Outcome {
     let n = start.len();
     obj.phase(Phase::Scan);
     let mut scan = vec![start.to_vec()];

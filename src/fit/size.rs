@@ -7,7 +7,7 @@ use nalgebra::{Isometry3, Translation3, UnitQuaternion};
 use std::collections::HashMap;
 
 /// The size of `robot`, m (None for a robot of one link).
-pub fn robot_size(robot: &urdf_rs::Robot) -> Option<(f64, &'static str)> {
+pub(crate) fn robot_size(robot: &urdf_rs::Robot) -> Option<(f64, &'static str)> {
     let by_child: HashMap<&str, &urdf_rs::Joint> = robot
         .joints
         .iter()

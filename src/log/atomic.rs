@@ -100,7 +100,7 @@ pub fn write_file(
 /// [`write_file`] with its error as text: for `src/margin/` and
 /// `src/baseline.rs`, whose own errors are still `String` (they are being
 /// edited elsewhere and convert to typed errors after that work merges).
-pub fn write_atomic(
+pub(crate) fn write_atomic(
     path: &Path,
     write: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>,
 ) -> Result<(), String> {

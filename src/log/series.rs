@@ -128,7 +128,7 @@ fn opt(x: f64) -> Option<f32> {
 }
 
 /// Indices kept by min/max decimation of `v` (length `n`) into [`BUCKETS`] buckets.
-pub fn decimate(n: usize, v: impl Fn(usize) -> f64) -> Vec<usize> {
+pub(crate) fn decimate(n: usize, v: impl Fn(usize) -> f64) -> Vec<usize> {
     if n <= 2 * BUCKETS {
         return (0..n).collect();
     }
@@ -189,7 +189,7 @@ fn path(tr: &Trajectory, [ix, iy]: [usize; 2]) -> Vec<[f32; 2]> {
 }
 
 /// Label spans of a trajectory.
-pub fn spans(tr: &Trajectory, labels: &[String]) -> Vec<Span> {
+pub(crate) fn spans(tr: &Trajectory, labels: &[String]) -> Vec<Span> {
     let mut out: Vec<Span> = Vec::new();
     for (k, &l) in tr.label.iter().enumerate() {
         let name = labels.get(l).cloned().unwrap_or_else(|| format!("#{l}"));

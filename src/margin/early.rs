@@ -38,7 +38,7 @@ pub fn family(metric: &str, minimum: bool) -> Family {
 
 /// Whether a gate of `family` with `bound` certainly breaks, given its
 /// value `v` over a prefix ending at `t`.
-pub fn certain(family: Family, v: f64, bound: f64, t: f64) -> bool {
+pub(crate) fn certain(family: Family, v: f64, bound: f64, t: f64) -> bool {
     match family {
         Family::RunningMax => !v.is_nan() && v > bound,
         Family::RunningMin => !v.is_nan() && v < bound,

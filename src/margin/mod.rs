@@ -73,7 +73,7 @@ impl Settings {
 /// The largest level of `d` a run of `prep` can take: what `[sim.perturb]`
 /// accepts (a time no longer than the run; a latency whose extra steps fit
 /// the step budget), within its row's search ceiling.
-pub fn ceiling(d: Dimension, prep: &Prepared) -> f64 {
+pub(crate) fn ceiling(d: Dimension, prep: &Prepared) -> f64 {
     let crate::engine::perturb::Search { floor, ceiling, .. } = d.row().search;
     if d.unit() != "s" {
         return ceiling;
@@ -232,7 +232,7 @@ impl DimensionResult {
 }
 
 /// Search the margin of `d` (the nominal run already made: `nominal`).
-pub fn search_dimension(
+pub(crate) fn search_dimension(
     ctx: &Ctx<'_>,
     d: Dimension,
     nominal: &Nominal,

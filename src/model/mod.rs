@@ -54,7 +54,7 @@ pub trait KinematicModel: Send + Sync {
 
 /// A state and an input as a scenario writes them, for messages: `x = 0.1,
 /// theta = 90°; v = 0.2, omega = 0` (angles in degrees).
-pub fn point_text(model: &dyn KinematicModel, q: &[f64], u: &[f64]) -> String {
+pub(crate) fn point_text(model: &dyn KinematicModel, q: &[f64], u: &[f64]) -> String {
     let angular = model.angular_states();
     let state: Vec<String> = model
         .state_names()

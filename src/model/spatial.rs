@@ -43,7 +43,7 @@ pub fn scale<T: Scalar>(a: V3<T>, s: T) -> V3<T> {
 
 /// a · b.
 #[inline]
-pub fn dot<T: Scalar>(a: V3<T>, b: V3<T>) -> T {
+pub(crate) fn dot<T: Scalar>(a: V3<T>, b: V3<T>) -> T {
     a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
 }
 
@@ -65,7 +65,7 @@ pub fn norm<T: Scalar>(a: V3<T>) -> T {
 
 /// Lift a constant vector.
 #[inline]
-pub fn lift<T: Scalar>(a: [f64; 3]) -> V3<T> {
+pub(crate) fn lift<T: Scalar>(a: [f64; 3]) -> V3<T> {
     [k(a[0]), k(a[1]), k(a[2])]
 }
 
@@ -77,13 +77,13 @@ pub fn re<T: Scalar>(a: V3<T>) -> [f64; 3] {
 
 /// m · v.
 #[inline]
-pub fn mul_mv<T: Scalar>(m: &M3<T>, v: V3<T>) -> V3<T> {
+pub(crate) fn mul_mv<T: Scalar>(m: &M3<T>, v: V3<T>) -> V3<T> {
     [dot(m[0], v), dot(m[1], v), dot(m[2], v)]
 }
 
 /// mᵀ · v.
 #[inline]
-pub fn mul_mtv<T: Scalar>(m: &M3<T>, v: V3<T>) -> V3<T> {
+pub(crate) fn mul_mtv<T: Scalar>(m: &M3<T>, v: V3<T>) -> V3<T> {
     [
         m[0][0] * v[0] + m[1][0] * v[1] + m[2][0] * v[2],
         m[0][1] * v[0] + m[1][1] * v[1] + m[2][1] * v[2],
@@ -93,7 +93,7 @@ pub fn mul_mtv<T: Scalar>(m: &M3<T>, v: V3<T>) -> V3<T> {
 
 /// a · b.
 #[inline]
-pub fn mul_mm<T: Scalar>(a: &M3<T>, b: &M3<T>) -> M3<T> {
+pub(crate) fn mul_mm<T: Scalar>(a: &M3<T>, b: &M3<T>) -> M3<T> {
     let mut out = [[k::<T>(0.0); 3]; 3];
     for (i, row) in out.iter_mut().enumerate() {
         for (j, x) in row.iter_mut().enumerate() {
@@ -105,7 +105,7 @@ pub fn mul_mm<T: Scalar>(a: &M3<T>, b: &M3<T>) -> M3<T> {
 
 /// a · b with a constant `b` (cheaper for dual numbers than lifting b).
 #[inline]
-pub fn mul_mm_const<T: Scalar>(a: &M3<T>, b: &[[f64; 3]; 3]) -> M3<T> {
+pub(crate) fn mul_mm_const<T: Scalar>(a: &M3<T>, b: &[[f64; 3]; 3]) -> M3<T> {
     let mut out = [[k::<T>(0.0); 3]; 3];
     for (i, row) in out.iter_mut().enumerate() {
         for (j, x) in row.iter_mut().enumerate() {
@@ -117,7 +117,7 @@ pub fn mul_mm_const<T: Scalar>(a: &M3<T>, b: &[[f64; 3]; 3]) -> M3<T> {
 
 /// m · v with a constant `v`.
 #[inline]
-pub fn mul_mv_const<T: Scalar>(m: &M3<T>, v: [f64; 3]) -> V3<T> {
+pub(crate) fn mul_mv_const<T: Scalar>(m: &M3<T>, v: [f64; 3]) -> V3<T> {
     std::array::from_fn(|i| m[i][0] * v[0] + m[i][1] * v[1] + m[i][2] * v[2])
 }
 
@@ -129,7 +129,7 @@ pub fn col<T: Scalar>(m: &M3<T>, j: usize) -> V3<T> {
 
 /// Rotation about z by `a`.
 #[inline]
-pub fn rot_z<T: Scalar>(a: T) -> M3<T> {
+pub(crate) fn rot_z<T: Scalar>(a: T) -> M3<T> {
     let (s, c) = (a.sin(), a.cos());
     let (o, l) = (k::<T>(0.0), k::<T>(1.0));
     [[c, -s, o], [s, c, o], [o, o, l]]
@@ -137,7 +137,7 @@ pub fn rot_z<T: Scalar>(a: T) -> M3<T> {
 
 /// Rotation about x by `a`.
 #[inline]
-pub fn rot_x<T: Scalar>(a: T) -> M3<T> {
+pub(crate) fn rot_x<T: Scalar>(a: T) -> M3<T> {
     let (s, c) = (a.sin(), a.cos());
     let (o, l) = (k::<T>(0.0), k::<T>(1.0));
     [[l, o, o], [o, c, -s], [o, s, c]]
@@ -145,7 +145,7 @@ pub fn rot_x<T: Scalar>(a: T) -> M3<T> {
 
 /// Rotation about y by `a`.
 #[inline]
-pub fn rot_y<T: Scalar>(a: T) -> M3<T> {
+pub(crate) fn rot_y<T: Scalar>(a: T) -> M3<T> {
     let (s, c) = (a.sin(), a.cos());
     let (o, l) = (k::<T>(0.0), k::<T>(1.0));
     [[c, o, s], [o, l, o], [-s, o, c]]
@@ -164,7 +164,7 @@ pub fn identity<T: Scalar>() -> M3<T> {
 }
 
 /// Real parts of a matrix.
-pub fn re_m<T: Scalar>(m: &M3<T>) -> [[f64; 3]; 3] {
+pub(crate) fn re_m<T: Scalar>(m: &M3<T>) -> [[f64; 3]; 3] {
     m.map(|r| r.map(|x| x.re()))
 }
 

@@ -64,7 +64,7 @@ impl PlanError {
 }
 
 /// `Ok` when `ok`, else [`PlanError::InvalidParameter`] naming the parameter.
-pub fn check_param(name: &str, ok: bool, reason: &str) -> Result<(), PlanError> {
+pub(crate) fn check_param(name: &str, ok: bool, reason: &str) -> Result<(), PlanError> {
     if ok {
         Ok(())
     } else {

@@ -72,7 +72,7 @@ pub struct Alignment {
 
 /// The shift that puts a recording on its plan's bag clock: its t = 0 is
 /// `rec_ns`, the plan's `plan_ns` (bag times, ns).
-pub fn shared_clock(rec_ns: i64, plan_ns: i64) -> f64 {
+pub(crate) fn shared_clock(rec_ns: i64, plan_ns: i64) -> f64 {
     (rec_ns - plan_ns) as f64 * 1e-9
 }
 
@@ -244,7 +244,7 @@ pub fn errors(track: &Track, run: &Trajectory, idx: &PoseIndex) -> Errors {
 
 /// `from` moved by the rotation about z and the shift that bring its
 /// positions closest to `to`'s in least squares (2D Procrustes).
-pub fn rigid_fit(from: &[[f64; 3]], to: &[[f64; 3]]) -> Vec<[f64; 3]> {
+pub(crate) fn rigid_fit(from: &[[f64; 3]], to: &[[f64; 3]]) -> Vec<[f64; 3]> {
     let n = from.len().max(1) as f64;
     let mean = |v: &[[f64; 3]], i: usize| v.iter().map(|p| p[i]).sum::<f64>() / n;
     let (fx, fy, tx, ty) = (mean(from, 0), mean(from, 1), mean(to, 0), mean(to, 1));

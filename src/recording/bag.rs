@@ -30,7 +30,7 @@ const FIELDS: [&str; 6] = ["x", "y", "qx", "qy", "qz", "qw"];
 
 /// The storage and files of the bag at `path`: a bag directory's (its
 /// `metadata.yaml` names them) or the one file named (`.db3`: sqlite3).
-pub fn storage_files(path: &Path) -> Result<(ros::Storage, Vec<PathBuf>), RecordingError> {
+pub(crate) fn storage_files(path: &Path) -> Result<(ros::Storage, Vec<PathBuf>), RecordingError> {
     if path.is_dir() {
         return Ok(ros::metadata::bag_files(path)?);
     }
@@ -169,7 +169,7 @@ pub fn read(
 }
 
 /// The bag time (ns) of a bag plan's t = 0: the first command on its topic.
-pub fn commands_start(
+pub(crate) fn commands_start(
     path: &Path,
     inputs: &[&str],
     keys: &BagKeys<'_>,

@@ -20,7 +20,7 @@ pub fn names(heading: bool) -> Vec<String> {
 }
 
 /// The metrics of `track` against the two runs and the goal.
-pub fn compute(
+pub(crate) fn compute(
     track: &Track,
     ideal: &Trajectory,
     sim: &Trajectory,

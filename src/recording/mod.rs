@@ -173,7 +173,7 @@ impl Recording {
 }
 
 /// Yaw of a unit quaternion (x, y, z, w), rad.
-pub fn yaw_of(x: f64, y: f64, z: f64, w: f64) -> f64 {
+pub(crate) fn yaw_of(x: f64, y: f64, z: f64, w: f64) -> f64 {
     (2.0 * (w * z + x * y)).atan2(1.0 - 2.0 * (y * y + z * z))
 }
 

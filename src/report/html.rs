@@ -111,7 +111,7 @@ fn with_unit(v: Option<f64>, unit: &str) -> String {
 }
 
 /// `LOGDIR/index.html`.
-pub fn index_page(runs: &[Loaded], unreadable: &[crate::error::Error]) -> String {
+pub(crate) fn index_page(runs: &[Loaded], unreadable: &[crate::error::Error]) -> String {
     let mut b = String::new();
     let verdicts: Vec<Verdict> = runs
         .iter()
@@ -313,7 +313,7 @@ pub enum PageError {
 }
 
 /// `LOGDIR/<scenario>/report.html`.
-pub fn scenario_page(l: &Loaded) -> Result<String, PageError> {
+pub(crate) fn scenario_page(l: &Loaded) -> Result<String, PageError> {
     let mut b = String::from("<p><a href=\"../index.html\">← all scenarios</a></p>");
     match &l.data {
         RunData::Single { summary, series } => {

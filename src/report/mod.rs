@@ -80,7 +80,7 @@ fn read_json<T: serde::de::DeserializeOwned>(path: &Path) -> Result<T, Error> {
 }
 
 /// Read and check one scenario directory.
-pub fn load_dir(dir: &Path) -> Result<Loaded, Error> {
+pub(crate) fn load_dir(dir: &Path) -> Result<Loaded, Error> {
     let name = dir
         .file_name()
         .map(|n| n.to_string_lossy().into_owned())

@@ -29,12 +29,12 @@ const PALETTE: [RGBColor; 8] = [
 ];
 
 /// Colour of plan label `k` (segment shading, legend).
-pub fn label_color(k: usize) -> RGBColor {
+pub(crate) fn label_color(k: usize) -> RGBColor {
     PALETTE[k % PALETTE.len()]
 }
 
 /// Series colour `k` for charts with several neutral lines.
-pub fn series_color(k: usize) -> RGBColor {
+pub(crate) fn series_color(k: usize) -> RGBColor {
     PALETTE[k % PALETTE.len()]
 }
 
@@ -164,7 +164,7 @@ fn svg(
 }
 
 /// A chart over time: lines, threshold lines, shaded plan segments.
-pub fn time_chart(
+pub(crate) fn time_chart(
     title: &str,
     y_desc: &str,
     lines: &[Line<'_>],
@@ -295,7 +295,7 @@ pub struct Marker<'a> {
 }
 
 /// The planar path, equal axis scales: paths, overlays, start/goal markers.
-pub fn path_chart(paths: &[Path2<'_>], markers: &[Marker<'_>]) -> Res<String> {
+pub(crate) fn path_chart(paths: &[Path2<'_>], markers: &[Marker<'_>]) -> Res<String> {
     let pts = || {
         paths
             .iter()
@@ -389,7 +389,7 @@ pub fn path_chart(paths: &[Path2<'_>], markers: &[Marker<'_>]) -> Res<String> {
 }
 
 /// Histogram of `values` with `bins` equal bins; optional vertical line (e.g. success limit).
-pub fn histogram(
+pub(crate) fn histogram(
     title: &str,
     x_desc: &str,
     values: &[f64],
@@ -453,7 +453,7 @@ pub fn histogram(
 }
 
 /// Scatter of `(x, y, success)`, successes green, failures red; optional horizontal limit.
-pub fn scatter(
+pub(crate) fn scatter(
     title: &str,
     x_desc: &str,
     y_desc: &str,
@@ -475,7 +475,7 @@ pub fn scatter(
 
 /// [`scatter`] on a logarithmic x axis (x > 0 only: a margin search's
 /// levels span decades, the edge is where they crowd).
-pub fn scatter_log_x(
+pub(crate) fn scatter_log_x(
     title: &str,
     x_desc: &str,
     y_desc: &str,

@@ -298,7 +298,7 @@ pub fn metric(name: &str) -> Option<&'static Metric> {
 /// The unit of metric `name` as written after its values (`m`, `°`, `s`;
 /// empty when it has none or none is known), for a model whose coordinates
 /// `spec` describes.
-pub fn metric_unit(name: &str, spec: &crate::compare::MetricSpec<'_>) -> &'static str {
+pub(crate) fn metric_unit(name: &str, spec: &crate::compare::MetricSpec<'_>) -> &'static str {
     let Some(row) = metric(name) else {
         return "";
     };

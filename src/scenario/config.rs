@@ -343,7 +343,7 @@ pub(crate) fn model_system(
 
 /// Whether the planner `kind` plans for the model `kind` (per [`PAIRS`];
 /// the [`OUTSIDE`] kinds plan for every model).
-pub fn plans_for(model: &str, planner: &str) -> bool {
+pub(crate) fn plans_for(model: &str, planner: &str) -> bool {
     PAIRS
         .iter()
         .any(|(m, p)| *m == model && (p.contains(&planner) || OUTSIDE.contains(&planner)))

@@ -363,7 +363,7 @@ fn respan<'i>(value: DeValue<'i>, span: &Range<usize>) -> DeValue<'i> {
 
 /// The span of the key of the deepest table on `path` that the document
 /// writes (so a key inserted there points at its table's line), or `0..0`.
-pub fn anchor(root: &DeTable<'_>, path: &KeyPath) -> Range<usize> {
+pub(crate) fn anchor(root: &DeTable<'_>, path: &KeyPath) -> Range<usize> {
     let mut span = 0..0;
     let mut table = root;
     for seg in &path.0 {

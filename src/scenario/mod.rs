@@ -197,7 +197,7 @@ pub enum Expect {
 }
 
 /// The schema of the file's own keys (everything but `[model]` and `[planner]`).
-pub fn file_schema() -> &'static schema::Schema {
+pub(crate) fn file_schema() -> &'static schema::Schema {
     static SCHEMA: std::sync::OnceLock<schema::Schema> = std::sync::OnceLock::new();
     SCHEMA.get_or_init(schema::Schema::of::<ScenarioFile>)
 }
@@ -265,7 +265,7 @@ pub type Edit = (KeyPath, String);
 pub const MAX_NAME_BYTES: usize = 100;
 
 /// Why `name` cannot be a log directory name, if it cannot.
-pub fn name_problem(name: &str) -> Option<String> {
+pub(crate) fn name_problem(name: &str) -> Option<String> {
     if name.is_empty() {
         return Some("is empty".into());
     }

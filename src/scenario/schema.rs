@@ -593,7 +593,7 @@ fn doc(node: &Value) -> String {
 }
 
 /// A JSON value written as TOML (`0.1`, `"shortest"`, `[1, 2]`, `{ kind = "a" }`).
-pub fn toml_value(v: &Value) -> String {
+pub(crate) fn toml_value(v: &Value) -> String {
     match v {
         Value::Null => "none".into(),
         Value::Bool(b) => b.to_string(),

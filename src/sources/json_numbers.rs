@@ -43,7 +43,7 @@ pub fn walk<'a>(text: &'a str, f: &mut dyn FnMut(&[Step<'a>], usize, f64)) -> Op
 
 /// 1-based line of byte `offset` in `text`, counting from a known
 /// (`line`, `from`) so increasing offsets cost one pass in total.
-pub fn line_at(text: &str, from: (usize, usize), offset: usize) -> (usize, usize) {
+pub(crate) fn line_at(text: &str, from: (usize, usize), offset: usize) -> (usize, usize) {
     let (line, start) = from;
     let end = offset.min(text.len());
     if end < start {

@@ -59,7 +59,7 @@ struct Member {
 
 /// Run the variants `indices` together; their `variants.jsonl` lines, in
 /// index order.
-pub fn run_group(
+pub(crate) fn run_group(
     prep: &Prepared,
     cfg: &SweepConfig,
     indices: &[usize],

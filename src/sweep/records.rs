@@ -41,7 +41,7 @@ pub struct Header {
 }
 
 /// Hex SHA-256 of a text.
-pub fn sha256_hex(text: &str) -> String {
+pub(crate) fn sha256_hex(text: &str) -> String {
     Sha256::digest(text.as_bytes())
         .iter()
         .map(|b| format!("{b:02x}"))
@@ -246,7 +246,7 @@ fn parse_record(line: &str, file: usize, offset: u64) -> Result<Entry, RecordErr
 }
 
 /// Parse a record line as written (with its newline).
-pub fn parse_line(line: &str) -> Result<Entry, RecordError> {
+pub(crate) fn parse_line(line: &str) -> Result<Entry, RecordError> {
     parse_record(line.trim_end_matches('\n'), 0, 0)
 }
 
@@ -349,7 +349,7 @@ impl Scan {
 }
 
 /// The bytes of a record as `sweep.json` lists it (the line without its wall time).
-pub fn raw_record<R: Read + Seek>(r: &mut R, e: &Entry) -> std::io::Result<Vec<u8>> {
+pub(crate) fn raw_record<R: Read + Seek>(r: &mut R, e: &Entry) -> std::io::Result<Vec<u8>> {
     r.seek(SeekFrom::Start(e.offset))?;
     let mut b = vec![0; e.len];
     r.read_exact(&mut b)?;

@@ -58,7 +58,7 @@ pub fn load(path: &Path) -> Result<Robot, Error> {
 /// Read, parse and check a URDF (expanding xacro, resolving meshes): every
 /// problem at once, one error per problem, each with the line of the
 /// element it names.
-pub fn load_from(path: &Path, source: &Source) -> Result<Loaded, Vec<Error>> {
+pub(crate) fn load_from(path: &Path, source: &Source) -> Result<Loaded, Vec<Error>> {
     let one = |line: Option<usize>, m: String| {
         vec![Error::Input {
             key: None,
@@ -223,7 +223,7 @@ fn thinned(
 
 /// A URDF refusal of the physics about the file at `path`, with the line of
 /// the element it is about.
-pub fn error_in(path: &Path, e: &SetupError) -> Error {
+pub(crate) fn error_in(path: &Path, e: &SetupError) -> Error {
     let text = read_text(path, "URDF", URDF_MAX_BYTES).unwrap_or_default();
     Error::Input {
         key: None,
@@ -234,7 +234,7 @@ pub fn error_in(path: &Path, e: &SetupError) -> Error {
 }
 
 /// The line of the URDF element a refusal is about, if it is in the text.
-pub fn line_of_error(text: &str, e: &SetupError) -> Option<usize> {
+pub(crate) fn line_of_error(text: &str, e: &SetupError) -> Option<usize> {
     match &e.about {
         About::Urdf(Some((elem, name))) => locate(text, &Place::new(elem, name, &[])),
         _ => None,
@@ -298,7 +298,7 @@ pub fn check_numbers(robot: &Robot) -> Result<(), (Place, String)> {
 }
 
 /// Every problem with the numbers the physics uses, each saying where.
-pub fn number_problems(robot: &Robot) -> Vec<(Place, String)> {
+pub(crate) fn number_problems(robot: &Robot) -> Vec<(Place, String)> {
     let mut out = Vec::new();
     // Each check returns its first problem; `?` inside a closure per element
     // keeps the checks as they read, and every element is still checked.
@@ -469,7 +469,7 @@ fn has_name(text: &str, start: usize, name: &str) -> bool {
 }
 
 /// 1-based line of a [`Place`] in the URDF text: the innermost tag found.
-pub fn locate(text: &str, place: &Place) -> Option<usize> {
+pub(crate) fn locate(text: &str, place: &Place) -> Option<usize> {
     let mut from = 0;
     let start = loop {
         let s = find_tag(text, place.elem, from, text.len())?;

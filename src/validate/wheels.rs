@@ -14,7 +14,7 @@ const TOUCH: f64 = 2e-3;
 
 /// The warning naming the undriven wheel joints of `robot`, if any: for a
 /// model whose `reading` has drives and wheels, with the URDF names it uses.
-pub fn undriven(robot: &Robot, reading: &UrdfReading, names: &[Named]) -> Option<String> {
+pub(crate) fn undriven(robot: &Robot, reading: &UrdfReading, names: &[Named]) -> Option<String> {
     if reading.drives.is_empty() || reading.wheels.is_empty() {
         return None;
     }

@@ -74,7 +74,7 @@ pub enum XacroError {
 }
 
 /// Whether the `xacro` command is on `PATH`.
-pub fn available() -> bool {
+pub(crate) fn available() -> bool {
     xacro_on_path().is_some()
 }
 
@@ -98,7 +98,7 @@ pub struct Expansion {
 
 /// Expand the xacro file `path` (whose markup is `why`) with the scenario's
 /// `xacro_args`, its packages found through `search`.
-pub fn expand(
+pub(crate) fn expand(
     path: &Path,
     why: &'static str,
     source: &Source,
@@ -204,7 +204,7 @@ fn run(
 /// xacro's own first error and where it was, on one line: `name 'nope' is
 /// not defined (when evaluating expression 'nope'; in macro `wheel`; in
 /// file robot.urdf.xacro)`. Warnings before it are left out.
-pub fn first_error(stderr: &str) -> String {
+pub(crate) fn first_error(stderr: &str) -> String {
     let plain = strip_ansi(stderr);
     let lines: Vec<&str> = plain.lines().map(str::trim).collect();
     let is_error = |l: &&str| l.starts_with("error:") || l.starts_with("XML parsing error");
@@ -284,7 +284,7 @@ fn strip_ansi(s: &str) -> String {
 }
 
 /// The warning of an expansion whose absent packages expanded to nothing.
-pub fn absent_warning(absent: &[Absent], urdf: &Path) -> String {
+pub(crate) fn absent_warning(absent: &[Absent], urdf: &Path) -> String {
     let (noun, pronoun) = if absent.len() == 1 {
         ("package", "its")
     } else {

@@ -10,7 +10,7 @@ use rand_chacha::ChaCha8Rng;
 /// A standard normal deviate (Box–Muller, one of the pair). Not `rand_distr`:
 /// it turns on num-traits' `libm` feature, which rebuilds nalgebra, Rapier
 /// and the Rerun SDK.
-pub fn standard_normal(r: &mut ChaCha8Rng) -> f64 {
+pub(crate) fn standard_normal(r: &mut ChaCha8Rng) -> f64 {
     // u1 in (0, 1], so the logarithm is finite.
     let u1 = 1.0 - r.random::<f64>();
     let u2 = r.random::<f64>();
@@ -30,7 +30,7 @@ fn steps_and_fraction(duration: f64, dt: f64) -> (usize, f64) {
 }
 
 /// Steps a replay under `p` is extended by, so every delayed command arrives.
-pub fn extra_steps(p: &Perturbation, dt: f64) -> usize {
+pub(crate) fn extra_steps(p: &Perturbation, dt: f64) -> usize {
     let (n, f) = steps_and_fraction(p.command_latency, dt);
     n.saturating_add(usize::from(f > 0.0))
 }
@@ -136,7 +136,7 @@ impl Reality {
 /// controller sent, what the drives got, from each sample on) added to `sim`
 /// when the commands were delayed or lagged (`sim.received` not empty), so
 /// the logs show both: MCAP `/sim/channels`, Rerun `sim/drive_*`.
-pub fn add_drive_channels(sim: &mut crate::record::SimTrajectory, input_names: &[&str]) {
+pub(crate) fn add_drive_channels(sim: &mut crate::record::SimTrajectory, input_names: &[&str]) {
     if sim.received.len() != sim.traj.u.len() {
         return;
     }

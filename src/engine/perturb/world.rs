@@ -4,7 +4,7 @@
 /// `robot` with its wheels' collision radius scaled by `s`
 /// (`wheel_radius_scale`): itself when `s` is 1, else
 /// [`shrink_round_collisions`] of `links`.
-pub fn worn_wheels<'r>(
+pub(crate) fn worn_wheels<'r>(
     robot: &'r urdf_rs::Robot,
     links: &[&str],
     s: f64,
@@ -19,7 +19,7 @@ pub fn worn_wheels<'r>(
 /// `robot` with the collision radius of every sphere and cylinder of the
 /// named links multiplied by `s` (wheel wear), or shrunk by `by` m when
 /// `absolute` (tyres worn by the same depth everywhere).
-pub fn shrink_round_collisions(
+pub(crate) fn shrink_round_collisions(
     robot: &urdf_rs::Robot,
     links: &[&str],
     s: f64,
@@ -48,7 +48,7 @@ pub fn shrink_round_collisions(
 }
 
 /// `robot` with every link's mass and inertia multiplied by `s` (`None` at 1).
-pub fn scaled_masses(robot: &urdf_rs::Robot, s: f64) -> Option<urdf_rs::Robot> {
+pub(crate) fn scaled_masses(robot: &urdf_rs::Robot, s: f64) -> Option<urdf_rs::Robot> {
     if s == 1.0 {
         return None;
     }

@@ -290,7 +290,7 @@ pub fn solve<S: EndogenousSystem>(
 
 /// Peak |u_i| of a solution's `m` inputs, sampled at the RK4 nodes of
 /// `steps` per segment.
-pub fn peak_rate(sol: &Solution, steps: usize, m: usize) -> Vec<f64> {
+pub(crate) fn peak_rate(sol: &Solution, steps: usize, m: usize) -> Vec<f64> {
     let mut peak = vec![0.0f64; m];
     for seg in &sol.segments {
         for n in 0..=2 * steps {
@@ -305,7 +305,7 @@ pub fn peak_rate(sol: &Solution, steps: usize, m: usize) -> Vec<f64> {
 
 /// `Unreachable` when `enforce_rate_limits` is set and a planned |u_i|
 /// peaks above `limits.max_rate[i]` (`inputs` names them, `unit` their unit).
-pub fn check_rate_limits(
+pub(crate) fn check_rate_limits(
     sol: &Solution,
     params: &EndogenousParams,
     limits: &Limits,
@@ -328,7 +328,7 @@ pub fn check_rate_limits(
 
 /// Wraps a solution for `m` inputs into an open-loop [`Plan`] (labels
 /// "segment 1", …).
-pub fn into_plan(
+pub(crate) fn into_plan(
     sol: Solution,
     params: &EndogenousParams,
     m: usize,

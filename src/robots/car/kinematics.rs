@@ -109,7 +109,7 @@ pub fn ackermann(phi: f64, wheelbase: f64, half_track: f64) -> [f64; 2] {
 /// dδ/dφ of each wheel's [`ackermann`] angle (left, right): how fast each
 /// front wheel turns per unit of bicycle angle, (L / (L ∓ h tan φ))² (1 +
 /// tan² φ) / (1 + tan² δ).
-pub fn ackermann_slope(phi: f64, wheelbase: f64, half_track: f64) -> [f64; 2] {
+pub(crate) fn ackermann_slope(phi: f64, wheelbase: f64, half_track: f64) -> [f64; 2] {
     let t = phi.tan();
     let l = wheelbase;
     let side = |h: f64| {

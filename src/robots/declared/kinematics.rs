@@ -13,7 +13,7 @@ use num_dual::Dual64;
 /// A `&'static` copy of `names`, made once per distinct list: the model
 /// trait hands out static names, and sweeps build a declared system per
 /// variant.
-pub fn static_names(names: &[String]) -> &'static [&'static str] {
+pub(crate) fn static_names(names: &[String]) -> &'static [&'static str] {
     static INTERNED: OnceLock<Mutex<HashMap<Vec<String>, &'static [&'static str]>>> =
         OnceLock::new();
     let map = INTERNED.get_or_init(Default::default);
@@ -31,7 +31,7 @@ pub fn static_names(names: &[String]) -> &'static [&'static str] {
 }
 
 /// A `&'static` copy of an index list (see [`static_names`]).
-pub fn static_indices(v: &[usize]) -> &'static [usize] {
+pub(crate) fn static_indices(v: &[usize]) -> &'static [usize] {
     static INTERNED: OnceLock<Mutex<HashMap<Vec<usize>, &'static [usize]>>> = OnceLock::new();
     let map = INTERNED.get_or_init(Default::default);
     let mut map = map.lock().unwrap_or_else(|e| e.into_inner());

@@ -96,7 +96,7 @@ pub fn build(cfg: &DeclaredConfig) -> Result<Box<dyn System>, SetupError> {
 
 /// [`build`], planning with seed 001's endogenous planner when `planner`
 /// is given.
-pub fn build_planned(
+pub(crate) fn build_planned(
     cfg: &DeclaredConfig,
     planner: Option<EndogenousParams>,
 ) -> Result<Box<dyn System>, SetupError> {

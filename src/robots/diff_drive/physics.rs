@@ -203,7 +203,7 @@ impl DiffDriveGeometry {
 /// above it would tip the robot, one below it lift a wheel. Any collision
 /// shape: its lowest point is the bottom of its bounding box in the body
 /// frame, exact for spheres, boxes, cylinders and convex meshes alike.
-pub fn caster_on_plane(
+pub(crate) fn caster_on_plane(
     robot: &urdf_rs::Robot,
     frames: &std::collections::HashMap<String, crate::engine::rapier::math::Pose>,
     base: &str,

@@ -41,7 +41,7 @@ pub const KINK_EPS: f64 = 1e-9;
 /// |u|^{2n}, smooth in u for n ≥ 1 (integer exponents use `powi`); rounded
 /// at u = 0 below n = 1 (see [`KINK_EPS`]).
 #[inline]
-pub fn pow2n<T: Scalar>(u: T, n: f64) -> T {
+pub(crate) fn pow2n<T: Scalar>(u: T, n: f64) -> T {
     if n < 1.0 {
         let e2 = KINK_EPS * KINK_EPS;
         return (u * u + e2).powf(n) - e2.powf(n);
@@ -66,7 +66,7 @@ pub fn pow2n<T: Scalar>(u: T, n: f64) -> T {
 /// (as (u² + ε²)^n − ε^{2n}, see [`KINK_EPS`]): the one-dimensional pieces of
 /// b's value, gradient and Hessian.
 #[inline]
-pub fn pow2n_derivatives(u: f64, n: f64, eps: f64) -> (f64, f64, f64) {
+pub(crate) fn pow2n_derivatives(u: f64, n: f64, eps: f64) -> (f64, f64, f64) {
     let u2 = u * u;
     if n < 1.0 {
         let e2 = eps * eps;

@@ -146,7 +146,7 @@ pub fn analysis(
 /// The report's paper table for Table I (`dilf_paper`): the grasps'
 /// relative pose changes between the printed start and goal, which no
 /// solid object allows (test `table_i_cannot_carry_a_rigid_object`).
-pub fn table_i_rows(start: &[f64], goal: &[f64]) -> Vec<crate::paper::PaperRow> {
+pub(crate) fn table_i_rows(start: &[f64], goal: &[f64]) -> Vec<crate::paper::PaperRow> {
     use crate::robots::mobile_manipulator::dilf::object::{
         relative_grasp_change, table_i_goal, table_i_start,
     };

@@ -177,7 +177,7 @@ const D4: f64 = puma560::DH[3].d;
 
 /// The URDF's collision shapes (all links of one robot but the wheels, which
 /// are [`Link::Base`] spheres here since they only spin about their axle).
-pub fn collision_shapes() -> Vec<(Link, CollisionShape)> {
+pub(crate) fn collision_shapes() -> Vec<(Link, CollisionShape)> {
     use CollisionShape::*;
     let x = [1.0, 0.0, 0.0];
     let y = [0.0, 1.0, 0.0];
@@ -491,7 +491,7 @@ pub fn frames<T: Scalar>(q: &[T]) -> RobotFrames<T> {
 }
 
 /// The grasp point (world) of one robot.
-pub fn grasp_point<T: Scalar>(q: &[T]) -> [T; 3] {
+pub(crate) fn grasp_point<T: Scalar>(q: &[T]) -> [T; 3] {
     frames(q)
         .tool
         .apply(spatial::lift([0.0, 0.0, GRASP_OFFSET]))

@@ -149,7 +149,7 @@ pub const ARMATURE: [f64; 6] = [
 ];
 
 /// The constant part Tz(d) Tx(a) Rx(α) of row `i`.
-pub fn row_offset<T: Scalar>(i: usize) -> Pose<T> {
+pub(crate) fn row_offset<T: Scalar>(i: usize) -> Pose<T> {
     let r = DH[i];
     Pose {
         r: spatial::rot_x(k(r.alpha)),
@@ -180,7 +180,7 @@ pub fn frames<T: Scalar>(base: &Pose<T>, q: &[T]) -> [Pose<T>; 7] {
 }
 
 /// The three factors of det J (see the module docs).
-pub fn singularity_factors<T: Scalar>(q: &[T]) -> [T; 3] {
+pub(crate) fn singularity_factors<T: Scalar>(q: &[T]) -> [T; 3] {
     let (a2, a3, d4) = (DH[1].a, DH[2].a, DH[3].d);
     let (c2, c3, s3) = (q[1].cos(), q[2].cos(), q[2].sin());
     let q23 = q[1] + q[2];

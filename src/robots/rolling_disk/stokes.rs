@@ -127,7 +127,7 @@ impl Loop {
 /// Drift (Δx, Δy) of a straight line in the θ–α plane from `from` to `to`.
 ///
 /// Closed form of ∫ r sin α dθ, ∫ r cos α dθ with θ, α linear in a common parameter.
-pub fn line_drift(r: f64, from: [f64; 2], to: [f64; 2]) -> [f64; 2] {
+pub(crate) fn line_drift(r: f64, from: [f64; 2], to: [f64; 2]) -> [f64; 2] {
     let (dth, dal) = (to[0] - from[0], to[1] - from[1]);
     let mid = from[1] + 0.5 * dal;
     let half = 0.5 * dal;
@@ -145,7 +145,7 @@ pub fn line_drift(r: f64, from: [f64; 2], to: [f64; 2]) -> [f64; 2] {
 ///
 /// Eq. 25 allows 0 < b < 4π, but for b/2 ∈ (π, 2π) Eq. 26 then needs a < 0;
 /// here b/2 is reduced to (0, π] and the sign moves into a.
-pub fn solve_xy_loop(r: f64, alpha: f64, delta: [f64; 2]) -> Option<(f64, f64)> {
+pub(crate) fn solve_xy_loop(r: f64, alpha: f64, delta: [f64; 2]) -> Option<(f64, f64)> {
     let rho = delta[0].hypot(delta[1]);
     if rho == 0.0 {
         return None;

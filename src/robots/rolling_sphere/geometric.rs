@@ -173,7 +173,7 @@ fn wrap(a: f64) -> f64 {
 ///
 /// Newton from T = R + π/2 (the function is increasing and convex, so the iterates decrease
 /// monotonically onto the root).
-pub fn tan_theta_prime(rf: f64) -> f64 {
+pub(crate) fn tan_theta_prime(rf: f64) -> f64 {
     let mut t = rf + FRAC_PI_2;
     for _ in 0..200 {
         let f = t - t.atan() - rf;
@@ -470,7 +470,7 @@ impl Piece {
 }
 
 /// s(τ) = ∫₀^τ rate: progress along a [`RampProfile`], in [0, 1].
-pub fn ramp_progress(p: &RampProfile, tau: f64) -> f64 {
+pub(crate) fn ramp_progress(p: &RampProfile, tau: f64) -> f64 {
     p.progress(tau)
 }
 

@@ -140,7 +140,7 @@ pub fn euler_to_rotation(alpha: f64, theta: f64, phi: f64) -> Rotation3<f64> {
 ///
 /// At the chart singularities only α + φ (θ = 0) or φ − α (θ = π) is defined: there α = 0 is
 /// returned and φ carries the whole angle.
-pub fn rotation_to_euler(r: &Rotation3<f64>) -> (f64, f64, f64) {
+pub(crate) fn rotation_to_euler(r: &Rotation3<f64>) -> (f64, f64, f64) {
     let m = r.matrix();
     let theta = m[(2, 2)].clamp(-1.0, 1.0).acos();
     let s = (m[(0, 2)].powi(2) + m[(1, 2)].powi(2)).sqrt();
@@ -158,7 +158,7 @@ pub fn rotation_to_euler(r: &Rotation3<f64>) -> (f64, f64, f64) {
 }
 
 /// Geodesic distance on SO(3): the angle in [0, π] of the rotation taking `r1` to `r2`.
-pub fn geodesic_angle(r1: &UnitQuaternion<f64>, r2: &UnitQuaternion<f64>) -> f64 {
+pub(crate) fn geodesic_angle(r1: &UnitQuaternion<f64>, r2: &UnitQuaternion<f64>) -> f64 {
     let d = r1.inverse() * r2;
     2.0 * d.imag().norm().atan2(d.w.abs())
 }
@@ -169,18 +169,18 @@ pub fn quat_of_state(q: &State) -> UnitQuaternion<f64> {
 }
 
 /// The orientation of an Euler-model state.
-pub fn quat_of_euler_state(q: &State) -> UnitQuaternion<f64> {
+pub(crate) fn quat_of_euler_state(q: &State) -> UnitQuaternion<f64> {
     UnitQuaternion::from_rotation_matrix(&euler_to_rotation(q[2], q[3], q[4]))
 }
 
 /// (x, y, α, θ, φ) → (x, y, qw, qx, qy, qz).
-pub fn euler_state_to_quat_state(q: &State) -> State {
+pub(crate) fn euler_state_to_quat_state(q: &State) -> State {
     let u = quat_of_euler_state(q);
     State::from_vec(vec![q[0], q[1], u.w, u.i, u.j, u.k])
 }
 
 /// (x, y, qw, qx, qy, qz) → (x, y, α, θ, φ) (see [`rotation_to_euler`] at the singularities).
-pub fn quat_state_to_euler_state(q: &State) -> State {
+pub(crate) fn quat_state_to_euler_state(q: &State) -> State {
     let (al, th, ph) = rotation_to_euler(&quat_of_state(q).to_rotation_matrix());
     State::from_vec(vec![q[0], q[1], al, th, ph])
 }

@@ -130,7 +130,7 @@ pub const EXTRA_METRICS: [&str; 5] = [
 
 /// Geodesic orientation error (rad) between two quaternion trajectories on
 /// the comparison's time grid (each run held at its end).
-pub fn orientation_tracking(ideal: &Trajectory, sim: &Trajectory, grid: &[f64]) -> Vec<f64> {
+pub(crate) fn orientation_tracking(ideal: &Trajectory, sim: &Trajectory, grid: &[f64]) -> Vec<f64> {
     grid.iter()
         .map(|&t| {
             geodesic_angle(

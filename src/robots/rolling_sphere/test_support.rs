@@ -39,12 +39,18 @@ pub fn deg_state(x: f64, y: f64, al: f64, th: f64, ph: f64) -> State {
 }
 
 /// (position error, geodesic orientation error) of the ideal quaternion run.
-pub fn ideal_error(a: f64, plan: &Plan, start: &State, goal: &State) -> (f64, f64) {
+pub(crate) fn ideal_error(a: f64, plan: &Plan, start: &State, goal: &State) -> (f64, f64) {
     ideal_error_dt(a, plan, start, goal, DT)
 }
 
 /// As [`ideal_error`] with step `dt`.
-pub fn ideal_error_dt(a: f64, plan: &Plan, start: &State, goal: &State, dt: f64) -> (f64, f64) {
+pub(crate) fn ideal_error_dt(
+    a: f64,
+    plan: &Plan,
+    start: &State,
+    goal: &State,
+    dt: f64,
+) -> (f64, f64) {
     let traj = simulate(
         &RollingSphereQuat::new(a),
         plan,
@@ -56,7 +62,7 @@ pub fn ideal_error_dt(a: f64, plan: &Plan, start: &State, goal: &State, dt: f64)
 
 /// The ideal run of `plan` on a sphere of radius `a` ends within 1e-9 of
 /// `goal` in position and orientation; `what` names the case.
-pub fn assert_reaches(a: f64, plan: &Plan, start: &State, goal: &State, what: &str) {
+pub(crate) fn assert_reaches(a: f64, plan: &Plan, start: &State, goal: &State, what: &str) {
     let (dp, dr) = ideal_error(a, plan, start, goal);
     assert!(
         dp < 1e-9 && dr < 1e-9,
@@ -64,7 +70,7 @@ pub fn assert_reaches(a: f64, plan: &Plan, start: &State, goal: &State, what: &s
     );
 }
 
-pub fn round_to(x: f64, digits: i32) -> f64 {
+pub(crate) fn round_to(x: f64, digits: i32) -> f64 {
     let s = 10f64.powi(digits);
     (x * s).round() / s
 }

@@ -157,7 +157,7 @@ impl SphericalTriangle {
 /// a + b > π). The third analogy for c is 0/0 at a + b = π (tan((a+b)/2) cos((A+B)/2)), so c
 /// is taken from the equivalent, everywhere well-conditioned atan2 form of the cosine rule;
 /// [`napier_c`] keeps Eq. 22's form for cross-checks.
-pub fn napier(a: f64, b: f64, big_c: f64) -> (f64, f64, f64) {
+pub(crate) fn napier(a: f64, b: f64, big_c: f64) -> (f64, f64, f64) {
     let (hs, hd) = (0.5 * (a + b), 0.5 * (a - b));
     let tc = (0.5 * big_c).tan();
     let a_minus_b = 2.0 * (hd.sin() / (hs.sin() * tc)).atan();
@@ -179,7 +179,7 @@ pub fn napier_c(a: f64, b: f64, big_a: f64, big_b: f64) -> f64 {
 }
 
 /// Eq. 17: ground displacement length of the manoeuvre.
-pub fn eq17_d(a: f64, b: f64, c: f64, big_a: f64, big_c: f64) -> f64 {
+pub(crate) fn eq17_d(a: f64, b: f64, c: f64, big_a: f64, big_c: f64) -> f64 {
     (a * a + b * b + c * c + 2.0 * a * c * (big_a + big_c).cos()
         - 2.0 * a * b * big_c.cos()
         - 2.0 * b * c * big_a.cos())
@@ -321,7 +321,7 @@ fn check_triangle(t: &SphericalTriangle, d: f64, phi: f64, yaw: f64) -> Option<S
 
 /// Paper mode: ψ fixed, (a, b, C) from Eqs. 17, 18, 21 by Newton (numerical Jacobian) from
 /// the best seeds of a 7³ grid. Returns the shortest converged triangle.
-pub fn solve_fixed_psi(
+pub(crate) fn solve_fixed_psi(
     d: f64,
     phi: f64,
     yaw: f64,
@@ -424,7 +424,7 @@ fn band_length(y: f64) -> f64 {
 }
 
 /// One triangle reaching displacement (d, φ) (radii) and yaw `yaw` ∈ [−π, π], ψ free.
-pub fn solve_single(
+pub(crate) fn solve_single(
     d: f64,
     phi: f64,
     yaw: f64,
@@ -523,7 +523,11 @@ pub fn solve_triangles(
 /// The contact point's path on the ball (unit vectors in the body frame) while rolling
 /// `legs` (ground heading, rolled angle) from body orientation `r0`. `samples` points per
 /// leg plus the start. For a triangle manoeuvre the path is the closed spherical triangle.
-pub fn ball_trace(r0: &UnitQuaternion<f64>, legs: &[(f64, f64)], samples: usize) -> Vec<[f64; 3]> {
+pub(crate) fn ball_trace(
+    r0: &UnitQuaternion<f64>,
+    legs: &[(f64, f64)],
+    samples: usize,
+) -> Vec<[f64; 3]> {
     let mut r = *r0;
     let down = Vector3::new(0.0, 0.0, -1.0);
     let body = |r: &UnitQuaternion<f64>| {
@@ -545,7 +549,7 @@ pub fn ball_trace(r0: &UnitQuaternion<f64>, legs: &[(f64, f64)], samples: usize)
 
 /// For visualisation: the spherical triangles traced on the ball (body frame, unit sphere)
 /// by the plan `start` → `goal`, one closed polyline per triangle.
-pub fn triangle_traces(
+pub(crate) fn triangle_traces(
     model: &RollingSphere,
     start: &State,
     goal: &State,

@@ -333,7 +333,7 @@ pub fn se2_distance(q: &State, goal: &State) -> f64 {
 }
 
 /// Goal-frame errors of a pose: (s along N, e across N (positive left), δ = θ − θf wrapped).
-pub fn goal_frame_errors(q: &State, goal: &State) -> (f64, f64, f64) {
+pub(crate) fn goal_frame_errors(q: &State, goal: &State) -> (f64, f64, f64) {
     let (sf, cf) = goal[2].sin_cos();
     let (dx, dy) = (q[0] - goal[0], q[1] - goal[1]);
     (cf * dx + sf * dy, -sf * dx + cf * dy, wrap(q[2] - goal[2]))

@@ -79,7 +79,7 @@ fn angle_z(q: &crate::engine::rapier::math::Rotation) -> f64 {
 }
 
 /// Checks the URDF against the model's geometry and mass table (1e-6 relative).
-pub fn check_urdf(robot: &urdf_rs::Robot, model: &SpaceRobot) -> Result<(), SetupError> {
+pub(crate) fn check_urdf(robot: &urdf_rs::Robot, model: &SpaceRobot) -> Result<(), SetupError> {
     let link = |name: &str| {
         robot.links.iter().find(|l| l.name == name).ok_or_else(|| {
             SetupError::urdf(format!(

@@ -56,7 +56,12 @@ pub fn link_frames(robot: &Robot) -> HashMap<String, RPose> {
 
 /// Check that `link` is `body` or hangs from it through fixed joints only
 /// (so it moves with the body); `what` names the element for the message.
-pub fn rigidly_on(robot: &Robot, link: &str, body: &str, what: &str) -> Result<(), SetupError> {
+pub(crate) fn rigidly_on(
+    robot: &Robot,
+    link: &str,
+    body: &str,
+    what: &str,
+) -> Result<(), SetupError> {
     let mut at = link;
     for _ in 0..=robot.joints.len() {
         if at == body {
@@ -198,7 +203,7 @@ fn round_collision_center(robot: &Robot, link: &str) -> ([f64; 3], &'static str)
 
 /// Check that the wheels share one contact plane (their lowest points at the
 /// same height in the body frame, within 0.1 mm); returns that height.
-pub fn contact_plane(wheels: &[&Wheel]) -> Result<f64, SetupError> {
+pub(crate) fn contact_plane(wheels: &[&Wheel]) -> Result<f64, SetupError> {
     let low: Vec<f64> = wheels.iter().map(|w| w.center[2] - w.radius).collect();
     let lo = low.iter().copied().fold(f64::INFINITY, f64::min);
     let hi = low.iter().copied().fold(f64::NEG_INFINITY, f64::max);
@@ -233,7 +238,7 @@ pub fn roll_on_balls(
 }
 
 /// [`roll_on_balls`] for the wheel links named.
-pub fn roll_links_on_balls(
+pub(crate) fn roll_links_on_balls(
     sw: &mut crate::engine::world::SimWorld,
     links: &[&str],
 ) -> Result<(), SetupError> {
@@ -251,7 +256,7 @@ pub fn roll_links_on_balls(
 }
 
 /// Whether two body-frame coordinates agree within the position tolerance.
-pub fn same_position(a: f64, b: f64) -> bool {
+pub(crate) fn same_position(a: f64, b: f64) -> bool {
     (a - b).abs() <= POS_TOL
 }
 
@@ -274,7 +279,7 @@ pub fn root_pose(
 
 /// Velocity of a wheel's lowest point along and across its rolling
 /// direction (m/s): zero for rolling without slip.
-pub fn contact_slip(b: &RigidBody, w: &Wheel) -> (f64, f64) {
+pub(crate) fn contact_slip(b: &RigidBody, w: &Wheel) -> (f64, f64) {
     let c = w.center_local;
     let center = b.position().transform_point(vector(c[0], c[1], c[2]));
     let contact = center - vector(0.0, 0.0, w.radius);
@@ -288,7 +293,7 @@ pub fn contact_slip(b: &RigidBody, w: &Wheel) -> (f64, f64) {
 
 /// Ground speed of a wheel's rim relative to its parent (m/s, positive
 /// forward): its rate about the axle times its radius.
-pub fn rim_speed(parent: &RigidBody, wheel: &RigidBody, w: &Wheel) -> f64 {
+pub(crate) fn rim_speed(parent: &RigidBody, wheel: &RigidBody, w: &Wheel) -> f64 {
     let a = w.axle_local;
     let axle = *wheel.rotation() * vector(a[0], a[1], a[2]);
     f((wheel.angvel() - parent.angvel()).dot(axle)) * w.radius

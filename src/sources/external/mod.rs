@@ -123,7 +123,7 @@ fn executable(p: &Path) -> bool {
 
 /// The program to start: a path (with a `/`) relative to `dir`, or a name
 /// looked up on `PATH` as the shell would.
-pub fn resolve_program(program: &str, dir: &Path) -> Result<PathBuf, String> {
+pub(crate) fn resolve_program(program: &str, dir: &Path) -> Result<PathBuf, String> {
     if program.is_empty() {
         return Err("the program name is empty".into());
     }

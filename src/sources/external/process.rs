@@ -332,7 +332,7 @@ fn exited(_pid: u32) -> bool {
 /// Whether any process of group `pgid` still runs (zombies, which only
 /// wait to be reaped, do not count).
 #[cfg(target_os = "linux")]
-pub fn group_alive(pgid: u32) -> bool {
+pub(crate) fn group_alive(pgid: u32) -> bool {
     let Ok(dir) = std::fs::read_dir("/proc") else {
         return true;
     };
@@ -356,7 +356,7 @@ pub fn group_alive(pgid: u32) -> bool {
 /// Elsewhere: whether any process of the group exists (`kill(-pgid, 0)`;
 /// an unreaped zombie counts, so the grace period may be waited out).
 #[cfg(all(unix, not(target_os = "linux")))]
-pub fn group_alive(pgid: u32) -> bool {
+pub(crate) fn group_alive(pgid: u32) -> bool {
     // SAFETY: signal 0 only checks that the group has a member.
     unsafe { libc::kill(-(pgid as libc::pid_t), 0) == 0 }
 }
@@ -603,7 +603,7 @@ impl Lines {
 }
 
 /// The last lines of `text`, each indented as `\n  | line`.
-pub fn format_tail(text: &str) -> String {
+pub(crate) fn format_tail(text: &str) -> String {
     let lines: Vec<&str> = text.lines().filter(|l| !l.trim().is_empty()).collect();
     let skip = lines.len().saturating_sub(TAIL_LINES);
     let mut out = String::new();

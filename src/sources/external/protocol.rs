@@ -35,7 +35,7 @@ struct Request<'a> {
 
 /// Append the request line for sample time `t` and state `q` (with the
 /// state `names` on a run's first sample) to `buf`, newline included.
-pub fn write_request(buf: &mut Vec<u8>, t: f64, q: &[f64], names: Option<&[&str]>) {
+pub(crate) fn write_request(buf: &mut Vec<u8>, t: f64, q: &[f64], names: Option<&[&str]>) {
     // Serializing plain numbers and strings cannot fail.
     let _ = serde_json::to_writer(&mut *buf, &Request { t, q, names });
     buf.push(b'\n');

@@ -418,7 +418,7 @@ impl<'a> Reader<'a> {
 
 /// A hint for a column (or JSON input) named `name` that is not one of
 /// the model's `inputs`: a steering angle for a car steered by rate.
-pub fn unknown_input_hint(name: &str, inputs: &[String]) -> &'static str {
+pub(crate) fn unknown_input_hint(name: &str, inputs: &[String]) -> &'static str {
     if name == "steer" && inputs.iter().any(|i| i == "steer_rate") {
         "; `steer` is a steering angle: steer the car by angle with `[model] steering = \"angle\"`"
     } else {

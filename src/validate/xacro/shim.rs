@@ -106,7 +106,7 @@ fn shown(file: &Path, urdf: &Path) -> String {
 }
 
 /// `` `pkg` (in a.xacro, b.xacro), ... ``.
-pub fn absent_list(absent: &[Absent], urdf: &Path) -> String {
+pub(crate) fn absent_list(absent: &[Absent], urdf: &Path) -> String {
     let items: Vec<String> = absent
         .iter()
         .map(|a| {
@@ -122,7 +122,7 @@ pub fn absent_list(absent: &[Absent], urdf: &Path) -> String {
 }
 
 /// The message naming every absent package at once.
-pub fn absent_error(absent: &[Absent], urdf: &Path) -> String {
+pub(crate) fn absent_error(absent: &[Absent], urdf: &Path) -> String {
     let n = absent.len();
     let first = absent.first().map_or("PKG", |a| a.package.as_str());
     format!(

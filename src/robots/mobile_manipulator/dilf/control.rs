@@ -276,7 +276,7 @@ pub fn control_aligning(
 }
 
 /// V̇ / D² under input u: f · q̇(u) (the sign of V̇, Eq. 17).
-pub fn vdot_scaled(q: &[f64], f: &[f64], u: &[f64]) -> f64 {
+pub(crate) fn vdot_scaled(q: &[f64], f: &[f64], u: &[f64]) -> f64 {
     let robots = q.len() / DOF;
     let mut out = 0.0;
     for r in 0..robots {

@@ -78,7 +78,7 @@ impl Barriers {
 
 /// The state after holding input `u` for `t` seconds from `q` (Eq. 1,
 /// exactly: each platform on its arc, each joint on its ramp).
-pub fn predict(q: &[f64], u: &[f64], t: f64) -> Vec<f64> {
+pub(crate) fn predict(q: &[f64], u: &[f64], t: f64) -> Vec<f64> {
     let mut out = q.to_vec();
     for (r, qr) in out.chunks_mut(DOF).enumerate() {
         let ur = &u[INPUTS * r..INPUTS * (r + 1)];

@@ -406,7 +406,7 @@ fn labels(robots: usize) -> Vec<String> {
 }
 
 /// Index of a plan label (e.g. `"stalled"`) for `robots` robots.
-pub fn label_index(robots: usize, name: &str) -> Option<usize> {
+pub(crate) fn label_index(robots: usize, name: &str) -> Option<usize> {
     labels(robots).iter().position(|l| l == name)
 }
 
@@ -701,7 +701,7 @@ impl PolicyFactory for Factory {
 /// Refuse a configuration (`what`: the scenario key, `start` or `goal`) that
 /// puts a robot part inside an obstacle or an arm inside a singularity
 /// enclosure: V is 0 there and Eq. 18 cannot start (or end).
-pub fn check_configuration(scene: &Scene, q: &[f64], what: &str) -> Result<(), PlanError> {
+pub(crate) fn check_configuration(scene: &Scene, q: &[f64], what: &str) -> Result<(), PlanError> {
     let bad = |reason: String| PlanError::InvalidParameter {
         name: what.into(),
         reason,

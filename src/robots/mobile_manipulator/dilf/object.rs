@@ -413,7 +413,7 @@ pub(crate) fn table_i_start_and_goal_ahead() -> (Vec<f64>, Vec<f64>) {
 }
 
 /// Table I's desired configuration of both robots (rad).
-pub fn table_i_goal() -> Vec<f64> {
+pub(crate) fn table_i_goal() -> Vec<f64> {
     use std::f64::consts::PI;
     let arm = |q1: f64| [q1, -PI / 2.0, 2.0 * PI / 3.0, 0.0, -PI / 6.0, 0.0];
     let mut q = vec![0.0, -2.0, 0.0];
@@ -426,7 +426,7 @@ pub fn table_i_goal() -> Vec<f64> {
 /// How far the grasps' relative pose at `b` is from the one at `a`:
 /// translation (m) and rotation (rad) of tool 2 in tool 1's frame. A solid
 /// object held at both needs both 0.
-pub fn relative_grasp_change(a: &[f64], b: &[f64]) -> (f64, f64) {
+pub(crate) fn relative_grasp_change(a: &[f64], b: &[f64]) -> (f64, f64) {
     let rel = |q: &[f64]| {
         mm::frames::<f64>(&q[..DOF])
             .tool

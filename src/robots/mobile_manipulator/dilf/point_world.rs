@@ -38,7 +38,7 @@ pub fn t_robot(e: &PlacedEllipsoid<f64>, x: [f64; 3], hp: [f64; 3]) -> [f64; 3] 
 
 /// Analytic switches σ_j = ‖h‖ Π_{i≠j} b_i / (‖h‖ Π_{i≠j} b_i + λ b_j)
 /// (Eqs. 6 and 8 have this form, with h = h_p resp. h1^p).
-pub fn switches(h_norm: f64, b: &[f64], lambda: f64) -> Vec<f64> {
+pub(crate) fn switches(h_norm: f64, b: &[f64], lambda: f64) -> Vec<f64> {
     (0..b.len())
         .map(|j| {
             let others: f64 = b
@@ -80,7 +80,7 @@ pub fn h1(parts: &[PlacedEllipsoid<f64>], x: [f64; 3], hp: [f64; 3], lambda: f64
 
 /// T_O: the deformed obstacle i to its point h_Oi,
 /// T = (b/(b+1))^{1/2} (h1 − h_O) + h_O.
-pub fn t_obstacle(b: f64, h1: [f64; 3], h_o: [f64; 3]) -> [f64; 3] {
+pub(crate) fn t_obstacle(b: f64, h1: [f64; 3], h_o: [f64; 3]) -> [f64; 3] {
     let s = (b / (b + 1.0)).max(0.0).sqrt();
     spatial::add(spatial::scale(spatial::sub(h1, h_o), s), h_o)
 }
@@ -110,13 +110,13 @@ pub fn switches_log<T: Scalar>(ln_h: T, ln_b: &[T], ln_lambda: f64) -> Vec<T> {
 
 /// r_j of [`switches_log`] from ln b̃_j and `total` = Σ_i ln b̃_i.
 #[inline]
-pub fn switch_exponent<T: Scalar>(ln_h: T, lb: T, total: T, ln_lambda: f64) -> T {
+pub(crate) fn switch_exponent<T: Scalar>(ln_h: T, lb: T, total: T, ln_lambda: f64) -> T {
     lb + lb - total - ln_h + ln_lambda
 }
 
 /// σ = 1 / (1 + exp(r)), written to stay finite for large |r|.
 #[inline]
-pub fn switch_log<T: Scalar>(r: T) -> T {
+pub(crate) fn switch_log<T: Scalar>(r: T) -> T {
     if r.re() > 0.0 {
         let e = (-r).exp();
         e / (e + 1.0)

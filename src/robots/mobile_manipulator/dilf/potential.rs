@@ -715,7 +715,7 @@ impl Scene {
 }
 
 /// A link-frame shape placed by a `T` pose.
-pub fn placed_generic<T: Scalar>(s: &Superellipsoid, pose: &Pose<T>) -> PlacedEllipsoid<T> {
+pub(crate) fn placed_generic<T: Scalar>(s: &Superellipsoid, pose: &Pose<T>) -> PlacedEllipsoid<T> {
     // The local pose is constant: multiply by it in f64 terms.
     let rot = if s.rpy == [0.0; 3] {
         pose.r

@@ -185,7 +185,7 @@ fn turns(from: f64, to: f64, max_turn: f64) -> Vec<f64> {
 /// goal last. Two robots: turns in place at the start centroid to face ψ,
 /// the goal formation at its centroid facing ψ, turns in place to the goal;
 /// one robot: its goal position facing ψ, then the goal.
-pub fn phase_goals(start: &[f64], goal: &[f64], psi: f64, max_turn: f64) -> Vec<Vec<f64>> {
+pub(crate) fn phase_goals(start: &[f64], goal: &[f64], psi: f64, max_turn: f64) -> Vec<Vec<f64>> {
     let (c_s, h_s) = formation(start);
     let (c_g, h_g) = formation(goal);
     let at_start = [c_s[0] - c_g[0], c_s[1] - c_g[1]];
@@ -223,7 +223,12 @@ pub fn phase_goals(start: &[f64], goal: &[f64], psi: f64, max_turn: f64) -> Vec<
 /// Approach headings to try, best first: the direction of travel τ (start
 /// centroid to goal centroid; the goal's heading when they coincide within
 /// `position`), then τ ± step, τ ± 2 step, … up to half a turn.
-pub fn candidate_headings(start: &[f64], goal: &[f64], step: f64, position: f64) -> Vec<f64> {
+pub(crate) fn candidate_headings(
+    start: &[f64],
+    goal: &[f64],
+    step: f64,
+    position: f64,
+) -> Vec<f64> {
     let (c_s, _) = formation(start);
     let (c_g, h_g) = formation(goal);
     let (dx, dy) = (c_g[0] - c_s[0], c_g[1] - c_s[1]);

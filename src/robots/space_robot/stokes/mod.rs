@@ -103,7 +103,7 @@ const GL5_W: [f64; 5] = [
 /// θ0 change along the straight joint-space segment p → q (θ1, θ2), from the
 /// line integral of Eq. 13 (composite 5-point Gauss-Legendre, panels ≤ 0.02 rad
 /// in θ2; the integrand is analytic so this is accurate to rounding).
-pub fn segment_rotation(robot: &SpaceRobot, p: [f64; 2], q: [f64; 2]) -> f64 {
+pub(crate) fn segment_rotation(robot: &SpaceRobot, p: [f64; 2], q: [f64; 2]) -> f64 {
     let (d1, d2) = (q[0] - p[0], q[1] - p[1]);
     let panels = ((d2.abs() / 0.02).ceil() as usize).clamp(1, 1_000_000);
     let h = 1.0 / panels as f64;
@@ -126,13 +126,13 @@ pub fn rectangle_integral(robot: &SpaceRobot, theta1: [f64; 2], theta2: [f64; 2]
 }
 
 /// k of Eq. 18 for one of n cycles producing θ̄0.
-pub fn k_per_cycle(robot: &SpaceRobot, theta0_bar: f64, cycles: usize) -> f64 {
+pub(crate) fn k_per_cycle(robot: &SpaceRobot, theta0_bar: f64, cycles: usize) -> f64 {
     theta0_bar / (cycles as f64 * robot.m_i0())
 }
 
 /// λ solving Eq. 20 for a given γ: (λ − θ1f)(1/Δ(γ) − 1/Δ(θ2f)) = k.
 /// `None` when cos γ = cos θ2f (the rectangle cannot rotate the vehicle).
-pub fn solve_lambda(robot: &SpaceRobot, goal: [f64; 2], gamma: f64, k: f64) -> Option<f64> {
+pub(crate) fn solve_lambda(robot: &SpaceRobot, goal: [f64; 2], gamma: f64, k: f64) -> Option<f64> {
     let alpha = 1.0 / robot.delta(gamma) - 1.0 / robot.delta(goal[1]);
     if alpha.abs() <= 1e-12 / robot.delta(goal[1]).abs() {
         return None;
@@ -142,7 +142,7 @@ pub fn solve_lambda(robot: &SpaceRobot, goal: [f64; 2], gamma: f64, k: f64) -> O
 
 /// γ solving Eq. 20 for a given λ: the root nearest θ2f (ties: the larger).
 /// `None` when λ = θ1f or no real γ exists (|cos γ| > 1).
-pub fn solve_gamma(robot: &SpaceRobot, goal: [f64; 2], lambda: f64, k: f64) -> Option<f64> {
+pub(crate) fn solve_gamma(robot: &SpaceRobot, goal: [f64; 2], lambda: f64, k: f64) -> Option<f64> {
     let w = lambda - goal[0];
     if w.abs() < 1e-12 {
         return None;

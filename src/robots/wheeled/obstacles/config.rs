@@ -45,7 +45,7 @@ pub struct SolidObstacleConfig {
 }
 
 /// Default of `goal_tolerance`: 2 cm and 2 degrees.
-pub fn default_goal_tolerance() -> [f64; 2] {
+pub(crate) fn default_goal_tolerance() -> [f64; 2] {
     [0.02, 2.0]
 }
 

@@ -14,13 +14,13 @@ const MAX_BYTES: u64 = 16 << 20;
 pub const CONVERT: &str = "convert it to MCAP with `ros2 bag convert -i BAG -o out.yaml` (out.yaml: `output_bags: [{uri: BAG_mcap, storage_id: mcap, all_topics: true}]`; see the guide's \"Replay a ROS 2 recording\")";
 
 /// The metadata file of bag directory `dir`.
-pub fn metadata_path(dir: &Path) -> PathBuf {
+pub(crate) fn metadata_path(dir: &Path) -> PathBuf {
     dir.join("metadata.yaml")
 }
 
 /// The storage of the bag in `dir` and its files, in order (each an
 /// `.mcap`, or each a `.db3`).
-pub fn bag_files(dir: &Path) -> Result<(Storage, Vec<PathBuf>), PlanError> {
+pub(crate) fn bag_files(dir: &Path) -> Result<(Storage, Vec<PathBuf>), PlanError> {
     let meta = metadata_path(dir);
     if !meta.is_file() {
         let mcaps = mcap_files_in(dir);

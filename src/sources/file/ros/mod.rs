@@ -132,7 +132,7 @@ pub struct Inventory {
 }
 
 /// A file's bytes (a regular file within the MCAP cap).
-pub fn read_bytes(file: &Path) -> Result<Vec<u8>, PlanError> {
+pub(crate) fn read_bytes(file: &Path) -> Result<Vec<u8>, PlanError> {
     let err = |m: String| PlanError::file(file.to_path_buf(), None, m);
     crate::input::check_regular(file, "plan file", MCAP_MAX_BYTES)
         .map_err(|e| err(e.to_string()))?;
@@ -359,7 +359,7 @@ pub fn read(
 }
 
 /// [`read`] with the bag's channels already scanned.
-pub fn read_with(
+pub(crate) fn read_with(
     bag: &Path,
     inv: &Inventory,
     inputs: &[&str],

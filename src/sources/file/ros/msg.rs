@@ -15,7 +15,7 @@ use std::collections::HashMap;
 const MAX_FIXED: usize = 1 << 20;
 
 /// `pkg/msg/Type` and `pkg/Type` name the same type.
-pub fn normalize(name: &str) -> String {
+pub(crate) fn normalize(name: &str) -> String {
     match name.split('/').collect::<Vec<_>>().as_slice() {
         [pkg, "msg", ty] => format!("{pkg}/{ty}"),
         _ => name.to_string(),
@@ -360,7 +360,7 @@ impl Definition {
 /// The number at `path` in a decoded message (checked with
 /// [`Definition::resolve_number`], so only a sequence's length can make it
 /// missing).
-pub fn number_at(v: &Value, path: &FieldPath) -> Result<f64, String> {
+pub(crate) fn number_at(v: &Value, path: &FieldPath) -> Result<f64, String> {
     use re_ros_msg::deserialize::primitive_array::PrimitiveArray as P;
     let mut v = v;
     let mut at = String::new();
@@ -447,7 +447,7 @@ pub fn number_at(v: &Value, path: &FieldPath) -> Result<f64, String> {
 }
 
 /// The integer at `path` (a header stamp's `sec` or `nanosec`), exactly.
-pub fn integer_at(v: &Value, path: &FieldPath) -> Option<i64> {
+pub(crate) fn integer_at(v: &Value, path: &FieldPath) -> Option<i64> {
     let mut v = v;
     for step in &path.steps {
         v = match (step, v) {

@@ -35,7 +35,7 @@ const ACKERMANN: &str = "float32 steering_angle\nfloat32 steering_angle_velocity
 const ACKERMANN_STAMPED: &str = "std_msgs/Header header\nackermann_msgs/AckermannDrive drive\n================================================================================\nMSG: std_msgs/Header\nbuiltin_interfaces/Time stamp\nstring frame_id\n================================================================================\nMSG: builtin_interfaces/Time\nint32 sec\nuint32 nanosec\n================================================================================\nMSG: ackermann_msgs/AckermannDrive\nfloat32 steering_angle\nfloat32 steering_angle_velocity\nfloat32 speed\nfloat32 acceleration\nfloat32 jerk\n";
 
 /// The built-in definition of `ty`, if it has one.
-pub fn built_in(ty: &str) -> Option<&'static str> {
+pub(crate) fn built_in(ty: &str) -> Option<&'static str> {
     let ty = crate::sources::file::ros::msg::normalize(ty);
     BUILT_IN
         .iter()
