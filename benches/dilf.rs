@@ -161,11 +161,11 @@ fn full_run(c: &mut Criterion) {
 }
 
 /// The pair carrying the beam (`dilf_pair_open`'s world: two robots, the
-/// rod through compliant wrists, dt = 4 ms, 4 solver iterations): 1000
-/// physics steps driving both platforms forward at 0.1 m/s with the arms
-/// held (after 250 steps, 1 s, of settling), and the physics replay of the
-/// scenario's plan (its feedback law on the simulated state every 20 ms,
-/// 3005 steps: the `steps/s` of `anholonomy run`).
+/// rod through compliant wrists, dt = 4 ms, the solver substeps and sweeps
+/// its file sets): 1000 physics steps driving both platforms forward at
+/// 0.1 m/s with the arms held (after 250 steps, 1 s, of settling), and the
+/// physics replay of the scenario's plan (its feedback law on the simulated
+/// state every 20 ms, 3245 steps: the `steps/s` of `anholonomy run`).
 fn pair_physics(c: &mut Criterion) {
     let prep = prepared("dilf_pair_open");
     let mut g = c.benchmark_group("dilf_pair_physics");

@@ -33,7 +33,8 @@ Usage (from the repository root, after `cargo build --release`):
 
     python3 scripts/mujoco_compare.py [--repeats 5] [--bin target/release/anholonomy]
 
-Installs `mujoco` and `mcap` with pip (--user) when they are missing. Not run
+Installs `mujoco` and `mcap` with pip (--user outside a virtual environment)
+when they are missing. Not run
 by .ci/run.
 """
 
@@ -61,12 +62,16 @@ def ensure(modules):
             missing.append(pkg)
     if missing:
         print(f"installing {' '.join(missing)} with pip ...", file=sys.stderr)
+        # Inside a virtual environment pip refuses --user (and needs none).
+        venv = sys.prefix != sys.base_prefix
+        user = [] if venv else ["--user"]
         subprocess.check_call(
-            [sys.executable, "-m", "pip", "install", "--quiet", "--user", *missing]
+            [sys.executable, "-m", "pip", "install", "--quiet", *user, *missing]
         )
-        import site
+        if not venv:
+            import site
 
-        site.addsitedir(site.getusersitepackages())
+            site.addsitedir(site.getusersitepackages())
 
 
 ensure([("mujoco", "mujoco"), ("mcap", "mcap"), ("numpy", "numpy")])
