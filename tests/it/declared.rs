@@ -349,3 +349,52 @@ fn a_non_finite_equation_stops_the_run_naming_the_state_and_time() {
     assert!(dir.path().join("logs/a/summary.json").is_file(), "{stderr}");
     assert!(!stderr.contains("panicked"));
 }
+
+/// The trailer pulled through its S curve with wheels of `scale` × their
+/// radius (`[model] wheels` when given): where the physics run ends.
+fn trailer_on_worn_wheels(scale: f64, wheels: &str) -> anholonomy::runner::RunOutcome {
+    let ex = example("trailer");
+    let dir = tempfile::tempdir().unwrap();
+    let text = absolute(
+        &std::fs::read_to_string(ex.join("trailer_forward.toml")).unwrap(),
+        &ex,
+    )
+    .replacen("frictionless = ", &format!("{wheels}\nfrictionless = "), 1)
+        + &format!("\n[sim.perturb]\nwheel_radius_scale = {scale}\n");
+    let path = dir.path().join("worn.toml");
+    std::fs::write(&path, text).unwrap();
+    run_file(&path, None)
+}
+
+#[test]
+fn worn_wheels_keep_a_declared_model_on_the_ground() {
+    // 1 % smaller or larger drive wheels: 1 % less or more travel on a
+    // 1.9 m curve, about 2 cm; wheels in the air would leave the robot
+    // standing (1.6 m short of its end).
+    let nominal = trailer_on_worn_wheels(1.0, "");
+    let base = nominal.metric("tracking_position_final").unwrap();
+    for s in [0.99, 1.01] {
+        let o = trailer_on_worn_wheels(s, "");
+        let d = o.metric("tracking_position_final").unwrap();
+        assert!(d < 0.03 && d > base, "scale {s}: {d} m (nominal {base} m)");
+    }
+    // The drive wheels named: the same robot.
+    let named = trailer_on_worn_wheels(
+        0.99,
+        "wheels = [\"left_wheel_joint\", \"right_wheel_joint\"]",
+    );
+    let found = trailer_on_worn_wheels(0.99, "");
+    assert_eq!(named.metrics, found.metrics);
+}
+
+#[test]
+fn a_wheel_must_be_a_driven_joint() {
+    for wheel in ["hitch", "trailer_left_wheel_joint", "no_such_joint"] {
+        refused(
+            "frictionless = ",
+            &format!("wheels = [\"{wheel}\"]\nfrictionless = "),
+            "model.wheels",
+            "wheels = ",
+        );
+    }
+}

@@ -117,6 +117,8 @@ pub struct Rig {
     pub positions: Vec<(String, Expr)>,
     /// Links whose collisions carry no friction.
     pub frictionless: Vec<String>,
+    /// `[model] wheels`: the driven joints whose links wear (None: found).
+    pub wheels: Option<Vec<String>>,
 }
 
 /// One read-back, resolved in the world.
@@ -222,7 +224,7 @@ impl DeclaredPhysics {
                 ));
             }
         }
-        // Wheels: the children of continuous joints with round collisions.
+        // Rolling links: the children of continuous joints with round collisions.
         let wheels: Vec<&str> = robot
             .joints
             .iter()
@@ -230,10 +232,48 @@ impl DeclaredPhysics {
             .map(|j| j.child.link.as_str())
             .filter(|l| crate::engine::urdf::collision_radius(robot, l).is_some())
             .collect();
-        let worn =
-            crate::engine::perturb::world::worn_wheels(robot, &wheels, sim.wheel_radius_scale);
+        // Worn or mismatched tyres (`wheel_radius_scale`): the wheels'
+        // collisions get the scaled radius, and the robot, placed on its
+        // nominal wheels, starts lower by the wear, on its worn ones (the
+        // wheel that wears least touches, none is below the ground).
+        // The model and the drives keep the nominal radius.
+        let mut root = place_root(robot, rig, start)?;
+        let s = sim.wheel_radius_scale;
+        let worn_links = if s == 1.0 {
+            Vec::new()
+        } else {
+            wearing_wheels(robot, rig, &root)?
+        };
+        let root_nominal = root;
+        let wear = worn_links
+            .iter()
+            .map(|(_, radius)| (1.0 - s) * radius)
+            .min_by(f64::total_cmp);
+        if let Some(wear) = wear {
+            root.translation.z -= r(wear);
+        }
+        let names: Vec<&str> = worn_links.iter().map(|(l, _)| l.as_str()).collect();
+        let mut worn = crate::engine::perturb::world::worn_wheels(robot, &names, s);
+        // Everything else round on the ground (casters, a trailer's
+        // wheels) loses as much, so the robot stays level: a pitch-rigid
+        // chain would otherwise rest on them with its drive wheels in the air.
+        if let Some(wear) = wear {
+            let others: Vec<&str> = touching_round_links(robot, &root_nominal)
+                .into_iter()
+                .filter(|l| !names.contains(l))
+                .collect();
+            if !others.is_empty() {
+                worn = std::borrow::Cow::Owned(
+                    crate::engine::perturb::world::shrink_round_collisions(
+                        &worn,
+                        &others,
+                        1.0,
+                        Some(wear),
+                    ),
+                );
+            }
+        }
         let robot: &urdf_rs::Robot = &worn;
-        let root = place_root(robot, rig, start)?;
         let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root)?;
         crate::robots::wheeled::roll_links_on_balls(&mut sw, &wheels)?;
         for l in &rig.frictionless {
@@ -356,6 +396,79 @@ impl DeclaredPhysics {
             };
         }
     }
+}
+
+/// Height above the ground within which a wheel's lowest point touches it
+/// at the start, m (the placement's rounding is far below).
+const TOUCHING: f64 = 1e-4;
+
+/// The links that wear with `wheel_radius_scale`, with their radius: the
+/// child links of `[model] wheels`, else of the velocity-driven joints whose
+/// round collision touches the ground with the root at `root`.
+fn wearing_wheels(
+    robot: &Robot,
+    rig: &Rig,
+    root: &RPose,
+) -> Result<Vec<(String, f64)>, SetupError> {
+    let frames = crate::robots::wheeled::link_frames(robot);
+    let mut out = Vec::new();
+    let given = rig.wheels.is_some();
+    let joints: Vec<&String> = match &rig.wheels {
+        Some(w) => w.iter().collect(),
+        None => rig.drives.iter().map(|(j, _)| j).collect(),
+    };
+    for j in joints {
+        let Some(uj) = joint(robot, j) else { continue };
+        let link = &uj.child.link;
+        let Some(radius) = crate::engine::urdf::collision_radius(robot, link) else {
+            if given {
+                return Err(SetupError::key(
+                    "model.wheels",
+                    format!(
+                        "joint `{j}` turns link `{link}`, which has no sphere or cylinder collision: it cannot wear"
+                    ),
+                ));
+            }
+            continue;
+        };
+        if given || lowest(robot, &frames, root, link) < TOUCHING {
+            out.push((link.clone(), radius));
+        }
+    }
+    Ok(out)
+}
+
+/// The lowest point of `link`'s collisions with the root at `root`, m
+/// (∞ when it has none).
+fn lowest(
+    robot: &Robot,
+    frames: &std::collections::HashMap<String, RPose>,
+    root: &RPose,
+    link: &str,
+) -> f64 {
+    robot
+        .links
+        .iter()
+        .filter(|l| l.name == link)
+        .flat_map(|l| &l.collision)
+        .filter_map(|c| {
+            let at = *root * frames[link] * crate::engine::world::origin(&c.origin);
+            crate::engine::world::lowest_point(&c.geometry, &at)
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The links with a round (sphere or cylinder) collision that touch the
+/// ground with the root at `root`.
+fn touching_round_links<'r>(robot: &'r Robot, root: &RPose) -> Vec<&'r str> {
+    let frames = crate::robots::wheeled::link_frames(robot);
+    robot
+        .links
+        .iter()
+        .map(|l| l.name.as_str())
+        .filter(|l| crate::engine::urdf::collision_radius(robot, l).is_some())
+        .filter(|l| lowest(robot, &frames, root, l) < TOUCHING)
+        .collect()
 }
 
 /// The root link: the one no joint points at.

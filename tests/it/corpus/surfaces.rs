@@ -160,6 +160,23 @@ pub fn cases(c: &mut Corpus) {
         Some("model.read.theta1"),
     );
 
+    // `[model] wheels`: each entry a `[model.drive]` joint.
+    for (what, wheel) in [
+        ("declared wheel that is a passive joint", "hitch"),
+        ("declared wheel that is not a joint", "no_such_joint"),
+    ] {
+        c.sc(
+            what,
+            edit(
+                &trailer(),
+                "frictionless = ",
+                &format!("wheels = [\"{wheel}\"]\nfrictionless = "),
+            ),
+            Some("wheels = "),
+            Some("model.wheels"),
+        );
+    }
+
     let t = trailer();
     let key = format!("thresholds.{long}");
     c.sc(
