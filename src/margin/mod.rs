@@ -16,6 +16,7 @@
 //! each ([`gate`]: not a search), and report it as a metric
 //! `margin_<dimension>`, so baselines hold them too.
 
+pub mod caps;
 pub mod early;
 mod gate;
 pub mod level;
@@ -178,6 +179,9 @@ pub struct DimensionResult {
     /// The metric plotted against the level: the first broken gate, or the
     /// gate nearest its bound when nothing broke.
     pub breaking_metric: Option<String>,
+    /// The default torque caps a torque or mass margin is measured against.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub default_caps: Option<caps::DefaultCaps>,
     /// Physics runs, nominal excluded.
     pub runs: usize,
     /// Rounds of parallel runs.
@@ -226,6 +230,9 @@ impl DimensionResult {
                 })
                 .collect();
             notes.push(format!("NON-MONOTONE: {}", pairs.join("; ")));
+        }
+        if let Some(c) = &self.default_caps {
+            notes.push(c.note());
         }
         notes.join("; ")
     }
@@ -342,6 +349,7 @@ pub fn search_dimension(
         inversions: outcome.inversions.iter().map(|(a, b)| [*a, *b]).collect(),
         first_broken,
         breaking_metric,
+        default_caps: caps::default_caps(ctx.prep, d),
         runs,
         rounds: outcome.rounds,
         seeds: d.random().then_some(seeds),
