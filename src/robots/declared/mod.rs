@@ -10,6 +10,7 @@ pub mod expr;
 pub mod kinematics;
 pub mod physics;
 pub mod plan;
+pub mod rates;
 
 use crate::echo::code;
 use crate::engine::perturb::Exposure;
@@ -68,7 +69,9 @@ pub struct DeclaredConfig {
     #[serde(default)]
     pub drive_position: BTreeMap<String, String>,
     /// Where each state is read in the simulation: `LINK.x`, `.y`, `.z`,
-    /// `.roll`, `.pitch`, `.yaw`, or `JOINT.position`.
+    /// `.roll`, `.pitch`, `.yaw` (world frame), `LINK.vx`, `.vy`, `.vz`
+    /// (m/s), `.wx`, `.wy`, `.wz` (rad/s; the link frame's velocity in its
+    /// own axes), `JOINT.position` or `JOINT.velocity`.
     pub read: BTreeMap<String, String>,
     /// Per-input bound on |u| for built-in leg planners (default 1 each).
     #[serde(default)]

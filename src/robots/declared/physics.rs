@@ -9,7 +9,10 @@
 //!   `[model.drive_position]`: a position servo at the value (rad or m),
 //!   within the joint's limits (steering).
 //! * **Read-back** (`[model.read]`): `LINK.x|y|z|roll|pitch|yaw` (the link
-//!   frame's origin and orientation in the world) or `JOINT.position`.
+//!   frame's origin and orientation in the world), `LINK.vx|vy|vz|wx|wy|wz`
+//!   (its velocity in its own axes, [`crate::robots::declared::rates`]),
+//!   `JOINT.position` or `JOINT.velocity`. The drive expressions see this
+//!   read-back state, after the last step.
 //!   Angles are unwrapped continuously.
 //! * **Start**: the state's reads on the root body (x, y, yaw of links fixed
 //!   to the root) place the robot, its lowest collision on the ground; a
@@ -42,7 +45,15 @@ pub enum Read {
     Link(String, LinkCoord),
     /// A joint's position (`JOINT.position`).
     Joint(String),
+    /// A link frame's velocity in its own axes: `vx`, `vy`, `vz` (m/s, of
+    /// the frame's origin) or `wx`, `wy`, `wz` (rad/s); index 0 to 5.
+    LinkVelocity(String, usize),
+    /// A joint's velocity (`JOINT.velocity`, rad/s or m/s).
+    JointVelocity(String),
 }
+
+/// The velocity components of a link read, in order.
+const LINK_VELOCITIES: [&str; 6] = ["vx", "vy", "vz", "wx", "wy", "wz"];
 
 /// A coordinate of a link frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -62,11 +73,12 @@ pub enum LinkCoord {
 }
 
 impl Read {
-    /// `LINK.x|y|z|roll|pitch|yaw` or `JOINT.position`.
+    /// `LINK.x|y|z|roll|pitch|yaw|vx|vy|vz|wx|wy|wz` or
+    /// `JOINT.position|velocity`.
     pub fn parse(s: &str) -> Result<Read, SetupError> {
         let shown = crate::echo::code(s);
         let (name, what) = s.rsplit_once('.').ok_or_else(|| {
-            format!("{shown}: expected LINK.x|y|z|roll|pitch|yaw or JOINT.position")
+            format!("{shown}: expected LINK.x|y|z|roll|pitch|yaw|vx|vy|vz|wx|wy|wz or JOINT.position|velocity")
         })?;
         if name.is_empty() {
             return Err(SetupError::other(format!(
@@ -82,9 +94,14 @@ impl Read {
             "pitch" => LinkCoord::Pitch,
             "yaw" => LinkCoord::Yaw,
             "position" => return Ok(Read::Joint(name.to_string())),
+            "velocity" => return Ok(Read::JointVelocity(name.to_string())),
+            v if LINK_VELOCITIES.contains(&v) => {
+                let k = LINK_VELOCITIES.iter().position(|x| *x == v).unwrap_or(0);
+                return Ok(Read::LinkVelocity(name.to_string(), k));
+            }
             _ => {
                 return Err(SetupError::other(format!(
-                "{shown}: `.{}` is not a coordinate (LINK.x|y|z|roll|pitch|yaw or JOINT.position)",
+                "{shown}: `.{}` is not a coordinate (LINK.x|y|z|roll|pitch|yaw|vx|vy|vz|wx|wy|wz or JOINT.position|velocity)",
                 crate::echo::bare(what)
             )))
             }
@@ -100,6 +117,8 @@ impl Read {
                 .joints
                 .iter()
                 .any(|x| x.name == *j && x.joint_type != JointType::Prismatic),
+            // A rate is not wrapped.
+            Read::LinkVelocity(..) | Read::JointVelocity(_) => false,
         }
     }
 }
@@ -126,6 +145,8 @@ pub struct Rig {
 enum Source {
     Link(RigidBodyHandle, RPose, LinkCoord),
     Joint(ImpulseJointHandle),
+    LinkVelocity(RigidBodyHandle, RPose, usize),
+    JointVelocity(ImpulseJointHandle),
 }
 
 /// The declared model in Rapier.
@@ -174,13 +195,15 @@ impl DeclaredPhysics {
         for (s, rd) in rig.states.iter().zip(&rig.reads) {
             let key = format!("model.read.{s}");
             match rd {
-                Read::Link(l, _) if !robot.links.iter().any(|x| x.name == *l) => {
+                Read::Link(l, _) | Read::LinkVelocity(l, _)
+                    if !robot.links.iter().any(|x| x.name == *l) =>
+                {
                     return Err(SetupError::key(
                         &key,
                         format!("URDF has no link {}", crate::echo::code(l)),
                     ))
                 }
-                Read::Joint(j) => match joint(robot, j) {
+                Read::Joint(j) | Read::JointVelocity(j) => match joint(robot, j) {
                     None => {
                         return Err(SetupError::key(
                             &key,
@@ -313,6 +336,14 @@ impl DeclaredPhysics {
                     sw.set_joint_position(h, v)?;
                     Source::Joint(h)
                 }
+                // The robot starts at rest: a rate's start is what it reads.
+                Read::LinkVelocity(l, k) => {
+                    let (body, off) = sw.require_frame(l).map_err(|e| e.under_key(&key))?;
+                    Source::LinkVelocity(body, off, *k)
+                }
+                Read::JointVelocity(j) => {
+                    Source::JointVelocity(sw.require_joint(j).map_err(|e| e.under_key(&key))?)
+                }
             });
         }
         let mut reading = UrdfReading::default();
@@ -383,6 +414,12 @@ impl DeclaredPhysics {
                 }
             }
             Source::Joint(h) => self.sim.joint_position(*h).unwrap_or(f64::NAN),
+            Source::LinkVelocity(b, off, k) => {
+                crate::robots::declared::rates::link_velocity(&self.sim, *b, off, *k)
+            }
+            Source::JointVelocity(h) => {
+                crate::robots::declared::rates::joint_velocity(&self.sim, *h).unwrap_or(f64::NAN)
+            }
         }
     }
 
