@@ -53,7 +53,7 @@ pub fn default_caps(prep: &Prepared, d: Dimension) -> Option<DefaultCaps> {
         .map(|x| x.joint.clone())
         .collect();
     // A model that reads no drives caps them all at the settings' value.
-    (!joints.is_empty() || drives.is_empty()).then(|| DefaultCaps {
+    (!joints.is_empty() || drives.is_empty()).then_some(DefaultCaps {
         cap: sc.sim.motor_max_torque,
         joints,
     })

@@ -18,6 +18,7 @@
 
 pub mod caps;
 pub mod early;
+pub mod jumps;
 mod gate;
 pub mod level;
 pub mod output;
@@ -179,6 +180,9 @@ pub struct DimensionResult {
     /// The metric plotted against the level: the first broken gate, or the
     /// gate nearest its bound when nothing broke.
     pub breaking_metric: Option<String>,
+    /// Gated metrics that jump between neighbouring levels ([`jumps`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub jumps: Vec<jumps::Jump>,
     /// The default torque caps a torque or mass margin is measured against.
     #[serde(skip_serializing_if = "Option::is_none")]
     pub default_caps: Option<caps::DefaultCaps>,
@@ -231,6 +235,7 @@ impl DimensionResult {
                 .collect();
             notes.push(format!("NON-MONOTONE: {}", pairs.join("; ")));
         }
+        notes.extend(self.jumps.iter().take(2).map(jumps::Jump::note));
         if let Some(c) = &self.default_caps {
             notes.push(c.note());
         }
@@ -349,6 +354,12 @@ pub fn search_dimension(
         inversions: outcome.inversions.iter().map(|(a, b)| [*a, *b]).collect(),
         first_broken,
         breaking_metric,
+        jumps: ctx
+            .gates
+            .iter()
+            .filter(|g| !g.metric.starts_with("ideal_"))
+            .flat_map(|g| jumps::jumps(&levels, g, s.resolution))
+            .collect(),
         default_caps: caps::default_caps(ctx.prep, d),
         runs,
         rounds: outcome.rounds,
