@@ -114,7 +114,12 @@ mod tests {
         assert_eq!(j.len(), 1, "{j:?}");
         assert_eq!(j[0].from, [0.94, 0.003]);
         assert_eq!(j[0].to, [0.96, 0.5]);
-        assert!(j[0].note().starts_with("JUMP: m 0.003 → 0.5 between 0.94 and 0.96"), "{}", j[0].note());
+        assert!(
+            j[0].note()
+                .starts_with("JUMP: m 0.003 → 0.5 between 0.94 and 0.96"),
+            "{}",
+            j[0].note()
+        );
         // Far apart (the doubling phase): not neighbours.
         let far = vec![level(0.2, 0.001), level(0.4, 0.5)];
         assert!(jumps(&far, &gate, 0.05).is_empty());

@@ -18,8 +18,8 @@
 
 pub mod caps;
 pub mod early;
-pub mod jumps;
 mod gate;
+pub mod jumps;
 pub mod level;
 pub mod output;
 pub mod search;
