@@ -335,7 +335,7 @@ fn settle_baselines(
                 b,
                 o,
                 &p.scenario.regression,
-                |m| baseline::direction(m),
+                baseline::direction,
                 |m| baseline::floor_of(&p.scenario, &spec, m),
             );
             deltas[k] = Some(d);
