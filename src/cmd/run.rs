@@ -331,13 +331,9 @@ fn settle_baselines(
             }
         } else if let Some(b) = &baselines[*i] {
             let spec = anholonomy::compare::metric_spec(p.system.model());
-            let d = baseline::compare(
-                b,
-                o,
-                &p.scenario.regression,
-                baseline::direction,
-                |m| baseline::floor_of(&p.scenario, &spec, m),
-            );
+            let d = baseline::compare(b, o, &p.scenario.regression, baseline::direction, |m| {
+                baseline::floor_of(&p.scenario, &spec, m)
+            });
             deltas[k] = Some(d);
         }
         if let Err(e) = record_regression(o, deltas[k].as_deref()) {

@@ -5,6 +5,7 @@
 
 use crate::margin::level::Gate;
 use crate::margin::Level;
+use crate::metric::Family;
 use serde::Serialize;
 
 /// A jump of a gated metric between two neighbouring levels.
@@ -42,7 +43,9 @@ const SHARE: f64 = 0.5;
 
 /// The jumps of `gate`'s metric over `levels` (searched levels; the nominal
 /// run, level 0, has no neighbour at a relative spacing). A level's value
-/// is the mean over its runs of the metric where finite.
+/// is the mean over its runs of the metric where finite; a run stopped
+/// early counts only for a running maximum or minimum (its prefix value is
+/// a bound of the whole run's; an end value of a prefix is not).
 pub fn jumps(levels: &[Level], gate: &Gate, resolution: f64) -> Vec<Jump> {
     let mut pts: Vec<[f64; 2]> = levels
         .iter()
@@ -51,6 +54,10 @@ pub fn jumps(levels: &[Level], gate: &Gate, resolution: f64) -> Vec<Jump> {
             let v: Vec<f64> = l
                 .runs
                 .iter()
+                .filter(|r| {
+                    r.stopped_at_s.is_none()
+                        || matches!(gate.family, Family::RunningMax | Family::RunningMin)
+                })
                 .filter_map(|r| r.gates.get(&gate.metric).copied())
                 .filter(|x| x.is_finite())
                 .collect();
@@ -73,9 +80,12 @@ pub fn jumps(levels: &[Level], gate: &Gate, resolution: f64) -> Vec<Jump> {
 mod tests {
     use super::*;
     use crate::margin::level::Run;
-    use crate::metric::Family;
 
     fn level(at: f64, v: f64) -> Level {
+        stopped(at, v, None)
+    }
+
+    fn stopped(at: f64, v: f64, stop: Option<f64>) -> Level {
         Level {
             level: at,
             value: 1.0 - at,
@@ -87,7 +97,7 @@ mod tests {
                 passed: true,
                 broken: Vec::new(),
                 gates: [("m".to_string(), v)].into_iter().collect(),
-                stopped_at_s: None,
+                stopped_at_s: stop,
                 steps: 0,
                 error: None,
                 cpu_s: 0.0,
@@ -120,6 +130,15 @@ mod tests {
             "{}",
             j[0].note()
         );
+        // A run stopped early: its end value is a prefix's, not compared;
+        // a running maximum's is.
+        let early = vec![level(0.94, 0.003), stopped(0.96, 0.5, Some(1.0))];
+        assert!(jumps(&early, &gate, 0.05).is_empty());
+        let running = Gate {
+            family: Family::RunningMax,
+            ..gate.clone()
+        };
+        assert_eq!(jumps(&early, &running, 0.05).len(), 1);
         // Far apart (the doubling phase): not neighbours.
         let far = vec![level(0.2, 0.001), level(0.4, 0.5)];
         assert!(jumps(&far, &gate, 0.05).is_empty());
