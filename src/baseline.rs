@@ -20,8 +20,16 @@
 //! A metric regresses when it is worse than its baseline by more than
 //! `max(abs, rel · |baseline|)`; better by more than that is reported as an
 //! improvement and never fails; informational metrics are reported when they
-//! change. Defaults [`crate::scenario::regression::DEFAULT_REL`], [`crate::scenario::regression::DEFAULT_ABS`]; a scenario's
-//! `[regression]` table overrides them, for all its metrics or per metric.
+//! change. `rel` defaults to [`crate::scenario::regression::DEFAULT_REL`];
+//! `abs`, the metric's floor, to
+//! [`crate::scenario::regression::default_floor`]: 10 % of the metric's
+//! gate, else its unit's floor. A scenario's `[regression]` table overrides
+//! both, for all its metrics or per metric.
+//!
+//! # Meaning
+//!
+//! Metrics that mean nothing for a run ([`RunOutcome::meaningful`], n/a in
+//! the results table) are neither written nor compared.
 //!
 //! NaN: NaN now with a finite baseline is a regression (e.g. a time to goal
 //! that is no longer reached); a finite value with a NaN baseline is an
@@ -58,6 +66,18 @@ pub struct Baseline {
     pub metrics: BTreeMap<String, f64>,
 }
 
+/// The default absolute floor of metric `name` in scenario `sc` (module
+/// docs): its gate is its `[thresholds]` or `[minimums]` value; `spec`
+/// gives its unit.
+pub fn floor_of(
+    sc: &crate::scenario::Scenario,
+    spec: &crate::compare::MetricSpec<'_>,
+    name: &str,
+) -> f64 {
+    let gate = sc.thresholds.get(name).or(sc.minimums.get(name)).copied();
+    crate::scenario::regression::default_floor(gate, crate::robots::metric_unit(name, spec))
+}
+
 /// `<dir>/<scenario>.json`.
 pub fn path_for(dir: &Path, scenario: &str) -> PathBuf {
     dir.join(format!("{scenario}.json"))
@@ -69,7 +89,12 @@ impl Baseline {
         Baseline {
             scenario: o.name.clone(),
             planner: o.planner.clone(),
-            metrics: o.metrics.iter().cloned().collect(),
+            metrics: o
+                .metrics
+                .iter()
+                .filter(|(k, _)| o.meaningful(k))
+                .cloned()
+                .collect(),
         }
     }
 
@@ -333,22 +358,36 @@ pub(crate) fn change_text(base: Option<f64>, now: Option<f64>) -> String {
     }
 }
 
-/// Compare a run with its baseline; `dir` gives each metric's direction.
+/// Compare a run with its baseline; `dir` gives each metric's direction,
+/// `floor` its default absolute floor
+/// ([`crate::scenario::regression::default_floor`]). Metrics that mean
+/// nothing for the run are left out on both sides.
 pub fn compare(
     base: &Baseline,
     o: &RunOutcome,
     cfg: &RegressionConfig,
     dir: impl Fn(&str) -> Direction,
+    floor: impl Fn(&str) -> f64,
 ) -> Vec<Delta> {
-    let now: BTreeMap<&str, f64> = o.metrics.iter().map(|(k, v)| (k.as_str(), *v)).collect();
-    let mut names: Vec<&str> = base.metrics.keys().map(String::as_str).collect();
+    let now: BTreeMap<&str, f64> = o
+        .metrics
+        .iter()
+        .filter(|(k, _)| o.meaningful(k))
+        .map(|(k, v)| (k.as_str(), *v))
+        .collect();
+    let mut names: Vec<&str> = base
+        .metrics
+        .keys()
+        .map(String::as_str)
+        .filter(|k| o.meaningful(k))
+        .collect();
     names.extend(now.keys().filter(|k| !base.metrics.contains_key(**k)));
     names.sort_unstable();
     names
         .into_iter()
         .map(|m| {
             let d = dir(m);
-            let (rel, abs) = cfg.tolerance(m);
+            let (rel, abs) = cfg.tolerance(m, floor(m));
             let (b, n) = (base.metrics.get(m).copied(), now.get(m).copied());
             let (status, tolerance) = match (b, n) {
                 (Some(b), Some(n)) => judge(d, b, n, rel, abs),
@@ -452,6 +491,7 @@ mod tests {
             &outcome(&[("a", 1.0), ("c", 3.0)]),
             &RegressionConfig::default(),
             |_: &str| LowerIsBetter,
+            |_: &str| DEFAULT_ABS,
         );
         let st: Vec<(&str, Status)> = d.iter().map(|d| (d.metric.as_str(), d.status)).collect();
         assert_eq!(
@@ -465,13 +505,74 @@ mod tests {
     }
 
     #[test]
+    fn na_metrics_are_neither_written_nor_compared() {
+        let mut o = outcome(&[("sim_goal_position", 1e-3), ("tracking_x_max", 4e-3)]);
+        o.tracking_meaningful = false;
+        let b = Baseline::from_outcome(&o);
+        assert_eq!(b.metrics.keys().collect::<Vec<_>>(), ["sim_goal_position"]);
+        // A baseline written before still holds it: not compared, not missing.
+        let mut old = b.clone();
+        old.metrics.insert("tracking_x_max".into(), 1e-3);
+        let mut now = o;
+        now.metrics.push(("tracking_y_max".into(), 9.0));
+        let d = compare(&old, &now, &RegressionConfig::default(), direction, |_| {
+            1e-9
+        });
+        let names: Vec<&str> = d.iter().map(|d| d.metric.as_str()).collect();
+        assert_eq!(names, ["sim_goal_position"]);
+        assert_eq!(d[0].status, Status::Unchanged);
+    }
+
+    #[test]
+    fn floors_come_from_the_gate_else_the_unit() {
+        use crate::scenario::regression::{default_floor, unit_floor};
+        assert_eq!(unit_floor("m"), 1e-4);
+        assert_eq!(unit_floor("°"), 0.01);
+        assert_eq!(unit_floor("m/s"), 1e-3);
+        assert_eq!(unit_floor("s"), 0.01);
+        assert_eq!(unit_floor(""), DEFAULT_ABS);
+        // A gate of 5 mm/s: changes below 0.5 mm/s never regress.
+        assert!((default_floor(Some(0.005), "m/s") - 5e-4).abs() < 1e-15);
+        assert_eq!(default_floor(Some(f64::INFINITY), "s"), 0.01);
+        assert_eq!(default_floor(Some(0.0), "m"), 1e-4);
+        // The worked example of docs/src/operations/ci-gates.md: lateral
+        // slip 1.1 → 1.5 mm/s under a 5 mm/s gate is unchanged (0.4 < 0.5),
+        // 1.1 → 2.3 mm/s regresses; a goal 0.05 mm further off is unchanged
+        // (0.1 mm floor) although it is +500 %.
+        let slip = default_floor(Some(0.005), "m/s");
+        assert_eq!(
+            judge(LowerIsBetter, 1.1e-3, 1.5e-3, DEFAULT_REL, slip).0,
+            Status::Unchanged
+        );
+        assert_eq!(
+            judge(LowerIsBetter, 1.1e-3, 2.3e-3, DEFAULT_REL, slip).0,
+            Status::Regressed
+        );
+        let goal = default_floor(None, "m");
+        assert_eq!(
+            judge(LowerIsBetter, 1e-5, 6e-5, DEFAULT_REL, goal).0,
+            Status::Unchanged
+        );
+        // A 13 % longer time to goal without a gate: 10 ms floor, 2 % of 15.2 s.
+        let t = default_floor(None, "s");
+        assert_eq!(
+            judge(LowerIsBetter, 15.2, 15.2 * 1.13, DEFAULT_REL, t).0,
+            Status::Regressed
+        );
+        assert_eq!(
+            judge(LowerIsBetter, 15.2, 15.2 * 1.01, DEFAULT_REL, t).0,
+            Status::Unchanged
+        );
+    }
+
+    #[test]
     fn per_metric_override_beats_scenario_beats_default() {
         let cfg: RegressionConfig =
             toml::from_str("rel = 0.5\nmetrics.x = { abs = 2.0 }\n").unwrap();
-        assert_eq!(cfg.tolerance("x"), (0.5, 2.0));
-        assert_eq!(cfg.tolerance("y"), (0.5, DEFAULT_ABS));
+        assert_eq!(cfg.tolerance("x", 1e-4), (0.5, 2.0));
+        assert_eq!(cfg.tolerance("y", 1e-4), (0.5, 1e-4));
         assert_eq!(
-            RegressionConfig::default().tolerance("y"),
+            RegressionConfig::default().tolerance("y", DEFAULT_ABS),
             (DEFAULT_REL, DEFAULT_ABS)
         );
         assert!(toml::from_str::<RegressionConfig>("bogus = 1").is_err());

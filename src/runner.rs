@@ -162,6 +162,12 @@ impl RunOutcome {
     pub fn metric(&self, name: &str) -> Option<f64> {
         crate::metric::find(&self.metrics, name)
     }
+
+    /// Whether metric `name` means anything for this run: the results table
+    /// shows n/a, and baselines neither write nor compare, the ones that do not.
+    pub fn meaningful(&self, name: &str) -> bool {
+        self.tracking_meaningful || !name.starts_with("tracking_")
+    }
 }
 
 /// Why the `tracking_*` metrics of a run mean nothing, when they do not.

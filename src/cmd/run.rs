@@ -330,7 +330,10 @@ fn settle_baselines(
                 errors.push(Error::Log { path, message: m });
             }
         } else if let Some(b) = &baselines[*i] {
-            let d = baseline::compare(b, o, &p.scenario.regression, baseline::direction);
+            let spec = anholonomy::compare::metric_spec(p.system.model());
+            let d = baseline::compare(b, o, &p.scenario.regression, baseline::direction, |m| {
+                baseline::floor_of(&p.scenario, &spec, m)
+            });
             deltas[k] = Some(d);
         }
         if let Err(e) = record_regression(o, deltas[k].as_deref()) {

@@ -104,6 +104,8 @@ pub fn check_gate(
         inversions: Vec::new(),
         first_broken,
         breaking_metric,
+        jumps: Vec::new(),
+        default_caps: super::caps::default_caps(ctx.prep, d),
         runs: runs.len(),
         rounds: usize::from(!runs.is_empty()),
         seeds: d.random().then_some(seeds),

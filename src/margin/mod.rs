@@ -16,8 +16,10 @@
 //! each ([`gate`]: not a search), and report it as a metric
 //! `margin_<dimension>`, so baselines hold them too.
 
+pub mod caps;
 pub mod early;
 mod gate;
+pub mod jumps;
 pub mod level;
 pub mod output;
 pub mod search;
@@ -178,6 +180,12 @@ pub struct DimensionResult {
     /// The metric plotted against the level: the first broken gate, or the
     /// gate nearest its bound when nothing broke.
     pub breaking_metric: Option<String>,
+    /// Gated metrics that jump between neighbouring levels ([`jumps`]).
+    #[serde(skip_serializing_if = "Vec::is_empty")]
+    pub jumps: Vec<jumps::Jump>,
+    /// The default torque caps a torque or mass margin is measured against.
+    #[serde(skip_serializing_if = "Option::is_none")]
+    pub default_caps: Option<caps::DefaultCaps>,
     /// Physics runs, nominal excluded.
     pub runs: usize,
     /// Rounds of parallel runs.
@@ -226,6 +234,10 @@ impl DimensionResult {
                 })
                 .collect();
             notes.push(format!("NON-MONOTONE: {}", pairs.join("; ")));
+        }
+        notes.extend(self.jumps.iter().take(2).map(jumps::Jump::note));
+        if let Some(c) = &self.default_caps {
+            notes.push(c.note());
         }
         notes.join("; ")
     }
@@ -342,6 +354,13 @@ pub(crate) fn search_dimension(
         inversions: outcome.inversions.iter().map(|(a, b)| [*a, *b]).collect(),
         first_broken,
         breaking_metric,
+        jumps: ctx
+            .gates
+            .iter()
+            .filter(|g| !g.metric.starts_with("ideal_"))
+            .flat_map(|g| jumps::jumps(&levels, g, s.resolution))
+            .collect(),
+        default_caps: caps::default_caps(ctx.prep, d),
         runs,
         rounds: outcome.rounds,
         seeds: d.random().then_some(seeds),

@@ -9,9 +9,34 @@ use std::collections::BTreeMap;
 /// Default relative tolerance (why 2 %: docs/src/operations/ci-gates.md).
 pub const DEFAULT_REL: f64 = 0.02;
 
-/// Default absolute tolerance, in the metric's own unit; below any meaningful
-/// value of every metric (m, deg, fractions, counts, kg m²/s).
+/// Absolute floor of a metric with neither a gate nor a unit floor
+/// (fractions, counts, ratios), in its own unit.
 pub const DEFAULT_ABS: f64 = 1e-9;
+
+/// Share of a metric's gate (its `[thresholds]` or `[minimums]` value) below
+/// which a change is never a regression (why: docs/src/operations/ci-gates.md).
+pub const GATE_SHARE: f64 = 0.1;
+
+/// The floor of a metric without a gate, by the unit written after its
+/// values: 0.1 mm, 0.01°, 1 mm/s, 10 ms; [`DEFAULT_ABS`] for any other unit.
+pub fn unit_floor(unit: &str) -> f64 {
+    match unit {
+        "m" => 1e-4,
+        "°" => 0.01,
+        "m/s" => 1e-3,
+        "s" => 0.01,
+        _ => DEFAULT_ABS,
+    }
+}
+
+/// A metric's default absolute floor: [`GATE_SHARE`] of its gate when it
+/// has a finite, non-zero one, else its [`unit_floor`].
+pub fn default_floor(gate: Option<f64>, unit: &str) -> f64 {
+    match gate {
+        Some(g) if g.is_finite() && g != 0.0 => GATE_SHARE * g.abs(),
+        _ => unit_floor(unit),
+    }
+}
 
 /// A relative and an absolute tolerance; unset fields fall back to the level above.
 #[derive(Debug, Clone, Copy, Default, PartialEq, Deserialize, Serialize, JsonSchema)]
@@ -20,7 +45,7 @@ pub struct Tolerance {
     /// Relative to |baseline|.
     #[schemars(range(min = 0))]
     pub rel: Option<f64>,
-    /// In the metric's unit.
+    /// Absolute floor, in the metric's unit (replaces the default floor).
     #[schemars(range(min = 0))]
     pub abs: Option<f64>,
 }
@@ -38,7 +63,8 @@ pub struct RegressionConfig {
     /// Relative tolerance for every metric.
     #[schemars(range(min = 0))]
     pub rel: Option<f64>,
-    /// Absolute tolerance for every metric.
+    /// Absolute floor for every metric, in each metric's unit (replaces the
+    /// default floor: 10 % of the metric's gate, else its unit's floor).
     #[schemars(range(min = 0))]
     pub abs: Option<f64>,
     /// Per-metric overrides.
@@ -72,12 +98,13 @@ impl RegressionConfig {
             .map(String::as_str)
     }
 
-    /// `(rel, abs)` for a metric.
-    pub fn tolerance(&self, metric: &str) -> (f64, f64) {
+    /// `(rel, abs)` for a metric whose default floor is `floor`
+    /// ([`default_floor`]): the overrides win over it.
+    pub fn tolerance(&self, metric: &str, floor: f64) -> (f64, f64) {
         let t = self.metrics.get(metric).copied().unwrap_or_default();
         (
             t.rel.or(self.rel).unwrap_or(DEFAULT_REL),
-            t.abs.or(self.abs).unwrap_or(DEFAULT_ABS),
+            t.abs.or(self.abs).unwrap_or(floor),
         )
     }
 }

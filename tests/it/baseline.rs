@@ -245,6 +245,9 @@ fn regression_table_keys_are_checked() {
     fixture(dir, "", "[regression]\nrelative = 0.1\n");
     let o = cli(dir, &["run", "s.toml", "--logs", "logs"]);
     one_line_input_error(&o, "relative");
+    fixture(dir, "", "[regression]\nabs = -0.001\n");
+    let o = cli(dir, &["run", "s.toml", "--logs", "logs"]);
+    one_line_input_error(&o, "key `regression.abs`: must be");
 }
 
 #[test]
@@ -258,4 +261,102 @@ fn shipped_baselines_match_their_scenarios() {
             .unwrap_or_else(|e| panic!("{e}"));
         assert!(!b.metrics.is_empty(), "{}", path.display());
     }
+    // A feedback law's tracking metrics are n/a: not in its baseline.
+    let path = root().join("baselines/diff_drive_go_to_pose.json");
+    let text = std::fs::read_to_string(&path).unwrap();
+    assert!(text.contains("sim_goal_position"), "{text}");
+    assert!(!text.contains("tracking_"), "{text}");
+}
+
+/// The value of `metric` in baseline file `file`, replaced by `f(value)`.
+fn edit_baseline(file: &Path, metric: &str, f: impl Fn(f64) -> f64) -> f64 {
+    let text = std::fs::read_to_string(file).unwrap();
+    let mut v: serde_json::Value = serde_json::from_str(&text).unwrap();
+    let x = v["metrics"][metric]
+        .as_f64()
+        .unwrap_or_else(|| panic!("{metric} in {text}"));
+    v["metrics"][metric] = serde_json::json!(f(x));
+    std::fs::write(file, serde_json::to_string_pretty(&v).unwrap()).unwrap();
+    x
+}
+
+#[test]
+fn changes_below_the_floor_pass_a_longer_time_to_goal_fails() {
+    let d = tempfile::tempdir().unwrap();
+    let dir = d.path();
+    // A gate on the goal distance (10 mm: floor 1 mm); none on the clearance-free
+    // tracking metrics (unit floor 0.1 mm) or the time to goal (10 ms).
+    fixture(dir, "", "[thresholds]\nsim_goal_position = 0.01\n");
+    let args = [
+        "check",
+        "s.toml",
+        "--baseline",
+        "base",
+        "--no-logs",
+        "--quiet",
+    ];
+    let mut write = args.to_vec();
+    write.push("--update-baseline");
+    let o = cli(dir, &write);
+    assert_eq!(o.status.code(), Some(0), "{:?}", text(&o));
+    let file = dir.join("base/disk_fixture.json");
+    let pristine = std::fs::read_to_string(&file).unwrap();
+
+    // Worse by 0.9 mm under a 10 mm gate, and by 0.09 mm on an ungated
+    // length: both far beyond 2 %, both below their floors.
+    let g = edit_baseline(&file, "sim_goal_position", |x| (x - 9e-4).max(0.0));
+    assert!(
+        g >= 9e-4 && 9e-4 > 0.02 * g,
+        "goal error {g}: pick another margin"
+    );
+    let t = edit_baseline(&file, "tracking_position_final", |x| x - 9e-5);
+    assert!(t > 9e-5 && 9e-5 > 0.02 * (t - 9e-5), "tracking {t}");
+    let o = cli(dir, &args);
+    let (out, err) = text(&o);
+    assert_eq!(o.status.code(), Some(0), "{out}\n{err}");
+
+    // A 13 % longer time to goal still fails (the shipped car parking run,
+    // no gate on its time: 10 ms floor, 2 % of 12.7 s).
+    let car = root().join("scenarios/car_parking.toml");
+    let car = car.to_str().unwrap();
+    let o = cli(
+        dir,
+        &[
+            "baseline",
+            car,
+            "--baseline",
+            "cars",
+            "--no-logs",
+            "--quiet",
+        ],
+    );
+    assert_eq!(o.status.code(), Some(0), "{:?}", text(&o));
+    let cars = dir.join("cars/car_parking.json");
+    let tt = edit_baseline(&cars, "sim_time_to_goal", |x| x / 1.13);
+    assert!(tt.is_finite() && tt > 1.0, "time to goal {tt}");
+    let car_check = ["check", car, "--baseline", "cars", "--no-logs", "--quiet"];
+    let o = cli(dir, &car_check);
+    let (out, err) = text(&o);
+    assert_eq!(o.status.code(), Some(1), "{out}\n{err}");
+    let rows: Vec<&str> = out.lines().filter(|l| l.contains("REGRESSED")).collect();
+    assert_eq!(rows.len(), 1, "{out}");
+    assert!(rows[0].contains("sim_time_to_goal"), "{out}");
+    // 1 % longer: within 2 %.
+    edit_baseline(&cars, "sim_time_to_goal", |_| tt / 1.01);
+    let o = cli(dir, &car_check);
+    assert_eq!(o.status.code(), Some(0), "{:?}", text(&o));
+
+    // `[regression]` overrides keep working: a relative tolerance of 1e6 on
+    // the disk's tracking error accepts a tenfold one.
+    std::fs::write(&file, &pristine).unwrap();
+    edit_baseline(&file, "tracking_position_final", |x| x / 10.0);
+    let o = cli(dir, &args);
+    assert_eq!(o.status.code(), Some(1), "{:?}", text(&o));
+    fixture(
+        dir,
+        "",
+        "[thresholds]\nsim_goal_position = 0.01\n[regression]\nmetrics.tracking_position_final = { rel = 1e6 }\n",
+    );
+    let o = cli(dir, &args);
+    assert_eq!(o.status.code(), Some(0), "{:?}", text(&o));
 }

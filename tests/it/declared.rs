@@ -349,3 +349,116 @@ fn a_non_finite_equation_stops_the_run_naming_the_state_and_time() {
     assert!(dir.path().join("logs/a/summary.json").is_file(), "{stderr}");
     assert!(!stderr.contains("panicked"));
 }
+
+/// The trailer pulled through its S curve with wheels of `scale` × their
+/// radius (`[model] wheels` when given): where the physics run ends.
+fn trailer_on_worn_wheels(scale: f64, wheels: &str) -> anholonomy::runner::RunOutcome {
+    let ex = example("trailer");
+    let dir = tempfile::tempdir().unwrap();
+    let text = absolute(
+        &std::fs::read_to_string(ex.join("trailer_forward.toml")).unwrap(),
+        &ex,
+    )
+    .replacen("frictionless = ", &format!("{wheels}\nfrictionless = "), 1)
+        + &format!("\n[sim.perturb]\nwheel_radius_scale = {scale}\n");
+    let path = dir.path().join("worn.toml");
+    std::fs::write(&path, text).unwrap();
+    run_file(&path, None)
+}
+
+#[test]
+fn worn_wheels_keep_a_declared_model_on_the_ground() {
+    // 1 % smaller or larger drive wheels: 1 % less or more travel on a
+    // 1.9 m curve, about 2 cm; wheels in the air would leave the robot
+    // standing (1.6 m short of its end).
+    let nominal = trailer_on_worn_wheels(1.0, "");
+    let base = nominal.metric("tracking_position_final").unwrap();
+    for s in [0.99, 1.01] {
+        let o = trailer_on_worn_wheels(s, "");
+        let d = o.metric("tracking_position_final").unwrap();
+        assert!(d < 0.03 && d > base, "scale {s}: {d} m (nominal {base} m)");
+    }
+    // The drive wheels named: the same robot.
+    let named = trailer_on_worn_wheels(
+        0.99,
+        "wheels = [\"left_wheel_joint\", \"right_wheel_joint\"]",
+    );
+    let found = trailer_on_worn_wheels(0.99, "");
+    assert_eq!(named.metrics, found.metrics);
+}
+
+#[test]
+fn a_wheel_must_be_a_driven_joint() {
+    for wheel in ["hitch", "trailer_left_wheel_joint", "no_such_joint"] {
+        refused(
+            "frictionless = ",
+            &format!("wheels = [\"{wheel}\"]\nfrictionless = "),
+            "model.wheels",
+            "wheels = ",
+        );
+    }
+}
+
+#[test]
+fn declared_models_read_link_and_joint_velocities() {
+    // The declared diff drive with three more states, each integrating
+    // nothing (q' = 0) and read back as a velocity: the tracking error of
+    // each is then the largest velocity the physics run read.
+    let ex = example("declared_diff_drive");
+    let dir = tempfile::tempdir().unwrap();
+    let text = absolute(
+        &std::fs::read_to_string(ex.join("declared_diff_drive.toml")).unwrap(),
+        &ex,
+    )
+    .replace(
+        "start = [0.0, 0.0, 0.0]",
+        "start = [0.0, 0.0, 0.0, 0.0, 0.0, 0.0, 0.0]",
+    )
+    .replace(
+        "goal = [1.43388, 1.11276, 0.0]",
+        "goal = [1.43388, 1.11276, 0.0, 0.0, 0.0, 0.0, 0.0]",
+    )
+    .replace(
+        "states = [\"x\", \"y\", \"theta\"]",
+        "states = [\"x\", \"y\", \"theta\", \"fwd\", \"side\", \"yaw_rate\", \"wheel\"]",
+    )
+    .replace(
+        "theta = \"omega\"\n",
+        "theta = \"omega\"\nfwd = \"0\"\nside = \"0\"\nyaw_rate = \"0\"\nwheel = \"0\"\n",
+    )
+    .replace(
+        "theta = \"base_link.yaw\"\n",
+        "theta = \"base_link.yaw\"\nfwd = \"base_link.vx\"\nside = \"base_link.vy\"\n\
+         yaw_rate = \"base_link.wz\"\nwheel = \"right_wheel_joint.velocity\"\n",
+    );
+    let path = dir.path().join("v.toml");
+    std::fs::write(&path, &text).unwrap();
+    let o = run_file(&path, None);
+    let m = |k: &str| {
+        o.metric(k)
+            .unwrap_or_else(|| panic!("{k}: {:?}", o.metrics))
+    };
+    // The plan (s_curve.csv): 0.25 m/s forward, turns at ±0.8 rad/s; the
+    // outer wheel at (0.25 + 0.8 · 0.13) / 0.05 = 7.08 rad/s. Rolling: no
+    // sideways speed.
+    assert!(
+        (m("tracking_fwd_max") - 0.25).abs() < 0.02,
+        "{}",
+        m("tracking_fwd_max")
+    );
+    assert!(m("tracking_side_max") < 0.01, "{}", m("tracking_side_max"));
+    assert!(
+        (m("tracking_yaw_rate_max") - 0.8).abs() < 0.06,
+        "{}",
+        m("tracking_yaw_rate_max")
+    );
+    assert!(
+        (m("tracking_wheel_max") - 7.08).abs() < 0.3,
+        "{}",
+        m("tracking_wheel_max")
+    );
+    // The shipped example: wheel speeds with a first-order lag, read back
+    // as joint velocities, pass their gates.
+    let o = run_file(&example("declared_diff_drive/speed_lag.toml"), None);
+    assert!(o.passed, "{:?}", o.failures);
+}

@@ -32,6 +32,7 @@ mod layering;
 mod log_roundtrip;
 mod log_unit;
 mod margin;
+mod margin_caps;
 mod metrics;
 mod obstacles;
 mod own_plan_examples;

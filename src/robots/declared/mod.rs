@@ -10,6 +10,7 @@ pub mod expr;
 pub mod kinematics;
 pub mod physics;
 pub mod plan;
+pub mod rates;
 
 use crate::echo::code;
 use crate::engine::perturb::Exposure;
@@ -48,6 +49,11 @@ pub struct DeclaredConfig {
     /// Links whose collisions carry no friction (ideal casters).
     #[serde(default)]
     pub frictionless: Vec<String>,
+    /// The wheels that wear with `[sim.perturb] wheel_radius_scale`, as
+    /// `[model.drive]` joints (default: the driven joints whose child link
+    /// has a round collision on the ground at the start).
+    #[serde(default)]
+    pub wheels: Option<Vec<String>>,
     /// Named numbers the expressions may use (a sweep may vary them:
     /// `model.params.NAME`).
     #[serde(default)]
@@ -63,7 +69,9 @@ pub struct DeclaredConfig {
     #[serde(default)]
     pub drive_position: BTreeMap<String, String>,
     /// Where each state is read in the simulation: `LINK.x`, `.y`, `.z`,
-    /// `.roll`, `.pitch`, `.yaw`, or `JOINT.position`.
+    /// `.roll`, `.pitch`, `.yaw` (world frame), `LINK.vx`, `.vy`, `.vz`
+    /// (m/s), `.wx`, `.wy`, `.wz` (rad/s; the link frame's velocity in its
+    /// own axes), `JOINT.position` or `JOINT.velocity`.
     pub read: BTreeMap<String, String>,
     /// Per-input bound on |u| for built-in leg planners (default 1 each).
     #[serde(default)]
@@ -195,6 +203,25 @@ pub(crate) fn build_planned(
             format!("must be > 0, got {v}"),
         ));
     }
+    if let Some(w) = cfg
+        .wheels
+        .iter()
+        .flatten()
+        .find(|w| !cfg.drive.contains_key(*w))
+    {
+        return Err(SetupError::key(
+            "model.wheels",
+            format!(
+                "{} is not a driven joint: a wheel is a `[model.drive]` joint ({})",
+                code(w),
+                if cfg.drive.is_empty() {
+                    "there are none".to_string()
+                } else {
+                    cfg.drive.keys().cloned().collect::<Vec<_>>().join(", ")
+                }
+            ),
+        ));
+    }
     let names = Declared::slot_names(&cfg.states, &cfg.inputs, &params);
     let expr = |table: &str, key: &str, text: &str| {
         Expr::parse(text, &names).map_err(|e| SetupError::key(format!("model.{table}.{key}"), e))
@@ -234,6 +261,7 @@ pub(crate) fn build_planned(
             drives: drives("drive", &cfg.drive)?,
             positions: drives("drive_position", &cfg.drive_position)?,
             frictionless: cfg.frictionless.clone(),
+            wheels: cfg.wheels.clone(),
         },
         max_rate: cfg
             .inputs
@@ -283,7 +311,8 @@ impl System for DeclaredSystem {
             sim,
         )?))
     }
-    /// Wheels (the children of continuous joints) can wear (`wheel_radius_scale`).
+    /// Its wheels (driven joints rolling on the ground, or `[model] wheels`)
+    /// can wear (`wheel_radius_scale`).
     fn exposure(&self, plan: &Plan) -> Exposure {
         Exposure {
             wheels: true,

@@ -9,7 +9,10 @@
 //!   `[model.drive_position]`: a position servo at the value (rad or m),
 //!   within the joint's limits (steering).
 //! * **Read-back** (`[model.read]`): `LINK.x|y|z|roll|pitch|yaw` (the link
-//!   frame's origin and orientation in the world) or `JOINT.position`.
+//!   frame's origin and orientation in the world), `LINK.vx|vy|vz|wx|wy|wz`
+//!   (its velocity in its own axes, [`crate::robots::declared::rates`]),
+//!   `JOINT.position` or `JOINT.velocity`. The drive expressions see this
+//!   read-back state, after the last step.
 //!   Angles are unwrapped continuously.
 //! * **Start**: the state's reads on the root body (x, y, yaw of links fixed
 //!   to the root) place the robot, its lowest collision on the ground; a
@@ -42,7 +45,15 @@ pub enum Read {
     Link(String, LinkCoord),
     /// A joint's position (`JOINT.position`).
     Joint(String),
+    /// A link frame's velocity in its own axes: `vx`, `vy`, `vz` (m/s, of
+    /// the frame's origin) or `wx`, `wy`, `wz` (rad/s); index 0 to 5.
+    LinkVelocity(String, usize),
+    /// A joint's velocity (`JOINT.velocity`, rad/s or m/s).
+    JointVelocity(String),
 }
+
+/// The velocity components of a link read, in order.
+const LINK_VELOCITIES: [&str; 6] = ["vx", "vy", "vz", "wx", "wy", "wz"];
 
 /// A coordinate of a link frame.
 #[derive(Debug, Clone, Copy, PartialEq)]
@@ -62,11 +73,12 @@ pub enum LinkCoord {
 }
 
 impl Read {
-    /// `LINK.x|y|z|roll|pitch|yaw` or `JOINT.position`.
+    /// `LINK.x|y|z|roll|pitch|yaw|vx|vy|vz|wx|wy|wz` or
+    /// `JOINT.position|velocity`.
     pub fn parse(s: &str) -> Result<Read, SetupError> {
         let shown = crate::echo::code(s);
         let (name, what) = s.rsplit_once('.').ok_or_else(|| {
-            format!("{shown}: expected LINK.x|y|z|roll|pitch|yaw or JOINT.position")
+            format!("{shown}: expected LINK.x|y|z|roll|pitch|yaw|vx|vy|vz|wx|wy|wz or JOINT.position|velocity")
         })?;
         if name.is_empty() {
             return Err(SetupError::other(format!(
@@ -82,9 +94,14 @@ impl Read {
             "pitch" => LinkCoord::Pitch,
             "yaw" => LinkCoord::Yaw,
             "position" => return Ok(Read::Joint(name.to_string())),
+            "velocity" => return Ok(Read::JointVelocity(name.to_string())),
+            v if LINK_VELOCITIES.contains(&v) => {
+                let k = LINK_VELOCITIES.iter().position(|x| *x == v).unwrap_or(0);
+                return Ok(Read::LinkVelocity(name.to_string(), k));
+            }
             _ => {
                 return Err(SetupError::other(format!(
-                "{shown}: `.{}` is not a coordinate (LINK.x|y|z|roll|pitch|yaw or JOINT.position)",
+                "{shown}: `.{}` is not a coordinate (LINK.x|y|z|roll|pitch|yaw|vx|vy|vz|wx|wy|wz or JOINT.position|velocity)",
                 crate::echo::bare(what)
             )))
             }
@@ -100,6 +117,8 @@ impl Read {
                 .joints
                 .iter()
                 .any(|x| x.name == *j && x.joint_type != JointType::Prismatic),
+            // A rate is not wrapped.
+            Read::LinkVelocity(..) | Read::JointVelocity(_) => false,
         }
     }
 }
@@ -117,6 +136,8 @@ pub struct Rig {
     pub positions: Vec<(String, Expr)>,
     /// Links whose collisions carry no friction.
     pub frictionless: Vec<String>,
+    /// `[model] wheels`: the driven joints whose links wear (None: found).
+    pub wheels: Option<Vec<String>>,
 }
 
 /// One read-back, resolved in the world.
@@ -124,6 +145,8 @@ pub struct Rig {
 enum Source {
     Link(RigidBodyHandle, RPose, LinkCoord),
     Joint(ImpulseJointHandle),
+    LinkVelocity(RigidBodyHandle, RPose, usize),
+    JointVelocity(ImpulseJointHandle),
 }
 
 /// The declared model in Rapier.
@@ -172,13 +195,15 @@ impl DeclaredPhysics {
         for (s, rd) in rig.states.iter().zip(&rig.reads) {
             let key = format!("model.read.{s}");
             match rd {
-                Read::Link(l, _) if !robot.links.iter().any(|x| x.name == *l) => {
+                Read::Link(l, _) | Read::LinkVelocity(l, _)
+                    if !robot.links.iter().any(|x| x.name == *l) =>
+                {
                     return Err(SetupError::key(
                         &key,
                         format!("URDF has no link {}", crate::echo::code(l)),
                     ))
                 }
-                Read::Joint(j) => match joint(robot, j) {
+                Read::Joint(j) | Read::JointVelocity(j) => match joint(robot, j) {
                     None => {
                         return Err(SetupError::key(
                             &key,
@@ -222,7 +247,7 @@ impl DeclaredPhysics {
                 ));
             }
         }
-        // Wheels: the children of continuous joints with round collisions.
+        // Rolling links: the children of continuous joints with round collisions.
         let wheels: Vec<&str> = robot
             .joints
             .iter()
@@ -230,10 +255,48 @@ impl DeclaredPhysics {
             .map(|j| j.child.link.as_str())
             .filter(|l| crate::engine::urdf::collision_radius(robot, l).is_some())
             .collect();
-        let worn =
-            crate::engine::perturb::world::worn_wheels(robot, &wheels, sim.wheel_radius_scale);
+        // Worn or mismatched tyres (`wheel_radius_scale`): the wheels'
+        // collisions get the scaled radius, and the robot, placed on its
+        // nominal wheels, starts lower by the wear, on its worn ones (the
+        // wheel that wears least touches, none is below the ground).
+        // The model and the drives keep the nominal radius.
+        let mut root = place_root(robot, rig, start)?;
+        let s = sim.wheel_radius_scale;
+        let worn_links = if s == 1.0 {
+            Vec::new()
+        } else {
+            wearing_wheels(robot, rig, &root)?
+        };
+        let root_nominal = root;
+        let wear = worn_links
+            .iter()
+            .map(|(_, radius)| (1.0 - s) * radius)
+            .min_by(f64::total_cmp);
+        if let Some(wear) = wear {
+            root.translation.z -= r(wear);
+        }
+        let names: Vec<&str> = worn_links.iter().map(|(l, _)| l.as_str()).collect();
+        let mut worn = crate::engine::perturb::world::worn_wheels(robot, &names, s);
+        // Everything else round on the ground (casters, a trailer's
+        // wheels) loses as much, so the robot stays level: a pitch-rigid
+        // chain would otherwise rest on them with its drive wheels in the air.
+        if let Some(wear) = wear {
+            let others: Vec<&str> = touching_round_links(robot, &root_nominal)
+                .into_iter()
+                .filter(|l| !names.contains(l))
+                .collect();
+            if !others.is_empty() {
+                worn = std::borrow::Cow::Owned(
+                    crate::engine::perturb::world::shrink_round_collisions(
+                        &worn,
+                        &others,
+                        1.0,
+                        Some(wear),
+                    ),
+                );
+            }
+        }
         let robot: &urdf_rs::Robot = &worn;
-        let root = place_root(robot, rig, start)?;
         let mut sw = SimWorld::on_ground(robot, urdf_dir, sim, root)?;
         crate::robots::wheeled::roll_links_on_balls(&mut sw, &wheels)?;
         for l in &rig.frictionless {
@@ -272,6 +335,14 @@ impl DeclaredPhysics {
                     let h = sw.require_joint(j).map_err(|e| e.under_key(&key))?;
                     sw.set_joint_position(h, v)?;
                     Source::Joint(h)
+                }
+                // The robot starts at rest: a rate's start is what it reads.
+                Read::LinkVelocity(l, k) => {
+                    let (body, off) = sw.require_frame(l).map_err(|e| e.under_key(&key))?;
+                    Source::LinkVelocity(body, off, *k)
+                }
+                Read::JointVelocity(j) => {
+                    Source::JointVelocity(sw.require_joint(j).map_err(|e| e.under_key(&key))?)
                 }
             });
         }
@@ -343,6 +414,12 @@ impl DeclaredPhysics {
                 }
             }
             Source::Joint(h) => self.sim.joint_position(*h).unwrap_or(f64::NAN),
+            Source::LinkVelocity(b, off, k) => {
+                crate::robots::declared::rates::link_velocity(&self.sim, *b, off, *k)
+            }
+            Source::JointVelocity(h) => {
+                crate::robots::declared::rates::joint_velocity(&self.sim, *h).unwrap_or(f64::NAN)
+            }
         }
     }
 
@@ -356,6 +433,79 @@ impl DeclaredPhysics {
             };
         }
     }
+}
+
+/// Height above the ground within which a wheel's lowest point touches it
+/// at the start, m (the placement's rounding is far below).
+const TOUCHING: f64 = 1e-4;
+
+/// The links that wear with `wheel_radius_scale`, with their radius: the
+/// child links of `[model] wheels`, else of the velocity-driven joints whose
+/// round collision touches the ground with the root at `root`.
+fn wearing_wheels(
+    robot: &Robot,
+    rig: &Rig,
+    root: &RPose,
+) -> Result<Vec<(String, f64)>, SetupError> {
+    let frames = crate::robots::wheeled::link_frames(robot);
+    let mut out = Vec::new();
+    let given = rig.wheels.is_some();
+    let joints: Vec<&String> = match &rig.wheels {
+        Some(w) => w.iter().collect(),
+        None => rig.drives.iter().map(|(j, _)| j).collect(),
+    };
+    for j in joints {
+        let Some(uj) = joint(robot, j) else { continue };
+        let link = &uj.child.link;
+        let Some(radius) = crate::engine::urdf::collision_radius(robot, link) else {
+            if given {
+                return Err(SetupError::key(
+                    "model.wheels",
+                    format!(
+                        "joint `{j}` turns link `{link}`, which has no sphere or cylinder collision: it cannot wear"
+                    ),
+                ));
+            }
+            continue;
+        };
+        if given || lowest(robot, &frames, root, link) < TOUCHING {
+            out.push((link.clone(), radius));
+        }
+    }
+    Ok(out)
+}
+
+/// The lowest point of `link`'s collisions with the root at `root`, m
+/// (∞ when it has none).
+fn lowest(
+    robot: &Robot,
+    frames: &std::collections::HashMap<String, RPose>,
+    root: &RPose,
+    link: &str,
+) -> f64 {
+    robot
+        .links
+        .iter()
+        .filter(|l| l.name == link)
+        .flat_map(|l| &l.collision)
+        .filter_map(|c| {
+            let at = *root * frames[link] * crate::engine::world::origin(&c.origin);
+            crate::engine::world::lowest_point(&c.geometry, &at)
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
+/// The links with a round (sphere or cylinder) collision that touch the
+/// ground with the root at `root`.
+fn touching_round_links<'r>(robot: &'r Robot, root: &RPose) -> Vec<&'r str> {
+    let frames = crate::robots::wheeled::link_frames(robot);
+    robot
+        .links
+        .iter()
+        .map(|l| l.name.as_str())
+        .filter(|l| crate::engine::urdf::collision_radius(robot, l).is_some())
+        .filter(|l| lowest(robot, &frames, root, l) < TOUCHING)
+        .collect()
 }
 
 /// The root link: the one no joint points at.

@@ -160,6 +160,51 @@ pub fn cases(c: &mut Corpus) {
         Some("model.read.theta1"),
     );
 
+    // Velocity reads of a link or joint the URDF lacks, of a fixed joint.
+    for (what, read) in [
+        (
+            "declared velocity read of an unknown link",
+            "trailer_lnk.wz",
+        ),
+        (
+            "declared velocity read of an unknown joint",
+            "hitchh.velocity",
+        ),
+        (
+            "declared velocity read of a fixed joint",
+            "caster_joint.velocity",
+        ),
+        ("declared read of an unknown velocity", "trailer_link.vq"),
+    ] {
+        c.sc(
+            what,
+            edit(
+                &trailer(),
+                "theta1 = \"trailer_link.yaw\"",
+                &format!("theta1 = \"{read}\""),
+            ),
+            Some(&format!("theta1 = \"{read}")),
+            Some("model.read.theta1"),
+        );
+    }
+
+    // `[model] wheels`: each entry a `[model.drive]` joint.
+    for (what, wheel) in [
+        ("declared wheel that is a passive joint", "hitch"),
+        ("declared wheel that is not a joint", "no_such_joint"),
+    ] {
+        c.sc(
+            what,
+            edit(
+                &trailer(),
+                "frictionless = ",
+                &format!("wheels = [\"{wheel}\"]\nfrictionless = "),
+            ),
+            Some("wheels = "),
+            Some("model.wheels"),
+        );
+    }
+
     let t = trailer();
     let key = format!("thresholds.{long}");
     c.sc(

@@ -437,4 +437,22 @@ pub fn cases(c: &mut Corpus) {
             Some(key),
         );
     }
+
+    // `[regression]` floors: negative ones, scenario-wide or per metric.
+    for (what, table, at, key) in [
+        (
+            "negative regression floor",
+            "[regression]\nabs = -0.001",
+            "abs =",
+            "regression.abs",
+        ),
+        (
+            "negative per-metric floor",
+            "[regression]\nmetrics.sim_goal_position = { abs = -1e-4 }",
+            "metrics.sim_goal_position",
+            "regression.metrics.sim_goal_position.abs",
+        ),
+    ] {
+        c.sc(what, format!("{d}\n{table}\n"), Some(at), Some(key));
+    }
 }
