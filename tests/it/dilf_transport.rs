@@ -2,9 +2,21 @@
 //! wrench bound and the law on the measured grasps (`dilf_pair_open`).
 
 use anholonomy::model::spatial::Pose;
+use anholonomy::robots::mobile_manipulator::dilf::potential::Scene;
 use anholonomy::robots::mobile_manipulator::kinematics::DOF;
 use anholonomy::scenario::{ModelConfig, PlannerConfig, Scenario};
 use anholonomy::validate::Prepared;
+
+/// The dilf task of a prepared pair scenario (its obstacles and object).
+fn scene_of(prep: &Prepared) -> Scene {
+    let sc = &prep.scenario;
+    let (ModelConfig::MobileManipulator(m), PlannerConfig::Dilf(p)) = (&sc.model, &sc.planner)
+    else {
+        panic!("not a dilf pair")
+    };
+    let (start, goal) = prep.start_goal();
+    anholonomy::robots::mobile_manipulator::task_scene(m, p, start.as_slice(), &goal).unwrap()
+}
 
 fn prepared(file: &str) -> Prepared {
     let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
@@ -30,14 +42,7 @@ fn the_measured_deformation_equals_the_planar_readout_when_the_platforms_stand_f
         .replace("solver_iterations = 2", "solver_iterations = 4")
         .replace("solver_pgs_iterations = 8", "solver_pgs_iterations = 4");
     let prep = Prepared::new(Scenario::parse(&path, &text).unwrap()).unwrap();
-    let sc = &prep.scenario;
-    let (ModelConfig::MobileManipulator(m), PlannerConfig::Dilf(p)) = (&sc.model, &sc.planner)
-    else {
-        panic!("not a dilf pair")
-    };
-    let (start, goal) = prep.start_goal();
-    let scene =
-        anholonomy::robots::mobile_manipulator::task_scene(m, p, start.as_slice(), &goal).unwrap();
+    let scene = scene_of(&prep);
     let c = scene.object.as_ref().unwrap();
     let mut sys = prep.physics().unwrap();
     let names = sys.channel_names();
@@ -163,13 +168,7 @@ fn the_analysis_beside_the_replay_equals_the_analysis_of_the_finished_run() {
 fn the_grasp_wrench_read_through_the_wrists_is_the_fe_statics_at_rest() {
     let prep = prepared("dilf_pair_open.toml");
     let sc = &prep.scenario;
-    let (ModelConfig::MobileManipulator(m), PlannerConfig::Dilf(p)) = (&sc.model, &sc.planner)
-    else {
-        panic!("not a dilf pair")
-    };
-    let (start, goal) = prep.start_goal();
-    let scene =
-        anholonomy::robots::mobile_manipulator::task_scene(m, p, start.as_slice(), &goal).unwrap();
+    let scene = scene_of(&prep);
     let c = scene.object.as_ref().unwrap();
     let mut sys = prep.physics().unwrap();
     let names = sys.channel_names();
