@@ -250,14 +250,11 @@ fn dilf(cfg: &MobileManipulatorConfig, params: &DilfParams) -> Result<Dilf, Setu
     for (i, o) in cfg.obstacles.iter().enumerate() {
         let shape = o.shape();
         shape.validate().map_err(|e| {
-            let field = ["semi_axes", "exponent", "center"]
-                .into_iter()
-                .find(|f| e.contains(f))
-                .unwrap_or("center");
-            let field = if field == "center" && e.contains("rpy") {
-                "rpy_deg"
-            } else {
-                field
+            use crate::robots::mobile_manipulator::ellipsoid::ShapeError;
+            let field = match &e {
+                ShapeError::SemiAxes(_) => "semi_axes",
+                ShapeError::ExponentLow(_) | ShapeError::ExponentHigh(_) => "exponent",
+                ShapeError::NotFinite => "rpy_deg",
             };
             SetupError::key(format!("model.obstacles[{i}].{field}"), e)
         })?;
