@@ -330,7 +330,7 @@ impl Dilf {
                 field_power: p.field_power,
             },
         )
-        .map_err(SetupError::from)
+        .map_err(|e| SetupError::other(e.to_string()))
     }
 
     /// The beam as the physics holds it: the scene's grasps and FE beam.
