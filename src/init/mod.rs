@@ -255,7 +255,7 @@ pub fn init(dir: &Path, from: Option<&str>) -> Result<Vec<(String, String)>, Vec
                     errors.push(Error::Write {
                         path,
                         command: "init",
-                        message: m,
+                        message: m.to_string(),
                     });
                 }
                 ran.push((o.name.clone(), o.verdict.describe(&o.failures, None)));
