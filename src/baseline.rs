@@ -83,6 +83,22 @@ pub fn path_for(dir: &Path, scenario: &str) -> PathBuf {
     dir.join(format!("{scenario}.json"))
 }
 
+/// Why a baseline file could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum WriteError {
+    /// Its directory cannot be created.
+    #[error("cannot create {}: {source}", crate::echo::path(dir))]
+    CreateDir {
+        /// The directory.
+        dir: PathBuf,
+        /// The system's error.
+        source: std::io::Error,
+    },
+    /// Writing the file (through a temporary one) failed.
+    #[error(transparent)]
+    Write(#[from] crate::log::LogError),
+}
+
 impl Baseline {
     /// The baseline a run would write.
     pub fn from_outcome(o: &RunOutcome) -> Baseline {
@@ -124,13 +140,16 @@ impl Baseline {
     }
 
     /// Write atomically (temporary file, then rename), creating the directory.
-    pub fn write(&self, path: &Path) -> Result<(), String> {
+    pub fn write(&self, path: &Path) -> Result<(), WriteError> {
         if let Some(dir) = path.parent().filter(|d| !d.as_os_str().is_empty()) {
-            std::fs::create_dir_all(dir)
-                .map_err(|e| format!("cannot create {}: {e}", crate::echo::path(dir)))?;
+            std::fs::create_dir_all(dir).map_err(|source| WriteError::CreateDir {
+                dir: dir.to_path_buf(),
+                source,
+            })?;
         }
         let text = self.to_json();
-        crate::log::atomic::write_atomic(path, |w| std::io::Write::write_all(w, text.as_bytes()))
+        crate::log::atomic::write_file(path, |w| std::io::Write::write_all(w, text.as_bytes()))?;
+        Ok(())
     }
 
     /// Read and check a baseline file for `scenario` / `planner`; every problem is an input

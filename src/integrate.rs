@@ -126,14 +126,17 @@ pub fn simulate(model: &dyn KinematicModel, plan: &Plan, q0: &State, dt: f64) ->
 }
 
 /// Why [`simulate_until`] stopped a run before its end.
-#[derive(Debug, Clone, PartialEq)]
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum IdealStop {
     /// The controller faulted ([`crate::plan::Controller::fault`]).
+    #[error("{0}")]
     Fault(String),
     /// The token was cancelled.
+    #[error("{}", crate::cancel::CANCELLED)]
     Cancelled,
     /// The model's equations gave a non-finite state (a declared model's
     /// expression dividing by zero, say): which coordinate, and when.
+    #[error("{0}")]
     NonFinite(String),
 }
 
@@ -144,11 +147,8 @@ pub fn simulate_checked(
     plan: &Plan,
     q0: &State,
     dt: f64,
-) -> Result<Trajectory, String> {
-    simulate_until(model, plan, q0, dt, &Cancel::default()).map_err(|e| match e {
-        IdealStop::Fault(m) | IdealStop::NonFinite(m) => m,
-        IdealStop::Cancelled => crate::cancel::CANCELLED.into(),
-    })
+) -> Result<Trajectory, IdealStop> {
+    simulate_until(model, plan, q0, dt, &Cancel::default())
 }
 
 /// [`simulate_checked`] that also stops when `cancel` is set (checked

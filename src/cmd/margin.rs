@@ -302,9 +302,9 @@ fn one(
     let wall = t0.elapsed().as_secs_f64();
     let logged = match &o.log_dir {
         Some(dir) => {
-            rep.write(dir, wall).map_err(|message| Error::Log {
+            rep.write(dir, wall).map_err(|e| Error::Log {
                 path: dir.join("margins.json"),
-                message,
+                message: e.to_string(),
             })?;
             Some(name.clone())
         }

@@ -327,7 +327,10 @@ fn settle_baselines(
         if let (Some(dir), true) = (base_dir, updating) {
             let path = baseline::path_for(dir, &o.name);
             if let Err(m) = Baseline::from_outcome(o).write(&path) {
-                errors.push(Error::Log { path, message: m });
+                errors.push(Error::Log {
+                    path,
+                    message: m.to_string(),
+                });
             }
         } else if let Some(b) = &baselines[*i] {
             let spec = anholonomy::compare::metric_spec(p.system.model());

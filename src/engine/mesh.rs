@@ -128,7 +128,7 @@ impl Search {
 
     /// The file a URDF mesh `filename` names, for a URDF in `urdf_dir`; the
     /// error says where it looked.
-    pub fn resolve(&self, filename: &str, urdf_dir: &Path) -> Result<PathBuf, String> {
+    pub fn resolve(&self, filename: &str, urdf_dir: &Path) -> Result<PathBuf, MeshError> {
         if let Some(rest) = filename.strip_prefix("package://") {
             let (pkg, rel) = rest.split_once('/').unwrap_or((rest, ""));
             let dir = self.package(pkg).ok_or_else(|| {
@@ -147,28 +147,34 @@ impl Search {
                         crate::echo::code(&crate::echo::path(d))
                     )
                 } else if tried.is_empty() {
-                    "no [model] packages entry, ROS_PACKAGE_PATH or AMENT_PREFIX_PATH names it".to_string()
+                    "no [model] packages entry, ROS_PACKAGE_PATH or AMENT_PREFIX_PATH names it"
+                        .to_string()
                 } else {
                     format!("not found through {}", tried.join(", "))
                 };
-                format!(
-                    "package `{pkg}` of `{filename}`: {looked} (name its directory in [model] packages = {{ {pkg} = \"DIR\" }})"
-                )
+                MeshError::Package {
+                    pkg: pkg.to_string(),
+                    filename: filename.to_string(),
+                    looked,
+                }
             })?;
             let path = dir.join(rel);
             return if path.is_file() {
                 Ok(path)
             } else {
-                Err(format!(
-                    "`{filename}`: no file `{rel}` in package `{pkg}` ({})",
-                    dir.display()
-                ))
+                Err(MeshError::NotInPackage {
+                    filename: filename.to_string(),
+                    rel: rel.to_string(),
+                    pkg: pkg.to_string(),
+                    dir,
+                })
             };
         }
         if let Some(pkg) = crate::engine::packages::absent_package(filename) {
-            return Err(format!(
-                "`{filename}` is in package `{pkg}`, which is absent (xacro expanded its `$(find {pkg})` as [model] missing_packages = \"empty\" says): name its directory in [model] packages = {{ {pkg} = \"DIR\" }}"
-            ));
+            return Err(MeshError::Absent {
+                filename: filename.to_string(),
+                pkg: pkg.to_string(),
+            });
         }
         let path = match filename.strip_prefix("file://") {
             Some(p) => PathBuf::from(p),
@@ -177,9 +183,90 @@ impl Search {
         if path.is_file() {
             Ok(path)
         } else {
-            Err(format!("`{filename}`: no such file ({})", path.display()))
+            Err(MeshError::NoSuchFile {
+                filename: filename.to_string(),
+                path,
+            })
         }
     }
+}
+
+/// Why a URDF mesh cannot be found or loaded (one line).
+#[derive(Debug, thiserror::Error)]
+pub enum MeshError {
+    /// A `package://` URI whose package directory is not known.
+    #[error(
+        "package `{pkg}` of `{filename}`: {looked} (name its directory in [model] packages = {{ {pkg} = \"DIR\" }})"
+    )]
+    Package {
+        /// The package.
+        pkg: String,
+        /// The URI as written.
+        filename: String,
+        /// Where it was looked for.
+        looked: String,
+    },
+    /// The package's directory has no such file.
+    #[error("`{filename}`: no file `{rel}` in package `{pkg}` ({})", dir.display())]
+    NotInPackage {
+        /// The URI as written.
+        filename: String,
+        /// The path inside the package.
+        rel: String,
+        /// The package.
+        pkg: String,
+        /// The package's directory.
+        dir: PathBuf,
+    },
+    /// The file is in a package that xacro expanded as absent.
+    #[error(
+        "`{filename}` is in package `{pkg}`, which is absent (xacro expanded its `$(find {pkg})` as [model] missing_packages = \"empty\" says): name its directory in [model] packages = {{ {pkg} = \"DIR\" }}"
+    )]
+    Absent {
+        /// The file name as written.
+        filename: String,
+        /// The absent package.
+        pkg: String,
+    },
+    /// A plain or `file://` name with no file there.
+    #[error("`{filename}`: no such file ({})", path.display())]
+    NoSuchFile {
+        /// The file name as written.
+        filename: String,
+        /// Where it was looked for.
+        path: PathBuf,
+    },
+    /// The extension is not a mesh format read here.
+    #[error("{}: unknown mesh format `.{ext}` (read: STL, OBJ, Collada .dae)", path.display())]
+    Format {
+        /// The file.
+        path: PathBuf,
+        /// Its extension, lower case.
+        ext: String,
+    },
+    /// A binary STL cut or damaged, or a file that cannot be read.
+    #[error(transparent)]
+    StlSize(#[from] crate::engine::mesh_limits::StlSizeError),
+    /// The mesh loader refused the file.
+    #[error("{}: not a readable mesh: {message}", path.display())]
+    Unreadable {
+        /// The file.
+        path: PathBuf,
+        /// The loader's message, on one line.
+        message: String,
+    },
+    /// The file holds no triangles.
+    #[error("{}: the mesh has no triangles", path.display())]
+    NoTriangles {
+        /// The file.
+        path: PathBuf,
+    },
+    /// Vertices that are not finite or faces that index past them.
+    #[error("{}: the mesh has non-finite vertices or out-of-range faces", path.display())]
+    BadGeometry {
+        /// The file.
+        path: PathBuf,
+    },
 }
 
 type Cache = Mutex<HashMap<(PathBuf, [u64; 3]), Arc<TriMesh>>>;
@@ -192,7 +279,7 @@ fn cache() -> &'static Cache {
 /// Load the mesh file at `path` with `scale` (every submesh merged). The
 /// error is one line: an unknown format, a file that does not parse, a
 /// mesh without triangles.
-pub fn load(path: &Path, scale: [f64; 3]) -> Result<Arc<TriMesh>, String> {
+pub fn load(path: &Path, scale: [f64; 3]) -> Result<Arc<TriMesh>, MeshError> {
     let key = (path.to_path_buf(), scale.map(f64::to_bits));
     if let Some(m) = cache().lock().ok().and_then(|c| c.get(&key).cloned()) {
         return Ok(m);
@@ -202,21 +289,20 @@ pub fn load(path: &Path, scale: [f64; 3]) -> Result<Arc<TriMesh>, String> {
         .map(|e| e.to_string_lossy().to_lowercase())
         .unwrap_or_default();
     if !FORMATS.contains(&ext.as_str()) {
-        return Err(format!(
-            "{}: unknown mesh format `.{ext}` (read: STL, OBJ, Collada .dae)",
-            path.display()
-        ));
+        return Err(MeshError::Format {
+            path: path.to_path_buf(),
+            ext,
+        });
     }
     if ext == "stl" {
         crate::engine::mesh_limits::check_stl_size(path)?;
     }
-    let scene = mesh_loader::Loader::default().load(path).map_err(|e| {
-        format!(
-            "{}: not a readable mesh: {}",
-            path.display(),
-            one_line(&e.to_string())
-        )
-    })?;
+    let scene = mesh_loader::Loader::default()
+        .load(path)
+        .map_err(|e| MeshError::Unreadable {
+            path: path.to_path_buf(),
+            message: one_line(&e.to_string()),
+        })?;
     let mut out = TriMesh {
         vertices: Vec::new(),
         triangles: Vec::new(),
@@ -232,7 +318,9 @@ pub fn load(path: &Path, scale: [f64; 3]) -> Result<Arc<TriMesh>, String> {
             .extend(m.faces.iter().map(|f| f.map(|i| base + i)));
     }
     if out.triangles.is_empty() {
-        return Err(format!("{}: the mesh has no triangles", path.display()));
+        return Err(MeshError::NoTriangles {
+            path: path.to_path_buf(),
+        });
     }
     let bad = out.vertices.iter().flatten().any(|x| !x.is_finite())
         || out
@@ -241,10 +329,9 @@ pub fn load(path: &Path, scale: [f64; 3]) -> Result<Arc<TriMesh>, String> {
             .flatten()
             .any(|&i| i as usize >= out.vertices.len());
     if bad {
-        return Err(format!(
-            "{}: the mesh has non-finite vertices or out-of-range faces",
-            path.display()
-        ));
+        return Err(MeshError::BadGeometry {
+            path: path.to_path_buf(),
+        });
     }
     let m = Arc::new(out);
     if let Ok(mut c) = cache().lock() {

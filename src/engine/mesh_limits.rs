@@ -14,7 +14,7 @@
 use crate::record::TriMesh;
 use std::collections::HashMap;
 use std::io::Read as _;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, OnceLock};
 
 /// Most triangles of a collision mesh whose hull is built from every vertex.
@@ -23,19 +23,59 @@ pub const HULL_TRIANGLES: usize = 20_000;
 /// Most points a thinned collision mesh keeps.
 pub const HULL_POINTS: usize = 5_000;
 
+/// A binary STL file that cannot hold what its header says, or cannot be read.
+#[derive(Debug, thiserror::Error)]
+pub enum StlSizeError {
+    /// Opening or reading the file failed.
+    #[error("{}: {source}", crate::echo::path(path))]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The system's error.
+        source: std::io::Error,
+    },
+    /// Shorter than a binary STL's header and count.
+    #[error(
+        "{}: {len} bytes: too short for a binary STL (84 bytes of header and triangle count)",
+        crate::echo::path(path)
+    )]
+    TooShort {
+        /// The file.
+        path: PathBuf,
+        /// Its size, bytes.
+        len: u64,
+    },
+    /// The header's triangle count does not fit the file's size.
+    #[error(
+        "{}: binary STL whose header counts {count} triangles ({want} bytes), but the file has {len} bytes (room for {} triangles): a cut or damaged file",
+        crate::echo::path(path),
+        len.saturating_sub(84) / 50
+    )]
+    Count {
+        /// The file.
+        path: PathBuf,
+        /// Triangles the header counts.
+        count: u32,
+        /// Bytes that count needs.
+        want: u64,
+        /// Bytes the file has.
+        len: u64,
+    },
+}
+
 /// A binary STL whose header counts other triangles than its size holds
 /// (84 bytes of header and count, 50 bytes per triangle; a trailing newline
 /// is tolerated, as `mesh-loader` does). ASCII STL (`solid ...` in text)
 /// has no count.
-pub(crate) fn check_stl_size(path: &Path) -> Result<(), String> {
-    let shown = crate::echo::path(path);
-    let mut f = std::fs::File::open(path).map_err(|e| format!("{shown}: {e}"))?;
-    let len = f.metadata().map_err(|e| format!("{shown}: {e}"))?.len();
+pub(crate) fn check_stl_size(path: &Path) -> Result<(), StlSizeError> {
+    let io = |source: std::io::Error| StlSizeError::Io {
+        path: path.to_path_buf(),
+        source,
+    };
+    let mut f = std::fs::File::open(path).map_err(io)?;
+    let len = f.metadata().map_err(io)?.len();
     let mut head = Vec::with_capacity(84);
-    f.by_ref()
-        .take(84)
-        .read_to_end(&mut head)
-        .map_err(|e| format!("{shown}: {e}"))?;
+    f.by_ref().take(84).read_to_end(&mut head).map_err(io)?;
     let text = head.trim_ascii_start();
     if text.starts_with(b"solid")
         && head
@@ -45,19 +85,22 @@ pub(crate) fn check_stl_size(path: &Path) -> Result<(), String> {
         return Ok(());
     }
     if head.len() < 84 {
-        return Err(format!(
-            "{shown}: {len} bytes: too short for a binary STL (84 bytes of header and triangle count)"
-        ));
+        return Err(StlSizeError::TooShort {
+            path: path.to_path_buf(),
+            len,
+        });
     }
     let count = u32::from_le_bytes([head[80], head[81], head[82], head[83]]);
     let want = 84 + 50 * u64::from(count);
     if len == want || len == want + 1 || len == want + 2 {
         return Ok(());
     }
-    Err(format!(
-        "{shown}: binary STL whose header counts {count} triangles ({want} bytes), but the file has {len} bytes (room for {} triangles): a cut or damaged file",
-        len.saturating_sub(84) / 50
-    ))
+    Err(StlSizeError::Count {
+        path: path.to_path_buf(),
+        count,
+        want,
+        len,
+    })
 }
 
 /// A collision mesh thinned for its hull: how many points it kept of how
@@ -215,13 +258,13 @@ mod tests {
         bin.extend(4_000_000_000u32.to_le_bytes());
         bin.extend([0u8; 100]);
         std::fs::write(&p, &bin).unwrap();
-        let e = check_stl_size(&p).unwrap_err();
+        let e = check_stl_size(&p).unwrap_err().to_string();
         assert!(e.contains("counts 4000000000 triangles"), "{e}");
         assert!(e.contains("the file has 184 bytes"), "{e}");
         bin[80..84].copy_from_slice(&2u32.to_le_bytes());
         std::fs::write(&p, &bin).unwrap();
-        assert_eq!(check_stl_size(&p), Ok(()));
+        assert!(check_stl_size(&p).is_ok());
         std::fs::write(&p, "solid x\nfacet normal 0 0 1\n").unwrap();
-        assert_eq!(check_stl_size(&p), Ok(()));
+        assert!(check_stl_size(&p).is_ok());
     }
 }

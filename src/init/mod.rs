@@ -118,10 +118,30 @@ fn dangling_link(dir: &Path, command: &str) -> Option<Error> {
 /// overrides it).
 pub const REPOSITORY: &str = env!("CARGO_PKG_REPOSITORY");
 
+/// Why `init --from URL` refuses a URL.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum UrlError {
+    /// No `scheme://` (or nothing after it).
+    #[error("`{0}` is not a URL (scheme://host/path, e.g. {REPOSITORY})")]
+    NotUrl(String),
+    /// A character the CI files' double quotes cannot hold.
+    #[error(
+        "{} holds {}, which the CI files cannot quote",
+        crate::echo::code(url),
+        crate::echo::code(&ch.to_string())
+    )]
+    Unquotable {
+        /// The URL as given (trailing `/` dropped).
+        url: String,
+        /// The first character that cannot be quoted.
+        ch: char,
+    },
+}
+
 /// `init --from URL`: a URL (`scheme://...`) without the characters that
 /// would end the double-quoted `${ANHOLONOMY_REPO:-URL}` the install script
 /// holds it in, or start a fragment; a trailing `/` is dropped.
-pub fn source_url(url: &str) -> Result<String, String> {
+pub fn source_url(url: &str) -> Result<String, UrlError> {
     let url = url.trim_end_matches('/');
     let scheme = url.split_once("://").map(|(s, _)| s);
     let scheme_ok = scheme.is_some_and(|s| {
@@ -130,19 +150,16 @@ pub fn source_url(url: &str) -> Result<String, String> {
                 .all(|c| c.is_ascii_alphanumeric() || "+.-".contains(c))
     });
     if !scheme_ok || url.ends_with("://") {
-        return Err(format!(
-            "`{url}` is not a URL (scheme://host/path, e.g. {REPOSITORY})"
-        ));
+        return Err(UrlError::NotUrl(url.to_string()));
     }
     if let Some(c) = url
         .chars()
         .find(|c| c.is_whitespace() || c.is_control() || "'\"`$\\#{}".contains(*c))
     {
-        return Err(format!(
-            "{} holds {}, which the CI files cannot quote",
-            crate::echo::code(url),
-            crate::echo::code(&c.to_string())
-        ));
+        return Err(UrlError::Unquotable {
+            url: url.to_string(),
+            ch: c,
+        });
     }
     Ok(url.to_string())
 }
@@ -194,7 +211,7 @@ pub fn starter_files(from: Option<&str>) -> Vec<(&'static str, String)> {
 pub fn init(dir: &Path, from: Option<&str>) -> Result<Vec<(String, String)>, Vec<Error>> {
     let from = match from.map(source_url).transpose() {
         Ok(f) => f,
-        Err(m) => return Err(vec![Error::input("--from", m)]),
+        Err(m) => return Err(vec![Error::input("--from", m.to_string())]),
     };
     if let Some(e) = dangling_link(dir, "init") {
         return Err(vec![e]);
@@ -238,7 +255,7 @@ pub fn init(dir: &Path, from: Option<&str>) -> Result<Vec<(String, String)>, Vec
                     errors.push(Error::Write {
                         path,
                         command: "init",
-                        message: m,
+                        message: m.to_string(),
                     });
                 }
                 ran.push((o.name.clone(), o.verdict.describe(&o.failures, None)));

@@ -96,13 +96,3 @@ pub fn write_file(
         }
     })
 }
-
-/// [`write_file`] with its error as text: for `src/margin/` and
-/// `src/baseline.rs`, whose own errors are still `String` (they are being
-/// edited elsewhere and convert to typed errors after that work merges).
-pub(crate) fn write_atomic(
-    path: &Path,
-    write: impl FnOnce(&mut std::io::BufWriter<std::fs::File>) -> std::io::Result<()>,
-) -> Result<(), String> {
-    write_file(path, write).map_err(|e| e.to_string())
-}

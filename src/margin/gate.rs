@@ -190,12 +190,12 @@ pub fn gate(prep: &Prepared, o: &mut RunOutcome) -> Result<(), crate::error::Err
             nominal,
             dimensions,
         };
-        let log_error = |message: String| crate::error::Error::Log {
+        let log_error = |e: &dyn std::fmt::Display| crate::error::Error::Log {
             path: prep.scenario.path.clone(),
-            message,
+            message: e.to_string(),
         };
-        report.write(dir, wall).map_err(log_error)?;
-        amend_summary(&dir.join("summary.json"), o).map_err(log_error)?;
+        report.write(dir, wall).map_err(|e| log_error(&e))?;
+        amend_summary(&dir.join("summary.json"), o).map_err(|e| log_error(&e))?;
     }
     Ok(())
 }
@@ -203,11 +203,16 @@ pub fn gate(prep: &Prepared, o: &mut RunOutcome) -> Result<(), crate::error::Err
 /// The run's `summary.json` with the margins' verdict: `passed`, `failures`
 /// and `metrics` as the outcome now has them (the run wrote it before the
 /// margins were searched).
-fn amend_summary(path: &std::path::Path, o: &RunOutcome) -> Result<(), String> {
-    let text =
-        std::fs::read_to_string(path).map_err(|e| format!("{}: {e}", crate::echo::path(path)))?;
+fn amend_summary(path: &std::path::Path, o: &RunOutcome) -> Result<(), SummaryError> {
+    let text = std::fs::read_to_string(path).map_err(|source| SummaryError::Read {
+        path: path.to_path_buf(),
+        source,
+    })?;
     let mut s: serde_json::Value =
-        serde_json::from_str(&text).map_err(|e| format!("{}: {e}", crate::echo::path(path)))?;
+        serde_json::from_str(&text).map_err(|source| SummaryError::Parse {
+            path: path.to_path_buf(),
+            source,
+        })?;
     s["passed"] = serde_json::json!(o.passed);
     s["failures"] = serde_json::json!(o.failures);
     s["verdict"] = serde_json::json!(o.verdict);
@@ -216,7 +221,28 @@ fn amend_summary(path: &std::path::Path, o: &RunOutcome) -> Result<(), String> {
     s["metrics"] = serde_json::json!(metrics);
     s["margin_gates"] = serde_json::json!(o.notes);
     s["wall_time_s"]["total"] = serde_json::json!(o.timings.total);
-    crate::log::atomic::write_atomic(path, |w| {
+    crate::log::atomic::write_file(path, |w| {
         serde_json::to_writer_pretty(w, &s).map_err(std::io::Error::other)
-    })
+    })?;
+    Ok(())
+}
+
+/// Why `summary.json` could not be amended with the margins' verdict.
+#[derive(Debug, thiserror::Error)]
+enum SummaryError {
+    /// The run's summary cannot be read.
+    #[error("{}: {source}", crate::echo::path(path))]
+    Read {
+        path: std::path::PathBuf,
+        source: std::io::Error,
+    },
+    /// The run's summary is not JSON.
+    #[error("{}: {source}", crate::echo::path(path))]
+    Parse {
+        path: std::path::PathBuf,
+        source: serde_json::Error,
+    },
+    /// Writing it back failed.
+    #[error(transparent)]
+    Write(#[from] crate::log::LogError),
 }

@@ -471,9 +471,13 @@ impl Report {
     }
 
     /// Write `dir/margins.json` (atomically).
-    pub fn write(&self, dir: &std::path::Path, total_wall_s: f64) -> Result<(), String> {
+    pub fn write(
+        &self,
+        dir: &std::path::Path,
+        total_wall_s: f64,
+    ) -> Result<(), crate::log::LogError> {
         let v = self.to_json(total_wall_s);
-        crate::log::atomic::write_atomic(&dir.join("margins.json"), |w| {
+        crate::log::atomic::write_file(&dir.join("margins.json"), |w| {
             serde_json::to_writer_pretty(w, &v).map_err(std::io::Error::other)
         })
     }

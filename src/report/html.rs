@@ -305,11 +305,6 @@ pub enum PageError {
     /// A chart could not be drawn.
     #[error(transparent)]
     Plot(#[from] crate::report::plots::PlotError),
-    /// The margins section refused: `src/report/margins.rs` still reports
-    /// its problems as text (it is being edited elsewhere; it converts to a
-    /// typed error after that work merges).
-    #[error("{0}")]
-    Margins(String),
 }
 
 /// `LOGDIR/<scenario>/report.html`.
@@ -345,7 +340,7 @@ pub(crate) fn scenario_page(l: &Loaded) -> Result<String, PageError> {
             b.push_str(&metrics_table(summary, &l.regression));
             b.push_str(&crate::report::robot::section(summary));
             if let Some(m) = &l.margins {
-                b.push_str(&crate::report::margins::section(m).map_err(PageError::Margins)?);
+                b.push_str(&crate::report::margins::section(m)?);
             }
         }
         RunData::Sweep(s) => {

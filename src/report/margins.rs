@@ -4,7 +4,7 @@
 
 use crate::engine::perturb::Dimension;
 use crate::margin::output::magnitude;
-use crate::report::plots;
+use crate::report::plots::{self, PlotError};
 use serde_json::Value;
 use std::fmt::Write as _;
 
@@ -20,7 +20,7 @@ fn gate_value(run: &Value, metric: &str) -> f64 {
 }
 
 /// The section's HTML.
-pub fn section(m: &Value) -> Result<String, String> {
+pub fn section(m: &Value) -> Result<String, PlotError> {
     let dims = m["dimensions"].as_array().cloned().unwrap_or_default();
     let s = &m["search"];
     let mut b = format!(
@@ -130,7 +130,7 @@ pub fn section(m: &Value) -> Result<String, String> {
 /// The breaking metric against the level (log scale), one point per run,
 /// pass green, fail red; non-finite values (e.g. a goal never reached)
 /// drawn at the top. The nominal run (level 0) is in the table.
-fn figure(m: &Value, d: &Value, dim: Dimension) -> Result<String, String> {
+fn figure(m: &Value, d: &Value, dim: Dimension) -> Result<String, PlotError> {
     let Some(metric) = d["breaking_metric"].as_str() else {
         return Ok(String::new());
     };

@@ -481,7 +481,7 @@ pub(crate) fn scatter_log_x(
     y_desc: &str,
     pts: &[(f64, f64, bool)],
     hline: Option<(f64, &str)>,
-) -> Result<String, String> {
+) -> Res<String> {
     let on_axis = |x: f64| x > 0.0 && x.is_finite();
     let xs = pts.iter().map(|p| p.0).filter(|x| on_axis(*x));
     let (lo, hi) = xs.fold((f64::INFINITY, 0.0f64), |(a, b), x| (a.min(x), b.max(x)));
@@ -502,9 +502,7 @@ pub(crate) fn scatter_log_x(
         .log_scale()
         .with_key_points(bold)
         .with_light_points(light);
-    // Text for `src/report/margins.rs`, its only caller, whose errors are
-    // still `String` (it is being edited elsewhere; typed after that merges).
-    scatter_on(&axes, x, (x0, x1), on_axis, pts, hline).map_err(|e| e.to_string())
+    scatter_on(&axes, x, (x0, x1), on_axis, pts, hline)
 }
 
 /// Labelled ticks 1, 2, 5 × 10^k within [x0, x1] (every 1..9 × 10^k when

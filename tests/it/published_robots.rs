@@ -274,7 +274,10 @@ fn meshes_resolve_through_packages_ros_package_path_and_ament_prefix_path() {
         s.resolve("package://mine/meshes/m.stl", here).unwrap(),
         d.join("mine/meshes/m.stl")
     );
-    let e = s.resolve("package://nope/meshes/m.stl", here).unwrap_err();
+    let e = s
+        .resolve("package://nope/meshes/m.stl", here)
+        .unwrap_err()
+        .to_string();
     assert!(
         e.contains("package `nope`") && e.contains("ROS_PACKAGE_PATH"),
         "{e}"

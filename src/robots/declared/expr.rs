@@ -348,8 +348,58 @@ pub enum ExprError {
         /// The expression.
         text: String,
         /// What is wrong.
-        why: String,
+        why: LanguageError,
     },
+}
+
+/// Why a parsed tree is not an expression of the language.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum LanguageError {
+    /// A binary operator without two operands (the operator as written).
+    #[error("`{0}` needs an operand on each side")]
+    Operands(String),
+    /// `()`.
+    #[error("an empty pair of parentheses")]
+    EmptyParens,
+    /// Several expressions where one is wanted.
+    #[error("several expressions in one")]
+    Several,
+    /// A unary minus without its operand.
+    #[error("`-` needs an operand")]
+    Negation,
+    /// A constant that is not a number (as written).
+    #[error("{} is not a number", echo::code(.0))]
+    NotNumber(String),
+    /// A name that is not a slot, with the nearest known one and the known ones.
+    #[error("{0}")]
+    UnknownName(String),
+    /// A function that is not one of [`FUNCTIONS`].
+    #[error("unknown function {} (functions: {})", echo::code(.0), function_list())]
+    UnknownFunction(String),
+    /// A call with another number of arguments than the function takes.
+    #[error("`{name}` takes {arity} argument{}, got {got}", if *arity == 1 { "" } else { "s" })]
+    Arity {
+        /// The function.
+        name: String,
+        /// Arguments it takes.
+        arity: usize,
+        /// Arguments given.
+        got: usize,
+    },
+    /// An operator outside + - * / ^, parentheses, functions, numbers and names.
+    #[error(
+        "{} is not part of the language (+ - * / ^, parentheses, functions, numbers, names)",
+        echo::code(.0)
+    )]
+    Foreign(String),
+    /// The program does not leave exactly one value.
+    #[error("not one value")]
+    NotOneValue,
+}
+
+/// The functions' names, comma-separated.
+fn function_list() -> String {
+    FUNCTIONS.iter().map(|f| f.0).collect::<Vec<_>>().join(", ")
 }
 
 /// Nesting of `text`, measured on the characters (the tree `evalexpr`
@@ -464,7 +514,7 @@ fn unknown_name(identifier: &str, names: &[&str]) -> String {
 
 /// The stack program of `tree` over slots `names`, and its stack depth.
 /// Post-order with an explicit stack of pending work.
-fn compile(tree: &Node, names: &[&str]) -> Result<(Vec<Op>, usize), String> {
+fn compile(tree: &Node, names: &[&str]) -> Result<(Vec<Op>, usize), LanguageError> {
     enum Work<'a> {
         Visit(&'a Node),
         Emit(Op, usize),
@@ -494,7 +544,7 @@ fn compile(tree: &Node, names: &[&str]) -> Result<(Vec<Op>, usize), String> {
         };
         if let Some(op) = binary {
             let [a, b] = kids else {
-                return Err(format!("`{operator}` needs an operand on each side"));
+                return Err(LanguageError::Operands(operator.to_string()));
             };
             work.extend([Work::Emit(op, 2), Work::Visit(b), Work::Visit(a)]);
             continue;
@@ -502,12 +552,12 @@ fn compile(tree: &Node, names: &[&str]) -> Result<(Vec<Op>, usize), String> {
         match operator {
             Operator::RootNode => match kids {
                 [one] => work.push(Work::Visit(one)),
-                [] => return Err("an empty pair of parentheses".into()),
-                _ => return Err("several expressions in one".into()),
+                [] => return Err(LanguageError::EmptyParens),
+                _ => return Err(LanguageError::Several),
             },
             Operator::Neg => {
                 let [a] = kids else {
-                    return Err("`-` needs an operand".into());
+                    return Err(LanguageError::Negation);
                 };
                 work.extend([Work::Emit(Op::Neg, 1), Work::Visit(a)]);
             }
@@ -515,12 +565,7 @@ fn compile(tree: &Node, names: &[&str]) -> Result<(Vec<Op>, usize), String> {
                 let v = match value {
                     Value::Float(f) => *f,
                     Value::Int(i) => *i as f64,
-                    other => {
-                        return Err(format!(
-                            "{} is not a number",
-                            echo::code(&other.to_string())
-                        ))
-                    }
+                    other => return Err(LanguageError::NotNumber(other.to_string())),
                 };
                 work.push(Work::Emit(Op::Const(v), 0));
             }
@@ -530,7 +575,7 @@ fn compile(tree: &Node, names: &[&str]) -> Result<(Vec<Op>, usize), String> {
                 } else if let Some(i) = names.iter().position(|n| n == identifier) {
                     Op::Slot(i)
                 } else {
-                    return Err(unknown_name(identifier, names));
+                    return Err(LanguageError::UnknownName(unknown_name(identifier, names)));
                 };
                 work.push(Work::Emit(op, 0));
             }
@@ -539,38 +584,28 @@ fn compile(tree: &Node, names: &[&str]) -> Result<(Vec<Op>, usize), String> {
                     Fun::named(identifier),
                     FUNCTIONS.iter().find(|f| f.0 == identifier),
                 ) else {
-                    let fs: Vec<&str> = FUNCTIONS.iter().map(|f| f.0).collect();
-                    return Err(format!(
-                        "unknown function {} (functions: {})",
-                        echo::code(identifier),
-                        fs.join(", ")
-                    ));
+                    return Err(LanguageError::UnknownFunction(identifier.to_string()));
                 };
                 let got = match kids {
                     [a] => args(a),
                     _ => Vec::new(),
                 };
                 if got.len() != arity {
-                    return Err(format!(
-                        "`{identifier}` takes {arity} argument{}, got {}",
-                        if arity == 1 { "" } else { "s" },
-                        got.len()
-                    ));
+                    return Err(LanguageError::Arity {
+                        name: identifier.to_string(),
+                        arity,
+                        got: got.len(),
+                    });
                 }
                 let op = if arity == 1 { Op::F1(f) } else { Op::F2(f) };
                 work.push(Work::Emit(op, arity));
                 work.extend(got.into_iter().rev().map(Work::Visit));
             }
-            other => {
-                return Err(format!(
-                    "{} is not part of the language (+ - * / ^, parentheses, functions, numbers, names)",
-                    echo::code(&other.to_string())
-                ))
-            }
+            other => return Err(LanguageError::Foreign(other.to_string())),
         }
     }
     if depth != 1 {
-        return Err("not one value".into());
+        return Err(LanguageError::NotOneValue);
     }
     Ok((ops, max))
 }

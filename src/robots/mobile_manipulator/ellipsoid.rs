@@ -89,6 +89,23 @@ pub(crate) fn pow2n_derivatives(u: f64, n: f64, eps: f64) -> (f64, f64, f64) {
     (p * u2, 2.0 * n * u * p, 2.0 * n * (2.0 * n - 1.0) * p)
 }
 
+/// Why a superellipsoid is unusable; messages name the field.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ShapeError {
+    /// A semi-axis is not finite and > 0.
+    #[error("`semi_axes` must be finite and > 0, got {}", crate::numfmt::list(.0))]
+    SemiAxes([f64; 3]),
+    /// The exponent is below 1/2 (or not finite): the set is not convex.
+    #[error("`exponent` n must be ≥ 1/2 (the set is not convex below), got {0}")]
+    ExponentLow(f64),
+    /// The exponent is over 32: |u|^2n overflows.
+    #[error("`exponent` n must be ≤ 32 (beyond, |u|^2n overflows), got {0}")]
+    ExponentHigh(f64),
+    /// The centre or the roll-pitch-yaw angles are not finite.
+    #[error("`center` and `rpy` must be finite")]
+    NotFinite,
+}
+
 impl Superellipsoid {
     /// A plain ellipsoid (n = 1) with the given centre and semi-axes, axis-aligned.
     pub fn ellipsoid(center: [f64; 3], semi_axes: [f64; 3]) -> Self {
@@ -101,27 +118,18 @@ impl Superellipsoid {
     }
 
     /// Why the shape is unusable, if it is (messages name the field).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), ShapeError> {
         if self.semi_axes.iter().any(|a| !(a.is_finite() && *a > 0.0)) {
-            return Err(format!(
-                "`semi_axes` must be finite and > 0, got {}",
-                crate::numfmt::list(&self.semi_axes)
-            ));
+            return Err(ShapeError::SemiAxes(self.semi_axes));
         }
         if !(self.exponent.is_finite() && self.exponent >= 0.5) {
-            return Err(format!(
-                "`exponent` n must be ≥ 1/2 (the set is not convex below), got {}",
-                self.exponent
-            ));
+            return Err(ShapeError::ExponentLow(self.exponent));
         }
         if self.exponent > 32.0 {
-            return Err(format!(
-                "`exponent` n must be ≤ 32 (beyond, |u|^2n overflows), got {}",
-                self.exponent
-            ));
+            return Err(ShapeError::ExponentHigh(self.exponent));
         }
         if self.center.iter().chain(&self.rpy).any(|v| !v.is_finite()) {
-            return Err("`center` and `rpy` must be finite".into());
+            return Err(ShapeError::NotFinite);
         }
         Ok(())
     }
@@ -389,9 +397,9 @@ mod tests {
     fn validation_names_the_field() {
         let mut s = shape(1.0);
         s.semi_axes[1] = 0.0;
-        assert!(s.validate().unwrap_err().contains("semi_axes"));
+        assert!(s.validate().unwrap_err().to_string().contains("semi_axes"));
         let mut s = shape(0.4);
-        assert!(s.validate().unwrap_err().contains("exponent"));
+        assert!(s.validate().unwrap_err().to_string().contains("exponent"));
         s.exponent = 0.5;
         assert!(s.validate().is_ok());
     }

@@ -250,14 +250,11 @@ fn dilf(cfg: &MobileManipulatorConfig, params: &DilfParams) -> Result<Dilf, Setu
     for (i, o) in cfg.obstacles.iter().enumerate() {
         let shape = o.shape();
         shape.validate().map_err(|e| {
-            let field = ["semi_axes", "exponent", "center"]
-                .into_iter()
-                .find(|f| e.contains(f))
-                .unwrap_or("center");
-            let field = if field == "center" && e.contains("rpy") {
-                "rpy_deg"
-            } else {
-                field
+            use crate::robots::mobile_manipulator::ellipsoid::ShapeError;
+            let field = match &e {
+                ShapeError::SemiAxes(_) => "semi_axes",
+                ShapeError::ExponentLow(_) | ShapeError::ExponentHigh(_) => "exponent",
+                ShapeError::NotFinite => "rpy_deg",
             };
             SetupError::key(format!("model.obstacles[{i}].{field}"), e)
         })?;
@@ -333,7 +330,7 @@ impl Dilf {
                 field_power: p.field_power,
             },
         )
-        .map_err(SetupError::from)
+        .map_err(|e| SetupError::other(e.to_string()))
     }
 
     /// The beam as the physics holds it: the scene's grasps and FE beam.

@@ -85,16 +85,26 @@ impl Default for RoverGeometry {
     }
 }
 
+/// A rover length that is not finite and positive.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+#[error("rover `{name}` must be finite and > 0, got {value}")]
+pub struct GeometryError {
+    /// The field: `l`, `r` or `wheel_radius`.
+    pub name: &'static str,
+    /// The value given.
+    pub value: f64,
+}
+
 impl RoverGeometry {
     /// Checks that all lengths are finite and positive.
-    pub fn validate(&self) -> Result<(), String> {
-        for (name, v) in [
+    pub fn validate(&self) -> Result<(), GeometryError> {
+        for (name, value) in [
             ("l", self.l),
             ("r", self.r),
             ("wheel_radius", self.wheel_radius),
         ] {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(format!("rover `{name}` must be finite and > 0, got {v}"));
+            if !(value.is_finite() && value > 0.0) {
+                return Err(GeometryError { name, value });
             }
         }
         Ok(())
@@ -276,28 +286,34 @@ pub enum SwitchingSignal {
     },
 }
 
+/// Why a random telegraph signal cannot be drawn.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum TelegraphError {
+    /// The switching rate is negative or not finite.
+    #[error("telegraph rate must be finite and >= 0, got {0}")]
+    Rate(f64),
+    /// The horizon is negative or not finite.
+    #[error("telegraph horizon must be finite and >= 0, got {}", crate::numfmt::readable(*.0))]
+    Horizon(f64),
+    /// rate × horizon (the expected number of switches) is over 1e7.
+    #[error("telegraph rate × horizon = {} exceeds 1e7 switches", crate::numfmt::readable(*.0))]
+    TooManySwitches(f64),
+}
+
 impl SwitchingSignal {
     /// Random telegraph process: σ(0) is a fair coin, then σ flips at the events of a Poisson
     /// process of `rate` (1/s). Switch times are drawn once from ChaCha8 seeded with `seed` up to
     /// `horizon` seconds, so σ(t) is a pure function of (seed, rate, t): RK4 stages and repeated
     /// runs see the same signal. After `horizon` σ holds its last value.
-    pub fn telegraph(seed: u64, rate: f64, horizon: f64) -> Result<Self, String> {
+    pub fn telegraph(seed: u64, rate: f64, horizon: f64) -> Result<Self, TelegraphError> {
         if !(rate.is_finite() && rate >= 0.0) {
-            return Err(format!(
-                "telegraph rate must be finite and >= 0, got {rate}"
-            ));
+            return Err(TelegraphError::Rate(rate));
         }
         if !(horizon.is_finite() && horizon >= 0.0) {
-            return Err(format!(
-                "telegraph horizon must be finite and >= 0, got {}",
-                crate::numfmt::readable(horizon)
-            ));
+            return Err(TelegraphError::Horizon(horizon));
         }
         if rate * horizon > 1e7 {
-            return Err(format!(
-                "telegraph rate × horizon = {} exceeds 1e7 switches",
-                crate::numfmt::readable(rate * horizon)
-            ));
+            return Err(TelegraphError::TooManySwitches(rate * horizon));
         }
         let mut rng = ChaCha8Rng::seed_from_u64(seed);
         let initial = if rng.random_bool(0.5) {

@@ -223,7 +223,8 @@ impl RoverPrimitiveParams {
                 ))
             }
         };
-        geom.validate().map_err(|e| bad("geometry", e))?;
+        geom.validate()
+            .map_err(|e| bad("geometry", e.to_string()))?;
         let speed = pos("speed", self.speed)?;
         let (k1, k2, k3) = (
             pos("k1", self.k1)?,

@@ -101,10 +101,31 @@ fn cross(a: &Vector2<f64>, b: &Vector2<f64>) -> f64 {
     a.x * b.y - a.y * b.x
 }
 
+/// Why a free-floating two-link robot's parameters are not usable.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum RobotError {
+    /// A mass, inertia or length is not positive and finite.
+    #[error("{name} must be positive and finite, got {value}")]
+    NotPositive {
+        /// The parameter (`m0`, `i0`, `l1`, ...).
+        name: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// |A| ≤ |B|, so Δ(θ2) of Eq. 13 is zero for some θ2.
+    #[error("Δ = A + B cos θ2 vanishes somewhere (A = {a}, B = {b})")]
+    DeltaVanishes {
+        /// Coefficient A.
+        a: f64,
+        /// Coefficient B.
+        b: f64,
+    },
+}
+
 impl SpaceRobot {
     /// Checks the parameters are physical and that Δ(θ2) never vanishes
     /// (|A| > |B|), so Eq. 13 is defined everywhere.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), RobotError> {
         let named = [
             ("m0", self.m0),
             ("i0", self.i0),
@@ -115,16 +136,14 @@ impl SpaceRobot {
             ("i2", self.i2),
             ("l2", self.l2),
         ];
-        for (name, v) in named {
-            if !v.is_finite() || v <= 0.0 {
-                return Err(format!("{name} must be positive and finite, got {v}"));
+        for (name, value) in named {
+            if !value.is_finite() || value <= 0.0 {
+                return Err(RobotError::NotPositive { name, value });
             }
         }
         let (a, b) = (self.coeff_a(), self.coeff_b());
         if a.abs() <= b.abs() {
-            return Err(format!(
-                "Δ = A + B cos θ2 vanishes somewhere (A = {a}, B = {b})"
-            ));
+            return Err(RobotError::DeltaVanishes { a, b });
         }
         Ok(())
     }

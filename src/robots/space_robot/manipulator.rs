@@ -138,6 +138,30 @@ pub struct Linearization3 {
     pub a: Matrix3<f64>,
 }
 
+/// Why a space manipulator's parameters do not describe a physical robot.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum ParamsError {
+    /// A mass, base inertia or length is not positive and finite.
+    #[error("{name} must be positive and finite, got {value}")]
+    NotPositive {
+        /// The parameter (`m0`, `i0`, `m1`, `l1`, `m2`, `l2`).
+        name: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// A link inertia or offset is negative or not finite.
+    #[error("{name} must be non-negative and finite, got {value}")]
+    Negative {
+        /// The parameter (`i1`, `i2`, `d1`, `d2`).
+        name: &'static str,
+        /// The value given.
+        value: f64,
+    },
+    /// The initial momentum `p` is not finite.
+    #[error("p must be finite")]
+    PNotFinite,
+}
+
 impl SpaceManipulator {
     /// Builds the model and its coefficients. Parameters are not validated
     /// here (see [`SpaceManipulator::validate`]).
@@ -171,7 +195,7 @@ impl SpaceManipulator {
     }
 
     /// Checks that the parameters describe a physical robot.
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), ParamsError> {
         let p = &self.params;
         let positive = [
             ("m0", p.m0),
@@ -181,18 +205,18 @@ impl SpaceManipulator {
             ("m2", p.m2),
             ("l2", p.l2),
         ];
-        for (name, v) in positive {
-            if !(v.is_finite() && v > 0.0) {
-                return Err(format!("{name} must be positive and finite, got {v}"));
+        for (name, value) in positive {
+            if !(value.is_finite() && value > 0.0) {
+                return Err(ParamsError::NotPositive { name, value });
             }
         }
-        for (name, v) in [("i1", p.i1), ("i2", p.i2), ("d1", p.d1), ("d2", p.d2)] {
-            if !(v.is_finite() && v >= 0.0) {
-                return Err(format!("{name} must be non-negative and finite, got {v}"));
+        for (name, value) in [("i1", p.i1), ("i2", p.i2), ("d1", p.d1), ("d2", p.d2)] {
+            if !(value.is_finite() && value >= 0.0) {
+                return Err(ParamsError::Negative { name, value });
             }
         }
         if !p.p.is_finite() {
-            return Err("p must be finite".into());
+            return Err(ParamsError::PNotFinite);
         }
         Ok(())
     }

@@ -229,7 +229,9 @@ pub fn plan_endogenous(
         name: name.into(),
         reason: reason.into(),
     };
-    model.validate().map_err(|r| invalid("model", &r))?;
+    model
+        .validate()
+        .map_err(|r| invalid("model", &r.to_string()))?;
     let three = |name: &str, v: &State| -> Result<Vec<f64>, PlanError> {
         if v.len() != 3 || v.iter().any(|x| !x.is_finite()) {
             return Err(invalid(

@@ -121,30 +121,64 @@ fn executable(p: &Path) -> bool {
     }
 }
 
+/// Why an external law's program cannot be started.
+#[derive(Debug, thiserror::Error)]
+pub enum ProgramError {
+    /// `command`'s first word is empty.
+    #[error("the program name is empty")]
+    Empty,
+    /// A path to a file that does not exist.
+    #[error("program not found: {}", crate::echo::path(.0))]
+    NotFound(PathBuf),
+    /// A path to something that is not an executable file.
+    #[error(
+        "program is not an executable file: {} (for a script, name its interpreter first, e.g. [\"python3\", \"{program}\"])",
+        crate::echo::path(path)
+    )]
+    NotExecutable {
+        /// The path, joined to the scenario's directory.
+        path: PathBuf,
+        /// The program as written.
+        program: String,
+    },
+    /// The path cannot be made absolute.
+    #[error("{}: {source}", crate::echo::path(path))]
+    Absolute {
+        /// The path, joined to the scenario's directory.
+        path: PathBuf,
+        /// The system's error.
+        source: std::io::Error,
+    },
+    /// A bare name that no `PATH` directory holds as an executable.
+    #[error("program `{0}` not found on PATH")]
+    NotOnPath(String),
+}
+
 /// The program to start: a path (with a `/`) relative to `dir`, or a name
 /// looked up on `PATH` as the shell would.
-pub(crate) fn resolve_program(program: &str, dir: &Path) -> Result<PathBuf, String> {
+pub(crate) fn resolve_program(program: &str, dir: &Path) -> Result<PathBuf, ProgramError> {
     if program.is_empty() {
-        return Err("the program name is empty".into());
+        return Err(ProgramError::Empty);
     }
     if program.contains('/') || program.contains(std::path::MAIN_SEPARATOR) {
         let p = dir.join(program);
         if !p.exists() {
-            return Err(format!("program not found: {}", crate::echo::path(&p)));
+            return Err(ProgramError::NotFound(p));
         }
         if !executable(&p) {
-            return Err(format!(
-                "program is not an executable file: {} (for a script, name its interpreter first, e.g. [\"python3\", \"{program}\"])",
-                crate::echo::path(&p)
-            ));
+            return Err(ProgramError::NotExecutable {
+                path: p,
+                program: program.to_string(),
+            });
         }
-        return std::path::absolute(&p).map_err(|e| format!("{}: {e}", crate::echo::path(&p)));
+        return std::path::absolute(&p)
+            .map_err(|source| ProgramError::Absolute { path: p, source });
     }
     let path = std::env::var_os("PATH").unwrap_or_default();
     std::env::split_paths(&path)
         .map(|d| d.join(program))
         .find(|p| executable(p))
-        .ok_or_else(|| format!("program `{program}` not found on PATH"))
+        .ok_or_else(|| ProgramError::NotOnPath(program.to_string()))
 }
 
 /// What every controller of one law shares.
@@ -288,7 +322,7 @@ impl Controller for ExternalController {
                 .and_then(|a| a.command(&self.law.labels))
             {
                 Ok(c) => c,
-                Err(m) => self.fail(k, t, Why::Bad(m)),
+                Err(m) => self.fail(k, t, Why::Bad(m.to_string())),
             },
             Err(Failure::Exited) => self.fail(k, t, Why::Exited),
             Err(Failure::Timeout) => self.fail(k, t, Why::Timeout),

@@ -71,21 +71,78 @@ pub fn quote(line: &str) -> String {
     format!("`{}`... ({} bytes)", &line[..end], line.len())
 }
 
+/// What is wrong with a law's answer line (for the law's author).
+#[derive(Debug, thiserror::Error)]
+pub enum AnswerError {
+    /// The line is not UTF-8.
+    #[error("the answer is not UTF-8")]
+    NotUtf8,
+    /// The line is empty or blank.
+    #[error("the answer is an empty line (expected {{\"u\": [...]}})")]
+    Empty,
+    /// The line is not the answer's JSON object.
+    #[error(
+        "the answer is not a JSON object {{\"u\": [...], \"label\": ..., \"done\": ...}}: {error}{hint}: {}",
+        quote(text)
+    )]
+    NotJson {
+        /// The JSON parser's error.
+        error: serde_json::Error,
+        /// A hint for NaN or Infinity, or empty.
+        hint: &'static str,
+        /// The line.
+        text: String,
+    },
+    /// `u` has another length than the model's inputs.
+    #[error(
+        "the answer has {got} number{} in `u`, the model has {inputs} input{} ({names})",
+        plural(*got),
+        plural(*inputs)
+    )]
+    Count {
+        /// Numbers in `u`.
+        got: usize,
+        /// The model's inputs.
+        inputs: usize,
+        /// Their names, comma-separated.
+        names: String,
+    },
+    /// The label is over [`MAX_LABEL_BYTES`].
+    #[error("the answer's label is {0} bytes long (at most {MAX_LABEL_BYTES})")]
+    LabelLong(usize),
+    /// The law used more than [`MAX_LABELS`] distinct labels.
+    #[error("the law used more than {MAX_LABELS} distinct labels (`{0}` is one too many)")]
+    TooManyLabels(String),
+}
+
+/// `"s"` unless `n` is 1.
+fn plural(n: usize) -> &'static str {
+    if n == 1 {
+        ""
+    } else {
+        "s"
+    }
+}
+
 impl Answer {
     /// Parse one answer line (without its newline) for a model with
     /// `input_names`: the message says what is wrong, for the law's author.
-    pub fn parse(line: &[u8], input_names: &[&str]) -> Result<Answer, String> {
-        let text = std::str::from_utf8(line).map_err(|_| "the answer is not UTF-8".to_string())?;
+    pub fn parse(line: &[u8], input_names: &[&str]) -> Result<Answer, AnswerError> {
+        let text = std::str::from_utf8(line).map_err(|_| AnswerError::NotUtf8)?;
         if text.trim().is_empty() {
-            return Err("the answer is an empty line (expected {\"u\": [...]})".into());
+            return Err(AnswerError::Empty);
         }
-        let mut a: Answer = serde_json::from_str(text).map_err(|e| {
+        let mut a: Answer = serde_json::from_str(text).map_err(|error| {
             let hint = if text.contains("NaN") || text.contains("Infinity") {
                 " (NaN and Infinity are not JSON: u must be finite)"
             } else {
                 ""
             };
-            format!("the answer is not a JSON object {{\"u\": [...], \"label\": ..., \"done\": ...}}: {e}{hint}: {}", quote(text))
+            AnswerError::NotJson {
+                error,
+                hint,
+                text: text.to_string(),
+            }
         })?;
         // Exact values (serde_json's own can be 1 ulp off).
         let n = a.u.len();
@@ -98,33 +155,26 @@ impl Answer {
         });
         let m = input_names.len();
         if a.u.len() != m {
-            return Err(format!(
-                "the answer has {} number{} in `u`, the model has {m} input{} ({})",
-                a.u.len(),
-                if a.u.len() == 1 { "" } else { "s" },
-                if m == 1 { "" } else { "s" },
-                input_names.join(", ")
-            ));
+            return Err(AnswerError::Count {
+                got: a.u.len(),
+                names: input_names.join(", "),
+                inputs: m,
+            });
         }
         if let Some(l) = &a.label {
             if l.len() > MAX_LABEL_BYTES {
-                return Err(format!(
-                    "the answer's label is {} bytes long (at most {MAX_LABEL_BYTES})",
-                    l.len()
-                ));
+                return Err(AnswerError::LabelLong(l.len()));
             }
         }
         Ok(a)
     }
 
     /// The command, with the label interned in `labels`.
-    pub fn command(&self, labels: &LabelTable) -> Result<Command, String> {
+    pub fn command(&self, labels: &LabelTable) -> Result<Command, AnswerError> {
         let name = self.label.as_deref().unwrap_or(DEFAULT_LABEL);
-        let label = labels.intern(name, MAX_LABELS).ok_or_else(|| {
-            format!(
-                "the law used more than {MAX_LABELS} distinct labels (`{name}` is one too many)"
-            )
-        })?;
+        let label = labels
+            .intern(name, MAX_LABELS)
+            .ok_or_else(|| AnswerError::TooManyLabels(name.to_string()))?;
         Ok(Command {
             u: Input::from_column_slice(&self.u),
             label,
@@ -161,7 +211,11 @@ mod tests {
         assert_eq!((a.label.as_deref(), a.done), (Some("go"), true));
         let d = Answer::parse(br#"{"u":[1,2]}"#, &names).unwrap();
         assert_eq!((d.label, d.done), (None, false));
-        let err = |line: &str| Answer::parse(line.as_bytes(), &names).unwrap_err();
+        let err = |line: &str| {
+            Answer::parse(line.as_bytes(), &names)
+                .unwrap_err()
+                .to_string()
+        };
         assert!(err(r#"{"u": [1]}"#).contains("has 1 number in `u`, the model has 2 inputs (v, w)"));
         assert!(err("hello").contains("not a JSON object"));
         assert!(err(r#"{"u": [NaN, 1]}"#).contains("NaN and Infinity are not JSON"));

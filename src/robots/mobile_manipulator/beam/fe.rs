@@ -33,7 +33,7 @@
 use nalgebra::{SMatrix, SVector};
 
 use crate::model::spatial::{dot, k, lift, mul_mm, rot_x, Pose, Scalar, M3};
-use crate::robots::mobile_manipulator::beam::Beam;
+use crate::robots::mobile_manipulator::beam::{Beam, BeamError};
 
 use crate::robots::mobile_manipulator::beam::se3::se3_log;
 
@@ -55,14 +55,12 @@ pub struct FeBeam {
 
 impl FeBeam {
     /// Precompute stiffness and condensation (fails if the beam is invalid).
-    pub fn new(beam: &Beam) -> Result<Self, String> {
+    pub fn new(beam: &Beam) -> Result<Self, BeamError> {
         beam.validate()?;
         let k = assemble(&element_stiffness(beam, beam.length / 2.0));
         let koo: SMatrix<f64, 6, 6> = k.fixed_view::<6, 6>(6, 6).into_owned();
         let kos: SMatrix<f64, 6, 6> = k.fixed_view::<6, 6>(6, 12).into_owned();
-        let chol = koo.cholesky().ok_or_else(|| {
-            "beam stiffness: middle-node block is not positive definite".to_string()
-        })?;
+        let chol = koo.cholesky().ok_or(BeamError::MiddleBlock)?;
         let cond = -chol.solve(&kos);
         let g = unit_gravity_load(beam);
         let go: SMatrix<f64, 6, 3> = g.fixed_view::<6, 3>(6, 0).into_owned();

@@ -82,32 +82,53 @@ pub struct Beam {
     pub length: f64,
 }
 
+/// Why a beam (or its stiffness model) is unusable; messages name the field.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum BeamError {
+    /// A modulus, density, diameter or the length is not finite and > 0.
+    #[error("`{0}` must be > 0")]
+    NotPositive(&'static str),
+    /// The inner diameter is negative, not finite or not below the outer one.
+    #[error("`section.inner_diameter` must be in [0, outer_diameter)")]
+    InnerDiameter,
+    /// The FE beam's middle-node stiffness block has no Cholesky factor.
+    #[error("beam stiffness: middle-node block is not positive definite")]
+    MiddleBlock,
+    /// The carried chain's free stiffness block has no Cholesky factor.
+    #[error("carried chain: the free block of the stiffness is not positive definite")]
+    ChainBlock,
+}
+
+impl From<BeamError> for crate::error::SetupError {
+    fn from(e: BeamError) -> Self {
+        crate::error::SetupError::other(e.to_string())
+    }
+}
+
 impl Beam {
     /// Why the beam is unusable, if it is (messages name the field).
-    pub fn validate(&self) -> Result<(), String> {
+    pub fn validate(&self) -> Result<(), BeamError> {
         let m = &self.material;
         let s = &self.section;
         let pos = |v: f64| v.is_finite() && v > 0.0;
-        if !pos(m.youngs_modulus) {
-            return Err("`material.youngs_modulus` must be > 0".into());
-        }
-        if !pos(m.shear_modulus) {
-            return Err("`material.shear_modulus` must be > 0".into());
-        }
-        if !pos(m.density) {
-            return Err("`material.density` must be > 0".into());
-        }
-        if !pos(s.outer_diameter) {
-            return Err("`section.outer_diameter` must be > 0".into());
+        for (field, v) in [
+            ("material.youngs_modulus", m.youngs_modulus),
+            ("material.shear_modulus", m.shear_modulus),
+            ("material.density", m.density),
+            ("section.outer_diameter", s.outer_diameter),
+        ] {
+            if !pos(v) {
+                return Err(BeamError::NotPositive(field));
+            }
         }
         if !(s.inner_diameter.is_finite()
             && s.inner_diameter >= 0.0
             && s.inner_diameter < s.outer_diameter)
         {
-            return Err("`section.inner_diameter` must be in [0, outer_diameter)".into());
+            return Err(BeamError::InnerDiameter);
         }
         if !pos(self.length) {
-            return Err("`length` must be > 0".into());
+            return Err(BeamError::NotPositive("length"));
         }
         Ok(())
     }

@@ -19,7 +19,7 @@
 //! both wrists rigid the middle node is [`crate::robots::mobile_manipulator::beam::FeBeam`]'s condensation.
 
 use crate::model::spatial::{k, Scalar};
-use crate::robots::mobile_manipulator::beam::FeBeam;
+use crate::robots::mobile_manipulator::beam::{BeamError, FeBeam};
 use nalgebra::{DMatrix, SMatrix};
 
 /// A wrist's stiffness in end-0 axes (6 × 6, translations then rotations,
@@ -57,7 +57,7 @@ fn apply<T: Scalar, const R: usize, const C: usize>(m: &[[f64; C]; R], x: &[T; C
 
 impl GraspStatics {
     /// Solve the chain once (fails only if the stiffness is singular).
-    pub fn new(fe: &FeBeam, wrists: [WristStiffness; 2]) -> Result<GraspStatics, String> {
+    pub fn new(fe: &FeBeam, wrists: [WristStiffness; 2]) -> Result<GraspStatics, BeamError> {
         // DOFs: A 0..6, node 0 6..12, node 1 12..18, node 2 18..24, B 24..30.
         let n = 30;
         let mut kk = DMatrix::<f64>::zeros(n, n);
@@ -112,9 +112,7 @@ impl GraspStatics {
         }
         let nf = free.len();
         let kff = DMatrix::from_fn(nf, nf, |i, j| kk[(free[i], free[j])]);
-        let chol = kff
-            .cholesky()
-            .ok_or("carried chain: the free block of the stiffness is not positive definite")?;
+        let chol = kff.cholesky().ok_or(BeamError::ChainBlock)?;
         // q_F = K_FF⁻¹ (f_F g − K_F· q_P ξ).
         let kq = &kk * &qp;
         let rhs_xi = DMatrix::from_fn(nf, 6, |i, j| -kq[(free[i], j)]);

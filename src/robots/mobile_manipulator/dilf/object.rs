@@ -28,7 +28,7 @@
 //! q_f come from the chain's statics, the beam moving with the wrists.
 
 use crate::model::spatial::{self, k, Pose, Scalar, M3};
-use crate::robots::mobile_manipulator::beam::{Beam, FeBeam, GraspStatics};
+use crate::robots::mobile_manipulator::beam::{Beam, BeamError, FeBeam, GraspStatics};
 use crate::robots::mobile_manipulator::ellipsoid::PlacedEllipsoid;
 use crate::robots::mobile_manipulator::kinematics::{self as mm, Wrist, DOF};
 
@@ -95,12 +95,40 @@ impl<T: Scalar> BeamState<T> {
     }
 }
 
+/// Why a beam cannot be carried between the two grasps.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum CarriedError {
+    /// The grasp points' distance at the start differs from the beam's length.
+    #[error(
+        "the grasp points are {dist:.4} m apart at the start, the beam is {length:.4} m long: \
+         the grasps cannot hold it undeformed"
+    )]
+    Apart {
+        /// Distance between the grasp points, m.
+        dist: f64,
+        /// The beam's rest length, m.
+        length: f64,
+    },
+    /// The two grasp points are at the same place.
+    #[error("the two grasp points coincide")]
+    Coincide,
+    /// The beam or its stiffness model is unusable.
+    #[error(transparent)]
+    Beam(#[from] BeamError),
+    /// The force bound is not finite and > 0.
+    #[error("`max_force` must be > 0 N, got {}", crate::numfmt::readable(*.0))]
+    MaxForce(f64),
+    /// The moment bound is not finite and > 0.
+    #[error("`max_moment` must be > 0 N m, got {}", crate::numfmt::readable(*.0))]
+    MaxMoment(f64),
+}
+
 /// A frame at `p` whose x axis points along `x` and whose z axis is as close
 /// to world up as that allows.
-fn frame_along(p: [f64; 3], x: [f64; 3]) -> Result<Pose<f64>, String> {
+fn frame_along(p: [f64; 3], x: [f64; 3]) -> Result<Pose<f64>, CarriedError> {
     let n = spatial::dot(x, x).sqrt();
     if n < 1e-6 {
-        return Err("the two grasp points coincide".into());
+        return Err(CarriedError::Coincide);
     }
     let ex = [x[0] / n, x[1] / n, x[2] / n];
     let up = if ex[2].abs() < 0.99 {
@@ -128,17 +156,14 @@ impl Carried {
         q_max: f64,
         segments: usize,
         radius: f64,
-    ) -> Result<Carried, String> {
+    ) -> Result<Carried, CarriedError> {
         let (t1, t2) = (mm::frames(&q[..DOF]).tool, mm::frames(&q[DOF..]).tool);
         let (p1, p2) = (mm::grasp_point(&q[..DOF]), mm::grasp_point(&q[DOF..]));
         let d = spatial::sub(p2, p1);
         let dist = spatial::dot(d, d).sqrt();
         let length = length.unwrap_or(dist);
         if (dist - length).abs() > 1e-3 {
-            return Err(format!(
-                "the grasp points are {dist:.4} m apart at the start, the beam is {length:.4} m long: \
-                 the grasps cannot hold it undeformed"
-            ));
+            return Err(CarriedError::Apart { dist, length });
         }
         let beam = Beam { length, ..*beam };
         let fe = FeBeam::new(&beam)?;
@@ -159,19 +184,13 @@ impl Carried {
 
     /// The same beam with `bound` and `wrist`: solves the carried chain's
     /// statics when either needs it. Errors name the offending field.
-    pub fn with_grasps(mut self, bound: Bound, wrist: Wrist) -> Result<Carried, String> {
+    pub fn with_grasps(mut self, bound: Bound, wrist: Wrist) -> Result<Carried, CarriedError> {
         if let Bound::Wrench { force, moment } = bound {
             if !(force.is_finite() && force > 0.0) {
-                return Err(format!(
-                    "`max_force` must be > 0 N, got {}",
-                    crate::numfmt::readable(force)
-                ));
+                return Err(CarriedError::MaxForce(force));
             }
             if !(moment.is_finite() && moment > 0.0) {
-                return Err(format!(
-                    "`max_moment` must be > 0 N m, got {}",
-                    crate::numfmt::readable(moment)
-                ));
+                return Err(CarriedError::MaxMoment(moment));
             }
         }
         // In end-0 axes (the end frames share them at rest): the grasp
@@ -529,7 +548,7 @@ pub(crate) mod tests {
         );
         // A wrong rest length is refused.
         let err = Carried::at_rest(&beam(), Some(3.0), &q, 4.0, 4, 0.03).unwrap_err();
-        assert!(err.contains("cannot hold"), "{err}");
+        assert!(err.to_string().contains("cannot hold"), "{err}");
     }
 
     /// q_f depends only on the grasps' relative pose: moving and turning both

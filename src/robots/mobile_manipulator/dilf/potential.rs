@@ -247,6 +247,20 @@ pub struct Closest {
     pub beta: f64,
 }
 
+/// Why a scene cannot be built (user-facing).
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum SceneError {
+    /// λ is not finite and > 0.
+    #[error("`lambda` must be > 0")]
+    Lambda,
+    /// The velocity exponent is not finite and > 0.
+    #[error("`kv_exponent` must be > 0")]
+    KvExponent,
+    /// The first part is not the platform centred above the axle.
+    #[error("part 0 must be the platform, centred above the axle")]
+    Platform,
+}
+
 impl Scene {
     /// Build a scene; errors are user-facing.
     pub fn new(
@@ -255,16 +269,16 @@ impl Scene {
         obstacles: Vec<Obstacle>,
         goal: Vec<f64>,
         params: PotentialParams,
-    ) -> Result<Scene, String> {
+    ) -> Result<Scene, SceneError> {
         if !(params.lambda.is_finite() && params.lambda > 0.0) {
-            return Err("`lambda` must be > 0".into());
+            return Err(SceneError::Lambda);
         }
         if !(params.kv.is_finite() && params.kv > 0.0) {
-            return Err("`kv_exponent` must be > 0".into());
+            return Err(SceneError::KvExponent);
         }
         match parts.first() {
             Some(p) if p.link == Link::Base && p.shape.center[..2] == [0.0, 0.0] => {}
-            _ => return Err("part 0 must be the platform, centred above the axle".into()),
+            _ => return Err(SceneError::Platform),
         }
         let mut s = Scene {
             robots,
@@ -298,7 +312,7 @@ impl Scene {
     }
 
     /// The same scene (obstacles, beam, parameters) with another goal.
-    pub fn with_goal(&self, goal: Vec<f64>) -> Result<Scene, String> {
+    pub fn with_goal(&self, goal: Vec<f64>) -> Result<Scene, SceneError> {
         let s = Scene::new(
             self.robots,
             self.parts.clone(),

@@ -363,7 +363,10 @@ pub fn plan_repeatable(
     params: &RepeatableParams,
     limits: &Limits,
 ) -> Result<Plan, PlanError> {
-    model.robot.validate().map_err(|r| invalid("model", r))?;
+    model
+        .robot
+        .validate()
+        .map_err(|r| invalid("model", r.to_string()))?;
     check_state("start", start)?;
     if limits.max_rate.len() != 2 || limits.max_rate.iter().any(|r| !(r.is_finite() && *r > 0.0)) {
         return Err(invalid(

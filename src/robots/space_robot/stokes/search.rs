@@ -267,7 +267,9 @@ pub fn search(
     params: &StokesSpaceParams,
     limits: Option<&Limits>,
 ) -> Result<Design, PlanError> {
-    robot.validate().map_err(|r| invalid("model", r))?;
+    robot
+        .validate()
+        .map_err(|r| invalid("model", r.to_string()))?;
     check_params(params)?;
     check_state("start", start)?;
     check_state("goal", goal)?;

@@ -697,7 +697,7 @@ fn prepare(
             format!("the default for {ty}")
         };
         let whole = match &keys.select {
-            Some(s) => s.whole(&p)?,
+            Some(s) => s.whole(&p).map_err(|e| e.to_string())?,
             None => p.clone(),
         };
         def.resolve_number(&whole)
@@ -713,6 +713,7 @@ fn prepare(
                 Some(s) => s.whole(p),
                 None => Ok(p.clone()),
             };
+            let whole = |p: &FieldPath| whole(p).map_err(|e| e.to_string());
             if def.resolve_number(&whole(&sec)?).is_err()
                 || def.resolve_number(&whole(&nsec)?).is_err()
             {

@@ -40,12 +40,36 @@ pub struct FieldPath {
     pub steps: Vec<Step>,
 }
 
+/// What is wrong with a written field path.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+pub enum FieldPathError {
+    /// Nothing (or only blanks) was written.
+    #[error("an empty field path (write e.g. `twist.linear.x`)")]
+    Empty,
+    /// A name is empty or holds other characters than letters, digits and `_`.
+    #[error(
+        "`{0}` is not a field path (names of letters, digits and `_`, joined by `.`, each optionally followed by `[index]`)"
+    )]
+    NotPath(String),
+    /// An index without its brackets.
+    #[error("`{0}`: an index is written `[2]`")]
+    Bracket(String),
+    /// Brackets around something other than a whole number.
+    #[error("`{text}`: `{index}` is not an index")]
+    NotIndex {
+        /// The path as written.
+        text: String,
+        /// What the brackets hold.
+        index: String,
+    },
+}
+
 impl FieldPath {
     /// Parse `a.b[2].c`; the error says what is wrong with it.
-    pub fn parse(text: &str) -> Result<FieldPath, String> {
+    pub fn parse(text: &str) -> Result<FieldPath, FieldPathError> {
         let mut steps = Vec::new();
         if text.trim().is_empty() {
-            return Err("an empty field path (write e.g. `twist.linear.x`)".into());
+            return Err(FieldPathError::Empty);
         }
         for part in text.split('.') {
             let (name, mut rest) = match part.find('[') {
@@ -54,19 +78,20 @@ impl FieldPath {
             };
             let ok = |c: char| c.is_ascii_alphanumeric() || c == '_';
             if name.is_empty() || !name.chars().all(ok) {
-                return Err(format!(
-                    "`{text}` is not a field path (names of letters, digits and `_`, joined by `.`, each optionally followed by `[index]`)"
-                ));
+                return Err(FieldPathError::NotPath(text.to_string()));
             }
             steps.push(Step::Field(name.to_string()));
             while !rest.is_empty() {
                 let close = rest.find(']').filter(|_| rest.starts_with('['));
                 let Some(close) = close else {
-                    return Err(format!("`{text}`: an index is written `[2]`"));
+                    return Err(FieldPathError::Bracket(text.to_string()));
                 };
                 let i: usize = rest[1..close]
                     .parse()
-                    .map_err(|_| format!("`{text}`: `{}` is not an index", &rest[1..close]))?;
+                    .map_err(|_| FieldPathError::NotIndex {
+                        text: text.to_string(),
+                        index: rest[1..close].to_string(),
+                    })?;
                 steps.push(Step::Index(i));
                 rest = &rest[close + 1..];
             }

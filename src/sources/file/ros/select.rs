@@ -5,7 +5,7 @@
 //! (`transform.translation.x`); a message without such an element is not
 //! a sample of the trajectory.
 
-use crate::sources::file::ros::msg::{FieldPath, Step};
+use crate::sources::file::ros::msg::{FieldPath, FieldPathError, Step};
 use re_ros_msg::deserialize::Value;
 
 /// The element of `array` whose string field `key` is `value`.
@@ -22,7 +22,7 @@ pub struct Select<'a> {
 impl Select<'_> {
     /// The path inside an element as a path in the whole message (element 0
     /// stands for every element: the definition is the same).
-    pub fn whole(&self, inside: &FieldPath) -> Result<FieldPath, String> {
+    pub fn whole(&self, inside: &FieldPath) -> Result<FieldPath, FieldPathError> {
         FieldPath::parse(&format!("{}[0].{}", self.array, inside.text))
     }
 
