@@ -53,7 +53,7 @@ use crate::record::{Comparison, LinkVisual, Overlay, Series, SimTrajectory};
 use crate::robots::mobile_manipulator::beam::physics::BeamOptions;
 use crate::robots::mobile_manipulator::dilf::control::{self, vdot_scaled, Gains};
 use crate::robots::mobile_manipulator::dilf::object::Carried;
-use crate::robots::mobile_manipulator::dilf::potential::{Obstacle, PotentialParams, Scene, Warm};
+use crate::robots::mobile_manipulator::dilf::potential::{Obstacle, Scene, Warm};
 use crate::robots::mobile_manipulator::dilf::DilfParams;
 use crate::robots::mobile_manipulator::ellipsoid::Superellipsoid;
 use crate::robots::mobile_manipulator::kinematics::{self as mm, MobileManipulator, Wrist};
@@ -321,14 +321,7 @@ impl Dilf {
                 })
                 .collect(),
             goal.iter().copied().collect(),
-            PotentialParams {
-                lambda: p.lambda,
-                kv: p.kv_exponent,
-                goal_frame: p.goal_frame,
-                dipole: p.dipole,
-                singularity: p.singularity,
-                field_power: p.field_power,
-            },
+            p.potential(),
         )
         .map_err(|e| SetupError::other(e.to_string()))
     }

@@ -280,6 +280,19 @@ fn default_field_power() -> f64 {
 }
 
 impl DilfParams {
+    /// The potential's own parameters (Eq. 14's λ, k_v, goal frame, dipole,
+    /// singularity and field power).
+    pub fn potential(&self) -> potential::PotentialParams {
+        potential::PotentialParams {
+            lambda: self.lambda,
+            kv: self.kv_exponent,
+            goal_frame: self.goal_frame,
+            dipole: self.dipole,
+            singularity: self.singularity,
+            field_power: self.field_power,
+        }
+    }
+
     /// Range checks; messages name the parameter.
     pub fn validate(&self) -> Result<(), PlanError> {
         let pos = |v: f64| v.is_finite() && v > 0.0;
@@ -456,15 +469,7 @@ impl Policy {
 /// One robot in the open with `params`' potential and `goal` (tests).
 #[cfg(test)]
 fn open_scene(params: &DilfParams, goal: Vec<f64>) -> Arc<Scene> {
-    use potential::PotentialParams;
-    let potential = PotentialParams {
-        lambda: params.lambda,
-        kv: params.kv_exponent,
-        goal_frame: params.goal_frame,
-        dipole: params.dipole,
-        singularity: params.singularity,
-        field_power: params.field_power,
-    };
+    let potential = params.potential();
     let parts = crate::robots::mobile_manipulator::kinematics::default_parts();
     Arc::new(Scene::new(1, parts, Vec::new(), goal, potential).unwrap())
 }
@@ -474,15 +479,7 @@ fn open_scene(params: &DilfParams, goal: Vec<f64>) -> Arc<Scene> {
 #[cfg(test)]
 fn pair_scene(params: &DilfParams, start: &[f64], goal: Vec<f64>) -> Arc<Scene> {
     use crate::robots::mobile_manipulator::beam::{Beam, GFRP_ROD_10MM};
-    use potential::PotentialParams;
-    let potential = PotentialParams {
-        lambda: params.lambda,
-        kv: params.kv_exponent,
-        goal_frame: params.goal_frame,
-        dipole: params.dipole,
-        singularity: params.singularity,
-        field_power: params.field_power,
-    };
+    let potential = params.potential();
     let (material, section) = GFRP_ROD_10MM;
     let rod = Beam {
         material,
