@@ -11,14 +11,17 @@
 //! Every problem names the file, the topic and the message's index on that
 //! topic (0 for the first).
 
+pub mod error;
 pub mod metadata;
 pub mod msg;
+mod prepare_error;
 pub mod select;
 pub mod sqlite;
 
 use crate::planner::PlanError;
 use crate::sources::file::{At, Reader, Samples, MCAP_MAX_BYTES};
 use msg::{Definition, FieldPath};
+use prepare_error::{PrepareError, Unmapped};
 use std::collections::{BTreeMap, HashMap};
 use std::io::Read;
 use std::path::{Path, PathBuf};
@@ -252,25 +255,18 @@ fn paths_for<'a>(
         .collect()
 }
 
-/// Why an input has no field, for a message.
-fn unmapped(ty: &str, input: &str, inputs: &[&str]) -> String {
+/// Why an input has no field: with the inputs the type gives by default.
+fn unmapped(ty: &str, input: &str, inputs: &[&str]) -> Unmapped {
     let defaults = DEFAULT_MAPS
         .iter()
-        .find(|(t, _)| msg::normalize(t) == msg::normalize(ty));
-    let mut m = format!(
-        "no field gives the input `{input}` (the model's inputs: {}): map it in the scenario, `[planner.map] {input} = \"field.path\"`",
-        inputs.join(", ")
-    );
-    if let Some((_, d)) = defaults {
-        let names: Vec<&str> = d.iter().map(|(n, _)| *n).collect();
-        m.push_str(&format!("; {ty} gives {} by default", names.join(" and ")));
-        if names.contains(&"steer") && input == "steer_rate" {
-            m.push_str(
-                " (a steering angle: steer the car by angle with `[model] steering = \"angle\"`)",
-            );
-        }
+        .find(|(t, _)| msg::normalize(t) == msg::normalize(ty))
+        .map(|(_, d)| d.iter().map(|(n, _)| *n).collect());
+    Unmapped {
+        ty: ty.to_string(),
+        input: input.to_string(),
+        inputs: inputs.iter().map(|i| i.to_string()).collect(),
+        defaults,
     }
-    m
 }
 
 /// The topic to read: the scenario's, or the one topic whose type maps to
@@ -470,7 +466,9 @@ impl Decoder<'_> {
         let p = match self.prepared.get(&key) {
             Some(p) => p.clone(),
             None => {
-                let p = Rc::new(prepare(schema(), self.inputs, self.keys).map_err(at_msg)?);
+                let p = Rc::new(
+                    prepare(schema(), self.inputs, self.keys).map_err(|e| at_msg(e.to_string()))?,
+                );
                 if self.type_name.is_empty() {
                     self.type_name = p.def.name().to_string();
                     self.paths_used = self
@@ -485,7 +483,7 @@ impl Decoder<'_> {
             }
         };
         let inputs = self.inputs;
-        let decoded = p.def.decode(data).map_err(at_msg)?;
+        let decoded = p.def.decode(data).map_err(|e| at_msg(e.to_string()))?;
         let v = match &self.keys.select {
             None => &decoded,
             Some(s) => match s.element(&decoded) {
@@ -665,43 +663,50 @@ fn prepare(
     schema: Option<SchemaRef<'_>>,
     inputs: &[&str],
     keys: &BagKeys<'_>,
-) -> Result<Prepared, String> {
+) -> Result<Prepared, PrepareError> {
     let Some((name, encoding, data)) = schema else {
-        return Err(
-            "the bag stores no message definition for this topic (its channel has no schema): it cannot be decoded; record it again where the message package is installed"
-                .into(),
-        );
+        return Err(PrepareError::NoSchema);
     };
     let ty = name.to_string();
     if data.is_empty() {
-        return Err(format!(
-            "the bag stores no definition of {ty} (an empty schema: the recorder did not have the message package); record it again where the package is installed"
-        ));
+        return Err(PrepareError::EmptySchema { ty });
     }
     if encoding != "ros2msg" {
-        return Err(format!(
-            "the definition of {ty} is stored as `{encoding}`; only `ros2msg` (.msg) definitions are read"
-        ));
+        return Err(PrepareError::Encoding {
+            ty,
+            encoding: encoding.to_string(),
+        });
     }
-    let text = std::str::from_utf8(data)
-        .map_err(|_| format!("the definition of {ty} is not UTF-8 text"))?;
-    let def = Definition::parse(&ty, text)
-        .map_err(|e| format!("the bag's definition of {ty} is not usable: {e}"))?;
+    let Ok(text) = std::str::from_utf8(data) else {
+        return Err(PrepareError::NotUtf8 { ty });
+    };
+    let def = Definition::parse(&ty, text).map_err(|source| PrepareError::Definition {
+        ty: ty.clone(),
+        source,
+    })?;
     let texts = paths_for(&ty, inputs, keys.map).map_err(|i| unmapped(&ty, i, inputs))?;
     let mut paths = Vec::new();
     for (input, text) in inputs.iter().zip(texts) {
-        let p = FieldPath::parse(&text).map_err(|e| format!("input `{input}`: {e}"))?;
+        let p = FieldPath::parse(&text).map_err(|source| PrepareError::Path {
+            input: input.to_string(),
+            source,
+        })?;
         let from = if keys.map.contains_key(*input) {
             format!("planner.map.{input}")
         } else {
             format!("the default for {ty}")
         };
         let whole = match &keys.select {
-            Some(s) => s.whole(&p).map_err(|e| e.to_string())?,
+            Some(s) => s.whole(&p).map_err(PrepareError::Select)?,
             None => p.clone(),
         };
         def.resolve_number(&whole)
-            .map_err(|e| format!("input `{input}` = `{text}` ({from}): {e}"))?;
+            .map_err(|source| PrepareError::Resolve {
+                input: input.to_string(),
+                text,
+                from,
+                source: Box::new(source),
+            })?;
         paths.push(p);
     }
     let stamp = match keys.time {
@@ -710,16 +715,13 @@ fn prepare(
             let sec = FieldPath::parse("header.stamp.sec").expect("a path");
             let nsec = FieldPath::parse("header.stamp.nanosec").expect("a path");
             let whole = |p: &FieldPath| match &keys.select {
-                Some(s) => s.whole(p),
+                Some(s) => s.whole(p).map_err(PrepareError::Select),
                 None => Ok(p.clone()),
             };
-            let whole = |p: &FieldPath| whole(p).map_err(|e| e.to_string());
             if def.resolve_number(&whole(&sec)?).is_err()
                 || def.resolve_number(&whole(&nsec)?).is_err()
             {
-                return Err(format!(
-                    "time = \"header\", but {ty} has no `header.stamp` (not a stamped type): drop `time` to use the log time"
-                ));
+                return Err(PrepareError::NoStamp { ty });
             }
             Some([sec, nsec])
         }

@@ -11,8 +11,8 @@ use re_ros_msg::message_spec::{ArraySize, BuiltInType, ComplexType, MessageSpeci
 use re_ros_msg::MessageSchema;
 use std::collections::HashMap;
 
-/// Largest fixed array a definition may declare, elements (a covariance is 36).
-const MAX_FIXED: usize = 1 << 20;
+pub use crate::sources::file::ros::error::{DecodeError, DefinitionError, FieldError};
+use crate::sources::file::ros::error::{ValueError, MAX_FIXED};
 
 /// `pkg/msg/Type` and `pkg/Type` name the same type.
 pub(crate) fn normalize(name: &str) -> String {
@@ -171,8 +171,10 @@ enum Leaf<'a> {
 
 impl Definition {
     /// Parse and check the definition of type `name` (`pkg/msg/Type`).
-    pub fn parse(name: &str, text: &str) -> Result<Definition, String> {
-        let schema = MessageSchema::parse(name, text).map_err(|e| format!("{e:#}"))?;
+    pub fn parse(name: &str, text: &str) -> Result<Definition, DefinitionError> {
+        // The parser's error is anyhow's: kept as it prints, with its causes.
+        let schema = MessageSchema::parse(name, text)
+            .map_err(|e| DefinitionError::Syntax(format!("{e:#}")))?;
         let names = schema
             .dependencies
             .iter()
@@ -202,14 +204,17 @@ impl Definition {
     }
 
     /// Every type `spec` uses is defined and none contains itself.
-    fn check(&self, spec: &MessageSpecification, stack: &mut Vec<String>) -> Result<(), String> {
+    fn check(
+        &self,
+        spec: &MessageSpecification,
+        stack: &mut Vec<String>,
+    ) -> Result<(), DefinitionError> {
         let me = normalize(&spec.name);
         if stack.contains(&me) {
-            return Err(format!(
-                "the definition of {} contains itself ({} → {me})",
-                stack[0],
-                stack.join(" → ")
-            ));
+            return Err(DefinitionError::Recursive {
+                chain: stack.clone(),
+                again: me,
+            });
         }
         stack.push(me);
         for f in &spec.fields {
@@ -217,22 +222,22 @@ impl Definition {
             while let Type::Array { ty: inner, size } = ty {
                 if let ArraySize::Fixed(n) = size {
                     if *n > MAX_FIXED {
-                        return Err(format!(
-                            "field `{}` of {} is a fixed array of {n} elements (at most {MAX_FIXED} are read)",
-                            f.name, spec.name
-                        ));
+                        return Err(DefinitionError::FixedTooLong {
+                            field: f.name.clone(),
+                            message: spec.name.clone(),
+                            len: *n,
+                        });
                     }
                 }
                 ty = inner;
             }
             if let Type::Complex(c) = ty {
                 let Some(inner) = self.resolve(spec, c) else {
-                    return Err(format!(
-                        "field `{}` of {} is of type {}, which the bag's definition does not include",
-                        f.name,
-                        spec.name,
-                        type_name(spec, c)
-                    ));
+                    return Err(DefinitionError::Undefined {
+                        field: f.name.clone(),
+                        message: spec.name.clone(),
+                        type_name: type_name(spec, c),
+                    });
                 };
                 self.check(inner, stack)?;
             }
@@ -263,34 +268,27 @@ impl Definition {
 
     /// Check that `path` names a number in every message of this type;
     /// the error says what is there instead.
-    pub fn resolve_number(&self, path: &FieldPath) -> Result<(), String> {
+    pub fn resolve_number(&self, path: &FieldPath) -> Result<(), FieldError> {
         let mut scope = &self.schema.spec;
         let mut leaf = Leaf::Message(scope);
         let mut at = String::new();
         for step in &path.steps {
-            let here = if at.is_empty() {
-                "the message".to_string()
-            } else {
-                format!("`{at}`")
-            };
             leaf = match (step, leaf) {
                 (Step::Field(name), Leaf::Message(spec)) => {
                     let Some(f) = spec.fields.iter().find(|f| &f.name == name) else {
-                        let fields: Vec<&str> = spec
+                        // The placeholder member of an empty IDL struct is no field to offer.
+                        let fields = spec
                             .fields
                             .iter()
-                            .map(|f| f.name.as_str())
-                            .filter(|n| *n != "structure_needs_at_least_one_member")
+                            .map(|f| f.name.clone())
+                            .filter(|n| n != "structure_needs_at_least_one_member")
                             .collect();
-                        return Err(format!(
-                            "no field `{name}` in {here} ({}: fields {})",
-                            spec.name,
-                            if fields.is_empty() {
-                                "none".into()
-                            } else {
-                                fields.join(", ")
-                            }
-                        ));
+                        return Err(FieldError::NoField {
+                            name: name.clone(),
+                            at,
+                            message: spec.name.clone(),
+                            fields,
+                        });
                     };
                     scope = spec;
                     self.leaf(scope, &f.ty)
@@ -298,27 +296,29 @@ impl Definition {
                 (Step::Index(i), Leaf::Array(elem, fixed)) => {
                     if let Some(n) = fixed {
                         if *i >= n {
-                            return Err(format!(
-                                "index {i} is past the end of {here} (a fixed array of {n})"
-                            ));
+                            return Err(FieldError::PastEnd {
+                                index: *i,
+                                at,
+                                len: n,
+                            });
                         }
                     }
                     self.leaf(scope, elem)
                 }
                 (Step::Field(name), Leaf::Scalar(b)) => {
-                    return Err(format!(
-                        "{here} is a {}, it has no field `{name}`",
-                        builtin_name(b)
-                    ))
+                    return Err(FieldError::ScalarHasNoField {
+                        at,
+                        scalar: builtin_name(b),
+                        name: name.clone(),
+                    })
                 }
                 (Step::Field(name), Leaf::Array(..)) => {
-                    return Err(format!(
-                    "{here} is an array: pick an element before `.{name}` (e.g. `{at}[0].{name}`)"
-                ))
+                    return Err(FieldError::ArrayNeedsIndex {
+                        at,
+                        name: name.clone(),
+                    })
                 }
-                (Step::Index(i), _) => {
-                    return Err(format!("{here} is not an array, `[{i}]` does not apply"))
-                }
+                (Step::Index(i), _) => return Err(FieldError::NotArray { at, index: *i }),
             };
             match step {
                 Step::Field(n) if at.is_empty() => at = n.clone(),
@@ -328,28 +328,23 @@ impl Definition {
         }
         match leaf {
             Leaf::Scalar(b) if is_number(b) => Ok(()),
-            Leaf::Scalar(b) => Err(format!("`{at}` is a {}, not a number", builtin_name(b))),
-            Leaf::Message(spec) => {
-                let fields: Vec<&str> = spec.fields.iter().map(|f| f.name.as_str()).collect();
-                Err(format!(
-                    "`{at}` is a message ({}), not a number: pick one of its fields ({})",
-                    spec.name,
-                    fields.join(", ")
-                ))
-            }
-            Leaf::Array(..) => Err(format!(
-                "`{at}` is an array, not a number: pick an element (e.g. `{at}[0]`)"
-            )),
+            Leaf::Scalar(b) => Err(FieldError::NotNumber {
+                at,
+                scalar: builtin_name(b),
+            }),
+            Leaf::Message(spec) => Err(FieldError::Message {
+                at,
+                message: spec.name.clone(),
+                fields: spec.fields.iter().map(|f| f.name.clone()).collect(),
+            }),
+            Leaf::Array(..) => Err(FieldError::Array { at }),
         }
     }
 
     /// Decode one CDR message (with its 4-byte encapsulation header).
-    pub fn decode(&self, data: &[u8]) -> Result<Value, String> {
+    pub fn decode(&self, data: &[u8]) -> Result<Value, DecodeError> {
         if data.len() < 4 {
-            return Err(format!(
-                "{} bytes: too short for CDR (a 4-byte encapsulation header comes first)",
-                data.len()
-            ));
+            return Err(DecodeError::TooShort { len: data.len() });
         }
         let resolver = Resolver(self);
         let body = &data[4..];
@@ -366,18 +361,20 @@ impl Definition {
                 &resolver,
             ),
             [a, b] => {
-                return Err(format!(
-                    "CDR representation 0x{a:02x}{b:02x} is not read (plain CDR is: 0x0000, 0x0001, what ROS 2 writes)"
-                ))
+                return Err(DecodeError::Representation {
+                    code: u16::from_be_bytes([a, b]),
+                })
             }
         };
         out.map_err(|e| match e {
-            re_cdr::Error::UnexpectedEof => format!(
-                "its {} bytes end before the message does: a truncated message, or not a {}",
-                data.len(),
-                spec.name
-            ),
-            other => format!("not a CDR {}: {other}", spec.name),
+            re_cdr::Error::UnexpectedEof => DecodeError::Truncated {
+                len: data.len(),
+                message: spec.name.clone(),
+            },
+            source => DecodeError::Cdr {
+                message: spec.name.clone(),
+                source,
+            },
         })
     }
 }
@@ -385,8 +382,14 @@ impl Definition {
 /// The number at `path` in a decoded message (checked with
 /// [`Definition::resolve_number`], so only a sequence's length can make it
 /// missing).
-pub(crate) fn number_at(v: &Value, path: &FieldPath) -> Result<f64, String> {
+pub(crate) fn number_at(v: &Value, path: &FieldPath) -> Result<f64, ValueError> {
     use re_ros_msg::deserialize::primitive_array::PrimitiveArray as P;
+    let missing = || ValueError::Missing {
+        path: path.text.clone(),
+    };
+    let not_number = || ValueError::NotNumber {
+        path: path.text.clone(),
+    };
     let mut v = v;
     let mut at = String::new();
     let mut element: Option<f64> = None;
@@ -396,10 +399,11 @@ pub(crate) fn number_at(v: &Value, path: &FieldPath) -> Result<f64, String> {
             (Step::Index(i), Value::Array(a) | Value::Sequence(a)) => {
                 let got = a.get(*i);
                 if got.is_none() {
-                    return Err(format!(
-                        "`{at}` has {} elements in this message, no [{i}]",
-                        a.len()
-                    ));
+                    return Err(ValueError::TooFew {
+                        at,
+                        len: a.len(),
+                        index: *i,
+                    });
                 }
                 got
             }
@@ -436,15 +440,11 @@ pub(crate) fn number_at(v: &Value, path: &FieldPath) -> Result<f64, String> {
                         element = Some(x);
                         None
                     }
-                    None if *i >= len => {
-                        return Err(format!(
-                            "`{at}` has {len} elements in this message, no [{i}]"
-                        ))
-                    }
-                    None => return Err(format!("`{}` is not a number", path.text)),
+                    None if *i >= len => return Err(ValueError::TooFew { at, len, index: *i }),
+                    None => return Err(not_number()),
                 }
             }
-            _ => return Err(format!("`{}` is not in this message", path.text)),
+            _ => return Err(missing()),
         };
         match step {
             Step::Field(n) if at.is_empty() => at = n.clone(),
@@ -454,7 +454,7 @@ pub(crate) fn number_at(v: &Value, path: &FieldPath) -> Result<f64, String> {
         if let Some(x) = element {
             return Ok(x);
         }
-        v = next.ok_or_else(|| format!("`{}` is not in this message", path.text))?;
+        v = next.ok_or_else(missing)?;
     }
     Ok(match v {
         Value::I8(x) => *x as f64,
@@ -467,7 +467,7 @@ pub(crate) fn number_at(v: &Value, path: &FieldPath) -> Result<f64, String> {
         Value::U64(x) => *x as f64,
         Value::F32(x) => *x as f64,
         Value::F64(x) => *x,
-        _ => return Err(format!("`{}` is not a number", path.text)),
+        _ => return Err(not_number()),
     })
 }
 
@@ -519,22 +519,24 @@ mod tests {
         let ok = |p: &str| d.resolve_number(&FieldPath::parse(p).unwrap());
         assert!(ok("twist.linear.x").is_ok());
         assert!(ok("header.stamp.nanosec").is_ok());
-        let e = ok("twist.linear.w").unwrap_err();
+        let e = ok("twist.linear.w").unwrap_err().to_string();
         assert!(
             e.contains("no field `w` in `twist.linear`") && e.contains("x, y, z"),
             "{e}"
         );
-        let e = ok("header.frame_id").unwrap_err();
+        let e = ok("header.frame_id").unwrap_err().to_string();
         assert!(e.contains("is a string, not a number"), "{e}");
-        let e = ok("twist.linear").unwrap_err();
+        let e = ok("twist.linear").unwrap_err().to_string();
         assert!(e.contains("is a message"), "{e}");
-        let e = ok("twist[0]").unwrap_err();
+        let e = ok("twist[0]").unwrap_err().to_string();
         assert!(e.contains("not an array"), "{e}");
     }
 
     #[test]
     fn a_definition_that_lacks_a_type_or_contains_itself_is_refused() {
         let e = Definition::parse("p/msg/A", "p/B b\n").err().unwrap();
+        assert!(matches!(e, DefinitionError::Undefined { .. }), "{e:?}");
+        let e = e.to_string();
         assert!(
             e.contains("p/B, which the bag's definition does not include"),
             "{e}"
@@ -545,7 +547,8 @@ mod tests {
         )
         .err()
         .unwrap();
-        assert!(e.contains("contains itself"), "{e}");
+        assert!(matches!(e, DefinitionError::Recursive { .. }), "{e:?}");
+        assert!(e.to_string().contains("contains itself"), "{e}");
     }
 
     #[test]
