@@ -117,6 +117,9 @@ pub struct Metric {
     pub family: Family,
     /// What it measures, for the reference.
     pub doc: &'static str,
+    /// Whether it compares the ideal and the physics run sample by sample
+    /// (a tracking error): meaningless when each run closes its own loop.
+    pub compares_runs: bool,
 }
 
 /// A row, briefly: `m(name, unit, direction, family, doc)`.
@@ -133,6 +136,20 @@ pub const fn m(
         direction,
         family,
         doc,
+        compares_runs: false,
+    }
+}
+
+/// A tracking row: a difference between the two runs, lower is better,
+/// `tracking(name, unit, family, doc)`.
+pub const fn tracking(name: &'static str, unit: Unit, family: Family, doc: &'static str) -> Metric {
+    Metric {
+        name,
+        unit,
+        direction: Direction::LowerIsBetter,
+        family,
+        doc,
+        compares_runs: true,
     }
 }
 
@@ -163,66 +180,57 @@ pub const HARNESS: &[Metric] = &[
         EndOnly,
         "Error of one coordinate at the run's end (angles wrapped, in degrees).",
     ),
-    m(
+    tracking(
         "tracking_position_max",
         Unit::Meter,
-        Lower,
         RunningMax,
         "Largest planar distance between the two runs at one time (open-loop plans).",
     ),
-    m(
+    tracking(
         "tracking_position_rms",
         Unit::Meter,
-        Lower,
         EndOnly,
         "RMS planar distance between the two runs over time.",
     ),
-    m(
+    tracking(
         "tracking_position_final",
         Unit::Meter,
-        Lower,
         EndOnly,
         "Planar distance between the two runs' ends.",
     ),
-    m(
+    tracking(
         "tracking_position_{n}_max",
         Unit::Meter,
-        Lower,
         RunningMax,
         "Largest planar distance between the runs of robot n.",
     ),
-    m(
+    tracking(
         "tracking_position_{n}_rms",
         Unit::Meter,
-        Lower,
         EndOnly,
         "RMS planar distance between the runs of robot n.",
     ),
-    m(
+    tracking(
         "tracking_position_{n}_final",
         Unit::Meter,
-        Lower,
         EndOnly,
         "Planar distance between the runs' ends, robot n.",
     ),
-    m(
+    tracking(
         "tracking_{coord}_max",
         Unit::Coordinate,
-        Lower,
         RunningMax,
         "Largest difference of one coordinate between the two runs.",
     ),
-    m(
+    tracking(
         "tracking_{coord}_rms",
         Unit::Coordinate,
-        Lower,
         EndOnly,
         "RMS difference of one coordinate between the two runs.",
     ),
-    m(
+    tracking(
         "tracking_{coord}_final",
         Unit::Coordinate,
-        Lower,
         EndOnly,
         "Difference of one coordinate at the runs' ends.",
     ),
@@ -452,13 +460,20 @@ pub(crate) fn find_row<'a>(
 }
 
 impl Metric {
+    /// Which run metric `name` (of this row) reads, when the row's pattern
+    /// names one (`{run}`: `ideal` or `sim`).
+    pub fn run_of<'n>(&self, name: &'n str) -> Option<&'n str> {
+        captures(self.name, name)?
+            .into_iter()
+            .find_map(|(hole, v)| (hole == "run").then_some(v))
+    }
+
     /// How metric `name` (of this row) evolves when judged as an upper
     /// bound (`minimum` false) or a lower bound (`[minimums]`): the ideal
     /// run never changes with a perturbation, and a bound is certain early
     /// only when the running value moves towards breaking it.
     pub fn family_of(&self, name: &str, minimum: bool) -> Family {
-        let ideal = captures(self.name, name).is_some_and(|c| c.contains(&("run", "ideal")));
-        if ideal {
+        if self.run_of(name) == Some("ideal") {
             return EndOnly;
         }
         match (self.family, minimum) {

@@ -166,7 +166,7 @@ impl RunOutcome {
     /// Whether metric `name` means anything for this run: the results table
     /// shows n/a, and baselines neither write nor compare, the ones that do not.
     pub fn meaningful(&self, name: &str) -> bool {
-        self.tracking_meaningful || !name.starts_with("tracking_")
+        self.tracking_meaningful || !crate::robots::compares_runs(name)
     }
 }
 

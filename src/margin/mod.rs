@@ -357,7 +357,7 @@ pub(crate) fn search_dimension(
         jumps: ctx
             .gates
             .iter()
-            .filter(|g| !g.metric.starts_with("ideal_"))
+            .filter(|g| !crate::robots::reads_ideal_run(&g.metric))
             .flat_map(|g| jumps::jumps(&levels, g, s.resolution))
             .collect(),
         default_caps: caps::default_caps(ctx.prep, d),
@@ -411,7 +411,7 @@ fn nearest_gate(ctx: &Ctx<'_>, level: Option<&Level>) -> Option<String> {
     };
     ctx.gates
         .iter()
-        .filter(|g| !g.metric.starts_with("ideal_"))
+        .filter(|g| !crate::robots::reads_ideal_run(&g.metric))
         .map(|g| (ratio(g), g))
         .filter(|(r, _)| r.is_finite())
         .max_by(|a, b| a.0.total_cmp(&b.0))

@@ -225,7 +225,7 @@ fn metrics_table(summary: &Value, reg: &Option<Vec<StoredDelta>>) -> String {
     });
     if let Some(m) = summary["metrics"].as_object() {
         for (k, v) in m {
-            if let (Some(why), true) = (meaningless, k.starts_with("tracking_")) {
+            if let (Some(why), true) = (meaningless, crate::robots::compares_runs(k)) {
                 let _ = write!(
                     b,
                     "<tr><td class=\"l\">{}</td><td class=\"muted\" title=\"{}\">n/a</td><td></td><td></td><td></td><td class=\"l muted\">{}</td></tr>",

@@ -295,6 +295,18 @@ pub fn metric(name: &str) -> Option<&'static Metric> {
     crate::metric::find_row(metric_rows(), name)
 }
 
+/// Whether metric `name` compares the two runs sample by sample (its row
+/// is a tracking row): meaningless for a feedback policy.
+pub(crate) fn compares_runs(name: &str) -> bool {
+    metric(name).is_some_and(|r| r.compares_runs)
+}
+
+/// Whether metric `name` reads the ideal run alone (its row's `{run}` is
+/// `ideal`): no perturbation of the physics changes it.
+pub(crate) fn reads_ideal_run(name: &str) -> bool {
+    metric(name).is_some_and(|r| r.run_of(name) == Some("ideal"))
+}
+
 /// The unit of metric `name` as written after its values (`m`, `°`, `s`;
 /// empty when it has none or none is known), for a model whose coordinates
 /// `spec` describes.
@@ -308,4 +320,44 @@ pub(crate) fn metric_unit(name: &str, spec: &crate::compare::MetricSpec<'_>) -> 
     crate::metric::captures(row.name, name)
         .and_then(|c| c.into_iter().find(|(hole, _)| *hole == "coord"))
         .map_or("", |(_, coord)| spec.coord_unit(coord))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn rows_say_which_metrics_compare_runs_and_which_read_the_ideal_run() {
+        for name in [
+            "tracking_position_max",
+            "tracking_position_2_rms",
+            "tracking_theta_deg_final",
+            "tracking_orientation_deg_max",
+        ] {
+            assert!(compares_runs(name), "{name}");
+        }
+        for name in [
+            "sim_goal_position",
+            "ideal_goal_x",
+            "slip_lateral_max",
+            "real_sim_position_max",
+            "not_a_metric",
+        ] {
+            assert!(!compares_runs(name), "{name}");
+        }
+        assert!(reads_ideal_run("ideal_goal_position"));
+        assert!(reads_ideal_run("ideal_time_to_goal"));
+        assert!(!reads_ideal_run("sim_goal_position"));
+        assert!(!reads_ideal_run("real_ideal_position_max"));
+        assert!(!reads_ideal_run("tracking_position_max"));
+        // Every tracking row gets worse as it rises.
+        for r in metric_rows().filter(|r| r.compares_runs) {
+            assert_eq!(
+                r.direction,
+                crate::metric::Direction::LowerIsBetter,
+                "{}",
+                r.name
+            );
+        }
+    }
 }

@@ -184,7 +184,7 @@ impl Prepared {
             // times measures the time shift, not the physics.
             let gates = scenario.thresholds.keys().map(|k| ("thresholds", k));
             for (table, k) in gates.chain(scenario.minimums.keys().map(|k| ("minimums", k))) {
-                if k.starts_with("tracking_") {
+                if crate::robots::compares_runs(k) {
                     return Err(scenario.error_at(&format!("{table}.{k}"), "tracking errors mean nothing for this plan (a feedback policy: each run closes the loop on its own state and reaches the goal at its own time); gate on `sim_goal_*` instead"));
                 }
             }

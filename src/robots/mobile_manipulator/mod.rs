@@ -786,6 +786,9 @@ impl System for Dilf {
             metrics.extend(m);
             series.extend(s);
         }
+        // The clearance of a scene without obstacles is infinite throughout:
+        // nothing to plot, so no empty view in Rerun or the report.
+        series.retain(|s| s.values.iter().any(|v| v.is_finite()));
         (metrics, series)
     }
 }

@@ -28,7 +28,7 @@ use crate::engine::PhysicsSettings;
 use crate::engine::PhysicsSystem;
 use crate::error::SetupError;
 use crate::integrate::Trajectory;
-use crate::metric::{m, Direction::*, Family::*, Metric, Unit};
+use crate::metric::{m, tracking, Direction::*, Family::*, Metric, Unit};
 use crate::model::{KinematicModel, State};
 use crate::paper::{detail, rows_from, same, PaperRow};
 use crate::plan::{Limits, Plan};
@@ -78,24 +78,21 @@ pub const METRICS: &[Metric] = &[
         EndOnly,
         "Angle between the ball's final orientation and the goal's.",
     ),
-    m(
+    tracking(
         "tracking_orientation_deg_max",
         Unit::Degree,
-        LowerIsBetter,
         RunningMax,
         "Largest angle between the two runs' orientations.",
     ),
-    m(
+    tracking(
         "tracking_orientation_deg_rms",
         Unit::Degree,
-        LowerIsBetter,
         EndOnly,
         "RMS angle between the two runs' orientations.",
     ),
-    m(
+    tracking(
         "tracking_orientation_deg_final",
         Unit::Degree,
-        LowerIsBetter,
         EndOnly,
         "Angle between the two runs' final orientations.",
     ),
