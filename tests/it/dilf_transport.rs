@@ -151,6 +151,9 @@ fn the_analysis_beside_the_replay_equals_the_analysis_of_the_finished_run() {
         );
     }
     assert_eq!(series.len(), done.series.len());
+    // No obstacles in this scene: its clearance is infinite throughout and
+    // is not logged (an empty plot otherwise).
+    assert!(series.iter().all(|s| s.name != "clearance/ideal"));
     for (a, b) in series.iter().zip(&done.series) {
         assert_eq!(a.name, b.name);
         assert!(!a.values.is_empty(), "{}", a.name);
