@@ -32,11 +32,15 @@
 #[cfg(test)]
 mod armature_tests;
 mod carried;
+mod clearance;
 mod gripper_balance;
 mod joints;
+mod setup;
 mod urdf;
 #[cfg(test)]
 mod wrist_tests;
+
+use setup::{check_urdf, is_platform, place_robot};
 
 pub use carried::{link_visuals, robot_link_name, CarriedBeam};
 pub use joints::WRIST_CHANNELS;
@@ -250,34 +254,6 @@ pub struct Setup<'a> {
     pub wrist: Wrist,
 }
 
-/// Check the URDF's arm joints against the DH table the planner uses.
-fn check_urdf(robot: &urdf_rs::Robot) -> Result<(), SetupError> {
-    for (i, name) in ARM_JOINTS.iter().enumerate() {
-        let j = robot
-            .joints
-            .iter()
-            .find(|j| j.name == *name)
-            .ok_or_else(|| SetupError::urdf(format!("URDF has no joint `{name}`")))?;
-        let (xyz, rpy) = if i == 0 {
-            (MOUNT, [0.0; 3])
-        } else {
-            let r = puma560::DH[i - 1];
-            ([r.a, 0.0, r.d], [r.alpha, 0.0, 0.0])
-        };
-        let bad = (0..3).any(|k| {
-            (j.origin.xyz[k] - xyz[k]).abs() > 1e-9 || (j.origin.rpy[k] - rpy[k]).abs() > 1e-9
-        }) || j.axis.xyz.0 != [0.0, 0.0, 1.0];
-        if bad {
-            return Err(SetupError::urdf_at("joint", name.to_string(), format!(
-                "URDF joint `{name}` differs from the PUMA 560 model (origin xyz=\"{}\" rpy=\"{}\", axis z expected)",
-                crate::engine::urdf_text::numbers(&xyz),
-                crate::engine::urdf_text::numbers(&rpy)
-            )));
-        }
-    }
-    Ok(())
-}
-
 impl MobileManipulatorPhysics {
     /// Build the world: one robot per 9 start coordinates (one or two), the
     /// obstacles, and the beam when two robots carry one.
@@ -465,13 +441,6 @@ impl MobileManipulatorPhysics {
         Ok(me)
     }
 
-    fn refresh_clearances(&mut self) {
-        self.clearance = self.min_clearance();
-        if self.robots.len() == 2 {
-            self.robot_clearance = self.robot_robot_clearance();
-        }
-    }
-
     /// Joint i's angle from its two links (parent frame · joint origin vs child).
     fn joint_angle(&self, r: &RobotBodies, i: usize) -> f64 {
         let b = &self.sim.world.bodies;
@@ -493,167 +462,10 @@ impl MobileManipulatorPhysics {
         let axis = *child.rotation() * Vector::Z;
         f((child.angvel() - b[parent].angvel()).dot(axis))
     }
-
-    /// Least distance between any robot or beam collider and any obstacle
-    /// (m); 0 when touching or overlapping.
-    pub fn min_clearance(&self) -> f64 {
-        let cs = &self.sim.world.colliders;
-        let beam = self.beam.iter().flat_map(|b| b.colliders().iter().copied());
-        let moving = self
-            .robots
-            .iter()
-            .flat_map(|r| r.colliders.iter().copied())
-            .chain(beam);
-        let obstacles: Vec<(ColliderHandle, Aabb)> = self
-            .obstacles
-            .iter()
-            .copied()
-            .zip(self.obstacle_aabbs.iter().copied())
-            .collect();
-        least_distance(cs, &with_aabbs(cs, moving), &obstacles)
-    }
-
-    /// Least distance between the two robots' colliders (m).
-    pub fn robot_robot_clearance(&self) -> f64 {
-        let cs = &self.sim.world.colliders;
-        let set = |r: &RobotBodies| with_aabbs(cs, r.colliders.iter().copied());
-        least_distance(cs, &set(&self.robots[0]), &set(&self.robots[1]))
-    }
-
-    /// Collider pairs in contact that are collisions, obstacles aside: robot
-    /// against robot, the beam against a platform or the ground, any robot
-    /// body but a wheel or caster on the ground.
-    pub fn body_contacts(&self) -> usize {
-        let ground = self.sim.ground_collider;
-        let rolling = |c: ColliderHandle| self.robots.iter().any(|r| r.rolling.contains(&c));
-        self.sim
-            .world
-            .narrow_phase
-            .contact_pairs()
-            .filter(|p| p.has_any_active_contact())
-            .filter(|p| {
-                let (a, b) = (p.collider1, p.collider2);
-                let obstacle = self.obstacles.contains(&a) || self.obstacles.contains(&b);
-                let on_ground = Some(a) == ground && rolling(b) || Some(b) == ground && rolling(a);
-                !obstacle && !on_ground
-            })
-            .count()
-    }
-
-    /// Robot– and beam–obstacle collider pairs with an active contact.
-    pub fn obstacle_contacts(&self) -> usize {
-        self.obstacles
-            .iter()
-            .map(|o| {
-                self.sim
-                    .world
-                    .narrow_phase
-                    .contact_pairs_with(*o)
-                    .filter(|p| p.has_any_active_contact())
-                    .count()
-            })
-            .sum()
-    }
 }
 
 fn norm3(v: &[f64]) -> f64 {
     v.iter().map(|x| x * x).sum::<f64>().sqrt()
-}
-
-/// Colliders with their current world AABBs.
-fn with_aabbs(
-    cs: &ColliderSet,
-    colliders: impl Iterator<Item = ColliderHandle>,
-) -> Vec<(ColliderHandle, Aabb)> {
-    colliders.map(|c| (c, cs[c].compute_aabb())).collect()
-}
-
-/// Least distance (m, parry queries) between any collider of `a` and any of
-/// `b`; pairs whose AABBs are farther apart than the best so far are skipped.
-fn least_distance(
-    cs: &ColliderSet,
-    a: &[(ColliderHandle, Aabb)],
-    b: &[(ColliderHandle, Aabb)],
-) -> f64 {
-    let mut best = f64::INFINITY;
-    for (ca, ba) in a {
-        for (cb, bb) in b {
-            let gap = (ba.mins - bb.maxs).max(bb.mins - ba.maxs).max(Vector::ZERO);
-            if f(gap.length()) >= best {
-                continue;
-            }
-            let (x, y) = (&cs[*ca], &cs[*cb]);
-            if let Ok(d) = crate::engine::rapier::parry::query::distance(
-                x.position(),
-                x.shape(),
-                y.position(),
-                y.shape(),
-            ) {
-                best = best.min(f(d.distance));
-            }
-        }
-    }
-    best
-}
-
-/// Look up one robot's bodies and joints, put its arm at the start angles
-/// (the URDF loads at q = 0) and free its casters.
-fn place_robot(sw: &mut SimWorld, h: &RobotHandles, q: &[f64]) -> Result<RobotBodies, SetupError> {
-    let frames = mm::frames::<f64>(q);
-    let base = h.require_link("base_link")?;
-    let wheels = [h.require_link(WHEELS[0])?, h.require_link(WHEELS[1])?];
-    let wheel_joints = [
-        h.require_joint(WHEEL_JOINTS[0])?,
-        h.require_joint(WHEEL_JOINTS[1])?,
-    ];
-    let mut arm = [base; 6];
-    let mut arm_joints = [wheel_joints[0]; 6];
-    for i in 0..6 {
-        arm[i] = h.require_link(Link::Arm(i as u8 + 1).urdf_name())?;
-        arm_joints[i] = h.require_joint(ARM_JOINTS[i])?;
-    }
-    for (body, pose) in arm.iter().zip(&frames.arm) {
-        sw.world.bodies[*body].set_position(rl::from_spatial(pose), true);
-    }
-    let tool = h.require_link("tool")?;
-    sw.world.bodies[tool].set_position(rl::from_spatial(&frames.tool), true);
-    let tool_joint = h.require_joint("tool_joint")?;
-    let mut rolling = Vec::new();
-    for name in CASTERS {
-        for c in h.colliders_of(name)?.to_vec() {
-            if let Some(col) = sw.world.colliders.get_mut(c) {
-                // Casters roll freely: no friction.
-                col.set_friction(0.0);
-            }
-            rolling.push(c);
-        }
-    }
-    for w in WHEELS {
-        rolling.extend(h.colliders_of(w)?.iter().copied());
-    }
-    Ok(RobotBodies {
-        base,
-        wheels,
-        wheel_joints,
-        arm,
-        arm_joints,
-        tool,
-        tool_joint,
-        colliders: h.colliders.clone(),
-        rolling,
-        links: h.links.clone(),
-        theta: q[2],
-        q: std::array::from_fn(|i| q[3 + i]),
-        q_ref: std::array::from_fn(|i| q[3 + i]),
-    })
-}
-
-/// Whether collider `c` is a platform box: a cuboid on the base body.
-fn is_platform(sw: &SimWorld, base: RigidBodyHandle, c: ColliderHandle) -> bool {
-    sw.world
-        .colliders
-        .get(c)
-        .is_some_and(|col| col.parent() == Some(base) && col.shape().as_cuboid().is_some())
 }
 
 impl PhysicsSystem for MobileManipulatorPhysics {
