@@ -45,7 +45,7 @@
 use crate::common::*;
 use anholonomy::compare::wrap_angle;
 use anholonomy::integrate::simulate;
-use anholonomy::robots::mobile_manipulator::dilf::sequence::rigid;
+use anholonomy::robots::mobile_manipulator::dilf::{sequence::rigid, STOPS};
 use anholonomy::robots::mobile_manipulator::kinematics::{DOF, INPUTS};
 use anholonomy::scenario::{PlannerConfig, Scenario};
 use anholonomy::validate::Prepared;
@@ -360,14 +360,6 @@ fn ideal(prep: &Prepared) -> Outcome {
     };
     let converged = ended == "converged" && p.tolerance.reached(&exact_end, goal.as_slice());
     let end_t = *tr.t.last().unwrap();
-    const STOPS: [&str; 6] = [
-        "converged",
-        "collision",
-        "singular",
-        "solver failure",
-        "overstrained",
-        "stalled",
-    ];
     let ended = if STOPS.contains(&ended.as_str()) {
         ended
     } else {

@@ -1,9 +1,8 @@
 //! Seed 004's pair carrying the beam through compliant wrists, with the
 //! wrench bound and the law on the measured grasps (`dilf_pair_open`).
 
-use anholonomy::model::spatial::Pose;
 use anholonomy::robots::mobile_manipulator::dilf::potential::Scene;
-use anholonomy::robots::mobile_manipulator::kinematics::DOF;
+use anholonomy::robots::mobile_manipulator::kinematics::{flange_from_measurement, DOF};
 use anholonomy::scenario::{ModelConfig, PlannerConfig, Scenario};
 use anholonomy::validate::Prepared;
 
@@ -68,13 +67,7 @@ fn the_measured_deformation_equals_the_planar_readout_when_the_platforms_stand_f
         let q = sys.state();
         let q = q.as_slice();
         let meas = sys.measurement().unwrap();
-        let flange = |r: usize| {
-            let v = &meas[12 * r..12 * (r + 1)];
-            Pose {
-                p: [v[0], v[1], v[2]],
-                r: std::array::from_fn(|i| std::array::from_fn(|j| v[3 + 3 * i + j])),
-            }
-        };
+        let flange = |r: usize| flange_from_measurement(&meas, r);
         let planar = c.state(q);
         let measured = c.state_from_tools(&flange(0), &flange(1));
         for (a, b) in planar.q_f.iter().zip(&measured.q_f) {
@@ -190,13 +183,7 @@ fn the_grasp_wrench_read_through_the_wrists_is_the_fe_statics_at_rest() {
             continue;
         }
         let meas = sys.measurement().unwrap();
-        let flange = |r: usize| {
-            let v = &meas[12 * r..12 * (r + 1)];
-            Pose {
-                p: [v[0], v[1], v[2]],
-                r: std::array::from_fn(|i| std::array::from_fn(|j| v[3 + 3 * i + j])),
-            }
-        };
+        let flange = |r: usize| flange_from_measurement(&meas, r);
         let st = c.state_from_tools(&flange(0), &flange(1));
         let w = c.wrenches(&st.q_f, &st.gravity).unwrap();
         let norm = |v: &[f64]| v.iter().map(|x| x * x).sum::<f64>().sqrt();

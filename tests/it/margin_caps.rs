@@ -101,18 +101,21 @@ fn a_model_without_drive_readings_is_capped_by_the_settings() {
     let d = tempfile::tempdir().unwrap();
     let text = disk_scenario(&model("rolling_disk.urdf"), "name = \"disk\"", "");
     std::fs::write(d.path().join("s.toml"), &text).unwrap();
-    let o = cli(
-        d.path(),
-        &[
-            "margin",
-            "s.toml",
-            "--dimension",
-            "torque_scale",
-            "--no-logs",
-            "--json",
-        ],
-    );
-    let out = String::from_utf8_lossy(&o.stdout);
+    let margin_json = || {
+        let o = cli(
+            d.path(),
+            &[
+                "margin",
+                "s.toml",
+                "--dimension",
+                "torque_scale",
+                "--no-logs",
+                "--json",
+            ],
+        );
+        String::from_utf8_lossy(&o.stdout).into_owned()
+    };
+    let out = margin_json();
     assert!(
         out.contains("\"default_caps\"") && out.contains("\"joints\": []"),
         "{out}"
@@ -126,17 +129,6 @@ fn a_model_without_drive_readings_is_capped_by_the_settings() {
         ),
     )
     .unwrap();
-    let o = cli(
-        d.path(),
-        &[
-            "margin",
-            "s.toml",
-            "--dimension",
-            "torque_scale",
-            "--no-logs",
-            "--json",
-        ],
-    );
-    let out = String::from_utf8_lossy(&o.stdout);
+    let out = margin_json();
     assert!(!out.contains("default_caps"), "{out}");
 }

@@ -522,6 +522,20 @@ pub const DOF: usize = 9;
 /// Inputs per robot.
 pub const INPUTS: usize = 8;
 
+/// Numbers per robot in the physics' measurement: the flange's (link 6's)
+/// world position, then its rotation matrix row by row.
+pub const FLANGE_MEASUREMENT: usize = 12;
+
+/// Robot `r`'s flange pose in a measurement of [`FLANGE_MEASUREMENT`]
+/// numbers per robot.
+pub fn flange_from_measurement(measured: &[f64], r: usize) -> Pose<f64> {
+    let m = &measured[FLANGE_MEASUREMENT * r..FLANGE_MEASUREMENT * (r + 1)];
+    Pose {
+        p: [m[0], m[1], m[2]],
+        r: std::array::from_fn(|i| std::array::from_fn(|j| m[3 + 3 * i + j])),
+    }
+}
+
 impl KinematicModel for MobileManipulator {
     fn name(&self) -> &'static str {
         "mobile_manipulator"

@@ -43,6 +43,17 @@ use serde::{Deserialize, Serialize};
 use stall::{Progress, StallParams, Verdict};
 use std::sync::Arc;
 
+/// The labels on which the law stops: a run that ends on any other label
+/// ran out of time (the horizon).
+pub const STOPS: [&str; 6] = [
+    "converged",
+    "collision",
+    "singular",
+    "solver failure",
+    "overstrained",
+    "stalled",
+];
+
 /// Label indices of the plan: one per combination of the robots' Eq. 18b
 /// branches, the same combinations with the input scaled down by the hold
 /// guard, then these.
@@ -57,17 +68,7 @@ fn labels(robots: usize) -> Vec<String> {
         .collect();
     let mut out = combos.clone();
     out.extend(combos.iter().map(|c| format!("{c} (guarded)")));
-    out.extend(
-        [
-            "converged",
-            "collision",
-            "singular",
-            "solver failure",
-            "overstrained",
-            "stalled",
-        ]
-        .map(String::from),
-    );
+    out.extend(STOPS.map(String::from));
     out
 }
 
@@ -258,15 +259,14 @@ impl Controller for DilfController {
     fn command_measured(&mut self, t: f64, q: &State, measured: &[f64]) -> Command {
         let q = q.as_slice();
         let p = &self.policy;
-        if p.grasps != Grasps::Measured || p.scene.object.is_none() || measured.len() < 24 {
+        if p.grasps != Grasps::Measured
+            || p.scene.object.is_none()
+            || measured.len() < 2 * mm::FLANGE_MEASUREMENT
+        {
             return self.decide(t, q, None);
         }
         let corr: GraspCorrection = std::array::from_fn(|r| {
-            let m = &measured[12 * r..12 * (r + 1)];
-            let flange = crate::model::spatial::Pose {
-                p: [m[0], m[1], m[2]],
-                r: std::array::from_fn(|i| std::array::from_fn(|j| m[3 + 3 * i + j])),
-            };
+            let flange = mm::flange_from_measurement(measured, r);
             mm::frames::<f64>(&q[DOF * r..DOF * (r + 1)])
                 .tool
                 .inverse()

@@ -330,17 +330,9 @@ pub(super) fn ideal_outcome(
         .fold(0.0, f64::max);
     let converged = (last == converged_label).then_some(at);
     let label = plan.label_name(last).to_string();
-    let stops = [
-        "converged",
-        "collision",
-        "singular",
-        "solver failure",
-        "overstrained",
-        "stalled",
-    ];
     Outcome {
         converged,
-        ended: if stops.contains(&label.as_str()) {
+        ended: if super::STOPS.contains(&label.as_str()) {
             label
         } else {
             "horizon".into()

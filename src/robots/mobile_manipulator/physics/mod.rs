@@ -597,10 +597,11 @@ impl PhysicsSystem for MobileManipulatorPhysics {
     }
 
     /// Each flange's world pose (link 6, the frame the wrist hangs from):
-    /// position then rotation matrix row by row, 12 numbers per robot.
+    /// position then rotation matrix row by row
+    /// ([`mm::flange_from_measurement`] reads it back).
     fn measurement(&self) -> Option<Vec<f64>> {
         let b = &self.sim.world.bodies;
-        let mut out = Vec::with_capacity(12 * self.robots.len());
+        let mut out = Vec::with_capacity(mm::FLANGE_MEASUREMENT * self.robots.len());
         for r in &self.robots {
             let p = rl::to_spatial(b[r.arm[5]].position());
             out.extend(p.p);
